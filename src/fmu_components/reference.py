@@ -1,0 +1,247 @@
+"""Independent reference solutions of the model specification.
+
+This module shares no code with the FMUs' run-time package: it reads the thesis's own
+numbers from ``reference_data/thesis`` (in the thesis's printed units), converts them to SI
+by the rules of the specification, writes the right-hand sides out plainly (every state
+integrated, the damper in its rotor-angle form) and solves them with scipy's ``solve_ivp``
+(Radau) at tight tolerance.
+
+Two input conventions are provided:
+
+* ``solve_held_rate``: the co-simulation semantics of spec section 4. Samples (t_k, x_k,
+  v_k) are applied at t_k; over [t_k, t_k+1] the rate v_k is held and the deflection moves
+  as x_k + v_k (t - t_k). The outputs after each step belong to t_k+1 and use that moved
+  deflection, exactly as a host reads an FMU after doStep.
+* ``solve_smooth``: a continuous input x(t), v(t), the physical truth the co-simulation
+  approximates.
+"""
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.interpolate import PchipInterpolator
+
+THESIS_DATA = Path(__file__).resolve().parents[2] / "reference_data" / "thesis"
+RTOL = 1e-10
+ATOL = 1e-14
+
+# FMU name -> thesis component key in the CSV files.
+RUBBER_KEYS = {"RoadWheelTyre": "tyre", "TrackBushRadial": "bush_radial",
+               "TrackBushTorsion": "bush_torsion"}
+
+
+def _rows(name):
+    with open(THESIS_DATA / name, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+# Factors that take a value in the thesis's printed unit to SI.
+_TO_SI = {"N/mm": 1e3, "N.m/deg": 180.0 / math.pi, "N": 1.0, "N.m": 1.0,
+          "mm/s": 1e-3, "deg/s": math.pi / 180.0}
+
+
+@dataclass
+class RubberSpec:
+    elements: list  # [(k, c, xi)] for elements 1 (outer A), 2 (nested in A), 3 (B), SI
+    elastic: tuple  # a0..a3 in SI
+    h: float
+    x_ref: float
+    unilateral: bool
+
+
+def rubber_spec(fmu_name):
+    key = RUBBER_KEYS[fmu_name]
+    elements = []
+    for row in _rows("appendix_4b.csv"):
+        if row["component"] == key:
+            elements.append((float(row["k"]) * _TO_SI[row["k_unit"]],
+                             float(row["c"]) * _TO_SI[row["c_unit"]],
+                             float(row["xi"]) * _TO_SI[row["xi_unit"]]))
+    (elastic,) = [r for r in _rows("elastic_functions.csv") if r["component"] == key]
+    (geometric,) = [r for r in _rows("geometric_multipliers.csv") if r["component"] == key]
+    a = [float(elastic[f"a{p}"]) for p in range(4)]
+    h, x_ref = float(geometric["h"]), float(geometric["x_ref"])
+    if elastic["deflection_unit"] == "deg":  # polynomial in degrees -> in radians
+        a = [coefficient * (180.0 / math.pi) ** p for p, coefficient in enumerate(a)]
+    if geometric["deflection_unit"] == "deg":
+        h, x_ref = h * 180.0 / math.pi, math.radians(x_ref)
+    return RubberSpec(elements, tuple(a), h, x_ref, unilateral=(key == "tyre"))
+
+
+@dataclass
+class DamperSpec:
+    C1: float
+    C2: float
+    I: float
+    rates: np.ndarray
+    torques: np.ndarray  # smoothed column of Table A6-1
+
+
+def damper_spec():
+    constants = {r["name"]: r for r in _rows("damper_constants.csv")}
+    c1 = float(constants["C1"]["value"]) * (1e-3 if constants["C1"]["unit"] == "N.mm" else 1.0)
+    table = _rows("table_A6-1.csv")
+    return DamperSpec(c1, float(constants["C2"]["value"]), float(constants["I"]["value"]),
+                      np.array([float(r["rate_rad_per_s"]) for r in table]),
+                      np.array([float(r["smoothed_N_m"]) for r in table]))
+
+
+# --- right-hand sides and outputs --------------------------------------------------------
+
+class RubberEquations:
+    state_size = 3
+
+    def __init__(self, spec):
+        self.spec = spec
+
+    def initial_state(self, x0, v0):
+        return np.zeros(3)
+
+    def rhs(self, t, y, x_of_t, rate):
+        (k1, c1, xi1), (k2, c2, xi2), (k3, c3, xi3) = self.spec.elements
+        if self.spec.unilateral and x_of_t(t) <= 0.0:
+            rate = 0.0
+        s, w, r = y
+        branch_a = k1 * s + k2 * w
+        sdot = rate - branch_a * (abs(rate) + xi1) / c1
+        wdot = sdot - k2 * w * (abs(sdot) + xi2) / c2
+        rdot = rate - k3 * r * (abs(rate) + xi3) / c3
+        return [sdot, wdot, rdot]
+
+    def breakpoints(self, t0, t1, x0, rate):
+        """Times inside (t0, t1) where the right-hand side switches (contact)."""
+        if self.spec.unilateral and rate != 0.0:
+            crossing = t0 - x0 / rate
+            if t0 < crossing < t1:
+                return [crossing]
+        return []
+
+    def outputs(self, y, x):
+        spec = self.spec
+        (k1, _, _), (k2, _, _), (k3, _, _) = spec.elements
+        if spec.unilateral and x <= 0.0:
+            return {"force": 0.0, "elastic": 0.0, "viscoelastic": 0.0}
+        a0, a1, a2, a3 = spec.elastic
+        elastic = a0 + a1 * x + a2 * x ** 2 + a3 * x ** 3
+        viscoelastic = (1.0 + spec.h * abs(x - spec.x_ref)) * (k1 * y[0] + k2 * y[1] + k3 * y[2])
+        force = elastic + viscoelastic
+        if spec.unilateral:
+            force = max(0.0, force)
+        return {"force": force, "elastic": elastic, "viscoelastic": viscoelastic}
+
+
+class DamperEquations:
+    state_size = 2
+
+    def __init__(self, spec):
+        self.spec = spec
+        self.curve = PchipInterpolator(spec.rates, spec.torques, extrapolate=False)
+        self.end_slopes = (self.curve.derivative()(spec.rates[0]),
+                           self.curve.derivative()(spec.rates[-1]))
+
+    def dashpot(self, rate):
+        spec = self.spec
+        if rate < spec.rates[0]:
+            return spec.torques[0] + self.end_slopes[0] * (rate - spec.rates[0])
+        if rate > spec.rates[-1]:
+            return spec.torques[-1] + self.end_slopes[1] * (rate - spec.rates[-1])
+        return float(self.curve(rate))
+
+    def gas(self, deflection):
+        q = deflection / self.spec.C2
+        return self.spec.C1 * (1.0 / (1.0 - q) - 1.0 / (1.0 + q))
+
+    def initial_state(self, theta0, omega0):
+        return np.array([theta0, omega0])
+
+    def rhs(self, t, y, theta_of_t, rate):
+        rotor_angle, rotor_rate = y
+        return [rotor_rate,
+                (self.gas(theta_of_t(t) - rotor_angle) - self.dashpot(rotor_rate)) / self.spec.I]
+
+    def breakpoints(self, t0, t1, x0, rate):
+        return []
+
+    def outputs(self, y, theta):
+        deflection = theta - y[0]
+        return {"torque": self.gas(deflection), "gas_deflection": deflection,
+                "rotor_rate": y[1], "dashpot_torque": self.dashpot(y[1])}
+
+
+def equations_for(fmu_name):
+    if fmu_name == "RotaryDamper":
+        return DamperEquations(damper_spec())
+    return RubberEquations(rubber_spec(fmu_name))
+
+
+# --- solvers ---------------------------------------------------------------------------
+
+def _integrate(equations, y, t_points, x_of_t, rate):
+    """Integrate from t_points[0] with the rate held; states at each later point."""
+    t0, t1 = t_points[0], t_points[-1]
+    edges = [t0] + equations.breakpoints(t0, t1, x_of_t(t0), rate) + [t1]
+    states = []
+    for a, b in zip(edges[:-1], edges[1:]):
+        inside = [t for t in t_points[1:] if a < t <= b]
+        sol = solve_ivp(equations.rhs, (a, b), y, method="Radau", rtol=RTOL, atol=ATOL,
+                        args=(x_of_t, rate), t_eval=inside or None)
+        if not sol.success:
+            raise RuntimeError(f"reference solve failed on [{a}, {b}]: {sol.message}")
+        if inside:
+            states += [sol.y[:, i] for i in range(len(inside))]
+        y = sol.y[:, -1]
+    return states
+
+
+def solve_held_rate(fmu_name, times, deflection, rate):
+    """Outputs at every sample time under the co-simulation input convention.
+
+    Row 0 is the initial output (inputs at t_0, relaxed state); row k+1 the output after
+    the step [t_k, t_k+1]. Consecutive steps that share the same rate along a continuous
+    path (a hold, a ramp) are one interval of the held-rate input, so they are integrated
+    in one call, which changes nothing but cost.
+    """
+    equations = equations_for(fmu_name)
+    times = np.asarray(times, dtype=float)
+    deflection = np.asarray(deflection, dtype=float)
+    rate = np.asarray(rate, dtype=float)
+    y = equations.initial_state(deflection[0], rate[0])
+    rows = [equations.outputs(y, deflection[0])]
+    k = 0
+    n = len(times)
+    while k < n - 1:
+        x0, v0, t0 = deflection[k], rate[k], times[k]
+
+        def x_of_t(t, x0=x0, v0=v0, t0=t0):
+            return x0 + v0 * (t - t0)
+
+        j = k + 1
+        while j < n - 1 and rate[j] == v0 and math.isclose(
+                deflection[j], x_of_t(times[j]), rel_tol=1e-12, abs_tol=1e-15):
+            j += 1
+        states = _integrate(equations, y, times[k:j + 1], x_of_t, v0)
+        rows += [equations.outputs(state, x_of_t(t)) for state, t in zip(states, times[k + 1:j + 1])]
+        y = states[-1]
+        k = j
+    return {key: np.array([row[key] for row in rows]) for key in rows[0]}
+
+
+def solve_smooth(fmu_name, t_eval, x_of_t, v_of_t):
+    """Outputs at t_eval for a continuous input x(t) with rate v(t)."""
+    equations = equations_for(fmu_name)
+    t_eval = np.asarray(t_eval, dtype=float)
+    y0 = equations.initial_state(x_of_t(t_eval[0]), v_of_t(t_eval[0]))
+
+    def rhs(t, y):
+        return equations.rhs(t, y, x_of_t, v_of_t(t))
+
+    sol = solve_ivp(rhs, (t_eval[0], t_eval[-1]), y0, method="Radau", rtol=RTOL, atol=ATOL,
+                    t_eval=t_eval, dense_output=False)
+    if not sol.success:
+        raise RuntimeError(f"reference solve failed: {sol.message}")
+    rows = [equations.outputs(sol.y[:, i], x_of_t(t)) for i, t in enumerate(sol.t)]
+    return {key: np.array([row[key] for row in rows]) for key in rows[0]}

@@ -1,0 +1,1 @@
+"""Run-time code shipped inside every FMU. Standard library only."""

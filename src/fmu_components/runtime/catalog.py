@@ -1,0 +1,295 @@
+"""The four components as data: variables, units, parameter values with their thesis
+provenance, and how each builds its physics model.
+
+Values are SI. Appendix 4b prints its rubber tables in ADAMS mm-N-s units (deg for the
+torsion bush), so k is converted per m (per rad) and xi per m/s (rad/s); the check is the
+time constant tau = c/(k*xi) = 100, 0.1 and 1.0 s of section 6.4 (spec section 1).
+"""
+
+import math
+
+from .damper import RotaryDamper
+from .hermite import check_monotone_table
+from .integrator import DEFAULT_RTOL
+from .rubber import Branch, MaxwellElement, RubberModel
+
+PER_DEG = 180.0 / math.pi  # multiplies a per-degree value into per-radian
+MM = 1e-3
+
+
+class Variable:
+    __slots__ = ("name", "causality", "unit", "display_unit", "description", "start")
+
+    def __init__(self, name, causality, unit, description, start=None, display_unit=None):
+        self.name = name
+        self.causality = causality
+        self.unit = unit
+        self.display_unit = display_unit
+        self.description = description
+        self.start = start
+
+
+class ComponentDefinition:
+    """Everything the generic FMU adapter needs to know about one component."""
+
+    def __init__(self, name, description, inputs, outputs, parameters, build_model,
+                 check_parameters, direct_outputs, measured_ranges, stop_time=2.0):
+        self.name = name
+        self.description = description
+        self.inputs = inputs  # (deflection, rate)
+        self.outputs = outputs
+        self.parameters = parameters
+        self.build_model = build_model  # dict name -> value  ->  model
+        self.check_parameters = check_parameters  # dict -> message or None
+        self.direct_outputs = direct_outputs  # outputs that depend directly on the deflection
+        self.measured_ranges = measured_ranges  # input name -> (low, high, what the thesis measured)
+        self.default_experiment = {"startTime": 0.0, "stopTime": stop_time,
+                                   "stepSize": 1e-3, "tolerance": DEFAULT_RTOL}
+
+    @property
+    def variables(self):
+        return list(self.inputs) + list(self.outputs) + list(self.parameters)
+
+
+def _positive(values, names, units):
+    for name in names:
+        value = values[name]
+        if not (value > 0.0 and math.isfinite(value)):
+            return f"parameter {name} = {value!r} {units[name]} must be positive and finite"
+    return None
+
+
+def _finite(values, names, units):
+    for name in names:
+        if not math.isfinite(values[name]):
+            return f"parameter {name} = {values[name]!r} {units[name]} must be finite"
+    return None
+
+
+# --- rubber components (spec section 2) ---------------------------------------------------
+
+RUBBER_ELEMENTS = (
+    ("1", "outer Maxwell element of branch A"),
+    ("2", "Maxwell element nested across spring k1 of branch A (the stiffening element, "
+          "section 6.3)"),
+    ("3", "Maxwell element of branch B"),
+)
+
+
+def _rubber_component(name, description, *, deflection, load, angular, elements, elastic,
+                      geometric, unilateral, measured_range):
+    """elements: per element 1..3 (k, c, xi, thesis text); elastic: (a0..a3, thesis text);
+    geometric: (h, x_ref, thesis text)."""
+    length, load_unit = ("rad", "N.m") if angular else ("m", "N")
+    display = "deg" if angular else "mm"
+    stiffness = f"{load_unit}/{length}"
+    inputs = (
+        Variable(deflection, "input", length, f"{deflection.replace('_', ' ').capitalize()}"
+                 f" x of the component ({length})", 0.0, display),
+        Variable(f"{deflection}_rate", "input", f"{length}/s",
+                 f"Rate dx/dt of {deflection.replace('_', ' ')}, held over each communication step",
+                 0.0, f"{display}/s"),
+    )
+    outputs = (
+        Variable(load, "output", load_unit, f"{load.capitalize()} F applied to the component "
+                 f"to produce the deflection: Fe(x) + f(x)*(FA + FB) (Eq. 6.1-1)"),
+        Variable(f"{load}_elastic", "output", load_unit, f"Elastic part Fe(x) (section 5.3.1)"),
+        Variable(f"{load}_viscoelastic", "output", load_unit,
+                 f"Viscoelastic part f(x)*(FA + FB) of the three Maxwell elements (section 6.4)"),
+        Variable("stiffness", "output", stiffness, f"Instantaneous tangent stiffness dF/dx "
+                 f"in the direction of motion (mean of loading and unloading at zero rate)",
+                 display_unit=f"{load_unit}/{display}"),
+    )
+    parameters = []
+    for (index, role), (k, c, xi, thesis) in zip(RUBBER_ELEMENTS, elements):
+        parameters += [
+            Variable(f"k{index}", "parameter", stiffness, f"Spring stiffness of the {role} "
+                     f"(Appendix 4b: {thesis[0]})", k, f"{load_unit}/{display}"),
+            Variable(f"c{index}", "parameter", load_unit, f"Maximum damping force c of the "
+                     f"{role}: viscosity c/(|rate| + xi) (Appendix 4b: {thesis[1]})", c),
+            Variable(f"xi{index}", "parameter", f"{length}/s", f"Rate constant xi of the {role};"
+                     f" time constant c/(k xi) (Appendix 4b: {thesis[2]})", xi, f"{display}/s"),
+        ]
+    a, elastic_thesis = elastic
+    for power, coefficient in enumerate(a):
+        unit = load_unit if power == 0 else f"{load_unit}/{length}" + (str(power) if power > 1 else "")
+        parameters.append(Variable(f"elastic.a{power}", "parameter", unit,
+                                   f"Coefficient of x^{power} in the elastic force Fe(x) "
+                                   f"({elastic_thesis})", coefficient))
+    h, x_ref, geometric_thesis = geometric
+    parameters += [
+        Variable("geometric.h", "parameter", f"1/{length}", f"Slope h of the geometric "
+                 f"multiplier f(x) = 1 + h*|x - x_ref| ({geometric_thesis})", h, f"1/{display}"),
+        Variable("geometric.x_ref", "parameter", length, f"Reference deflection x_ref of the "
+                 f"geometric multiplier ({geometric_thesis})", x_ref, display),
+    ]
+    units = {p.name: p.unit for p in parameters}
+
+    def check(values):
+        return (_positive(values, [f"{symbol}{i}" for i, _ in RUBBER_ELEMENTS
+                                   for symbol in ("k", "c", "xi")], units)
+                or _finite(values, [f"elastic.a{p}" for p in range(4)] + ["geometric.x_ref"], units)
+                or (None if values["geometric.h"] >= 0.0 and math.isfinite(values["geometric.h"])
+                    else f"parameter geometric.h = {values['geometric.h']!r} 1/{length} must be "
+                         f"zero or positive and finite"))
+
+    def build(values):
+        def element(i):
+            return MaxwellElement(values[f"k{i}"], values[f"c{i}"], values[f"xi{i}"])
+        return RubberModel(
+            branches=[Branch(element(1), nested=element(2)), Branch(element(3))],
+            elastic=[values[f"elastic.a{p}"] for p in range(4)],
+            geometric_slope=values["geometric.h"],
+            geometric_reference=values["geometric.x_ref"],
+            unilateral=unilateral)
+
+    return ComponentDefinition(
+        name, description, inputs, outputs, parameters, build, check,
+        direct_outputs=[o.name for o in outputs],
+        measured_ranges={deflection: measured_range})
+
+
+ROAD_WHEEL_TYRE = _rubber_component(
+    "RoadWheelTyre",
+    "Warrior road-wheel tyre, radial compression against a track link: carbon-black-filled "
+    "natural rubber, final three-Maxwell-element model (thesis sections 5-7, Appendix 4b). "
+    "Unilateral contact: pushes, never pulls.",
+    deflection="compression", load="force", angular=False,
+    elements=[(1500 / MM, 1000.0, 0.0067 * MM, ("1500 N/mm", "1000 N", "0.0067 mm/s")),
+              (1500 / MM, 1000.0, 6.67 * MM, ("1500 N/mm", "1000 N", "6.67 mm/s")),
+              (150 / MM, 500.0, 3.33 * MM, ("150 N/mm", "500 N", "3.33 mm/s"))],
+    elastic=((0.0, 2.17e6, -2.14e8, 1.82e11), "Eq. 5.3.1-3"),
+    geometric=(543.0, 0.0, "Eq. 5.3.2-2: f = 543 x + 1"),
+    unilateral=True,
+    measured_range=(-math.inf, 10 * MM, "compression up to about 6 mm (45 kN), Fig. 5.4-3"))
+
+TRACK_BUSH_RADIAL = _rubber_component(
+    "TrackBushRadial",
+    "Warrior track-link bush, radial (pin) deflection: carbon-black-filled natural rubber, "
+    "final three-Maxwell-element model (thesis sections 5-7, Appendix 4b).",
+    deflection="deflection", load="force", angular=False,
+    elements=[(60000 / MM, 3800.0, 0.00063 * MM, ("60000 N/mm", "3800 N", "0.00063 mm/s")),
+              (60000 / MM, 3800.0, 0.63 * MM, ("60000 N/mm", "3800 N", "0.63 mm/s")),
+              (17000 / MM, 100000.0, 5.9 * MM, ("17000 N/mm", "100000 N", "5.9 mm/s"))],
+    elastic=((0.0, 81.8e6, 0.0, 0.0), "Eq. 5.3.1-2"),
+    geometric=(0.0, 0.0, "Appendix 4b: f = 1"),
+    unilateral=False,
+    measured_range=(-0.6 * MM, 0.6 * MM, "radial load up to 50 kN, section 5.1.2"))
+
+TRACK_BUSH_TORSION = _rubber_component(
+    "TrackBushTorsion",
+    "Warrior track-link bush, torsion about the pin: angle between adjacent links, zero with "
+    "links in line, live angle about 10 deg. Final three-Maxwell-element model (thesis "
+    "sections 5-7, Appendix 4b).",
+    deflection="angle", load="torque", angular=True,
+    elements=[(10 * PER_DEG, 20.0, 0.02 / PER_DEG, ("10 N.m/deg", "20 N.m", "0.02 deg/s")),
+              (10 * PER_DEG, 20.0, 20 / PER_DEG, ("10 N.m/deg", "20 N.m", "20 deg/s")),
+              (3 * PER_DEG, 40.0, 13.3 / PER_DEG, ("3 N.m/deg", "40 N.m", "13.3 deg/s"))],
+    # Eq. 5.3.1-1 prints -130.4 N.m, Appendix 4b +130.4; the torque is near zero at the
+    # 10 deg live angle only with the minus sign (spec section 2).
+    elastic=((-130.4, 12.4 * PER_DEG, 0.0, 0.0), "Eq. 5.3.1-1: 12.4 N.m/deg * angle - 130.4 N.m"),
+    geometric=(0.033 * PER_DEG, 10.0 / PER_DEG, "Eq. 5.3.2-1: f = 0.033|angle - 10 deg| + 1"),
+    unilateral=False,
+    measured_range=(-35.0 / PER_DEG, 55.0 / PER_DEG,
+                    "live angle 10 deg +/- 23 deg around the sprocket, section 5.1.2"))
+
+
+# --- rotary damper (spec section 3) -------------------------------------------------------
+
+# Table A6-1, "smoothed curve" column (rad/s, N.m). The printed table lost the 0.6 rad/s
+# row on the compression side; it is restored by symmetry with the rebound side
+# (reference_data/thesis/table_A6-1.csv keeps all three columns and the note).
+DAMPER_TABLE_RATES = (
+    -14.0, -13.0, -12.0, -11.0, -10.0, -9.0, -8.0, -7.0, -6.0, -5.0, -4.0, -3.0, -2.0,
+    -1.8, -1.6, -1.4, -1.2, -1.0, -0.8, -0.6, -0.4, -0.2, -0.1, 0.0, 0.1, 0.2, 0.4, 0.6, 0.8,
+    1.0, 1.2, 1.4, 1.6, 1.8, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0, 11.0, 12.0, 13.0,
+    14.0)
+DAMPER_TABLE_TORQUES = (
+    -8050.0, -8050.0, -8050.0, -8050.0, -7950.0, -7950.0, -7800.0, -7600.0, -7400.0, -7250.0,
+    -7000.0, -6500.0, -6000.0, -5800.0, -5550.0, -5200.0, -4471.0, -3250.0, -2186.0, -1306.0,
+    -622.0, -194.0, -100.0, 0.0, 100.0, 194.0, 622.0, 1306.0, 2186.0, 3250.0, 4471.0, 5856.0,
+    7200.0, 8000.0, 8500.0, 10300.0, 11600.0, 12100.0, 12600.0, 12850.0, 13000.0, 13200.0,
+    13400.0, 13550.0, 13550.0, 13650.0, 13650.0)
+TABLE_SIZE = len(DAMPER_TABLE_RATES)
+
+
+def _rate_name(i):
+    return f"dashpot.rate[{i + 1}]"
+
+
+def _torque_name(i):
+    return f"dashpot.torque[{i + 1}]"
+
+
+def _damper_component():
+    inputs = (
+        Variable("angle", "input", "rad", "Wheel-arm angle theta relative to the hull, at the "
+                 "damper rotor", 0.0, "deg"),
+        Variable("angle_rate", "input", "rad/s", "Arm angular rate d(theta)/dt, held over each "
+                 "communication step; positive in bump (compression)", 0.0, "deg/s"),
+    )
+    outputs = (
+        Variable("torque", "output", "N.m", "Torque applied to the damper to produce the arm "
+                 "motion: the gas-spring torque Tg (Eq. A5-16); steady rate gives Table A6-1"),
+        Variable("gas_deflection", "output", "rad", "Gas-spring deflection xd = theta - "
+                 "theta_r, bounded by |xd| < C2", display_unit="deg"),
+        Variable("rotor_rate", "output", "rad/s", "Rate omega_r of the rotor node between gas "
+                 "spring and dashpot", display_unit="deg/s"),
+        Variable("dashpot_torque", "output", "N.m", "Dashpot torque Td(omega_r) from the "
+                 "Table A6-1 curve (Appendix 6)"),
+        Variable("stiffness", "output", "N.m/rad", "Instantaneous tangent stiffness "
+                 "d torque/d theta, the gas-spring stiffness (rotor inertia holds theta_r)",
+                 display_unit="N.m/deg"),
+    )
+    parameters = [
+        Variable("C1", "parameter", "N.m", "Gas-spring torque constant C1 (Eq. A5-16; the "
+                 "thesis prints 0.8e6 in N.mm, section 13.0)", 800.0),
+        Variable("C2", "parameter", "rad", "Gas-spring deflection limit C2 (Eq. A5-16, "
+                 "section 13.0: 0.03 rad)", 0.03, "deg"),
+        Variable("I", "parameter", "kg.m2", "Rotor inertia at the node between gas spring "
+                 "and dashpot (section 12.6: 0.118 kg.m2)", 0.118),
+    ]
+    for i, (rate, torque) in enumerate(zip(DAMPER_TABLE_RATES, DAMPER_TABLE_TORQUES)):
+        parameters.append(Variable(_rate_name(i), "parameter", "rad/s", f"Dashpot curve point "
+                                   f"{i + 1}: angular rate (Table A6-1)", rate, "deg/s"))
+        parameters.append(Variable(_torque_name(i), "parameter", "N.m", f"Dashpot curve point "
+                                   f"{i + 1}: torque, smoothed column (Table A6-1)", torque))
+    units = {p.name: p.unit for p in parameters}
+
+    def table(values):
+        return ([values[_rate_name(i)] for i in range(TABLE_SIZE)],
+                [values[_torque_name(i)] for i in range(TABLE_SIZE)])
+
+    def check(values):
+        problem = _positive(values, ["C1", "C2", "I"], units)
+        if problem:
+            return problem
+        rates, torques = table(values)
+        problem = check_monotone_table(rates, torques)
+        if problem:
+            return f"dashpot table: {problem}"
+        for rate, torque in zip(rates, torques):
+            if rate * torque < 0.0 or (rate == 0.0 and torque != 0.0):
+                return (f"dashpot table: torque {torque:.6g} N.m at rate {rate:.6g} rad/s "
+                        f"would feed energy in; a dashpot's torque takes the sign of its rate")
+        return None
+
+    def build(values):
+        rates, torques = table(values)
+        return RotaryDamper(values["C1"], values["C2"], values["I"], rates, torques)
+
+    return ComponentDefinition(
+        "RotaryDamper",
+        "Warrior rotary suspension damper at the wheel-arm pivot: Table A6-1 dashpot "
+        "(laminar, turbulent, blow-off) in series with an isothermal entrapped-gas spring, "
+        "rotor inertia between them (thesis chapters 9-14, Appendices 5 and 6).",
+        inputs, outputs, parameters, build, check,
+        direct_outputs=["torque", "gas_deflection", "stiffness"],
+        measured_ranges={"angle": (-math.pi / 4, math.pi / 4, "rotation about +/-45 deg, section 9.1"),
+                         "angle_rate": (-14.0, 14.0, "Table A6-1 spans +/-14 rad/s")})
+
+
+ROTARY_DAMPER = _damper_component()
+
+COMPONENTS = {c.name: c for c in (ROAD_WHEEL_TYRE, TRACK_BUSH_RADIAL, TRACK_BUSH_TORSION,
+                                  ROTARY_DAMPER)}
