@@ -16,6 +16,7 @@ Two input conventions are provided:
   approximates.
 """
 
+import bisect
 import csv
 import math
 from dataclasses import dataclass
@@ -27,11 +28,13 @@ from scipy.interpolate import PchipInterpolator
 
 THESIS_DATA = Path(__file__).resolve().parents[2] / "reference_data" / "thesis"
 RTOL = 1e-10
-ATOL = 1e-14
+ATOL_FRACTION = 1e-10  # absolute tolerance as a fraction of each state's typical size
 
-# FMU name -> thesis component key in the CSV files.
+# FMU name -> thesis component key in the CSV files, and the name of its load output.
 RUBBER_KEYS = {"RoadWheelTyre": "tyre", "TrackBushRadial": "bush_radial",
                "TrackBushTorsion": "bush_torsion"}
+LOAD_NAMES = {"RoadWheelTyre": "force", "TrackBushRadial": "force",
+              "TrackBushTorsion": "torque"}
 
 
 def _rows(name):
@@ -95,8 +98,11 @@ def damper_spec():
 class RubberEquations:
     state_size = 3
 
-    def __init__(self, spec):
+    def __init__(self, spec, load_name):
         self.spec = spec
+        self.names = (load_name, f"{load_name}_elastic", f"{load_name}_viscoelastic")
+        # Spring deformations reach about c/k, where each dashpot saturates.
+        self.atol = np.array([c / k for k, c, _ in spec.elements]) * ATOL_FRACTION
 
     def initial_state(self, x0, v0):
         return np.zeros(3)
@@ -112,6 +118,19 @@ class RubberEquations:
         rdot = rate - k3 * r * (abs(rate) + xi3) / c3
         return [sdot, wdot, rdot]
 
+    def jac(self, t, y, x_of_t, rate):
+        (k1, c1, xi1), (k2, c2, xi2), (k3, c3, xi3) = self.spec.elements
+        if self.spec.unilateral and x_of_t(t) <= 0.0:
+            rate = 0.0
+        s, w, r = y
+        b1 = (abs(rate) + xi1) / c1
+        sdot = rate - (k1 * s + k2 * w) * b1
+        d_sdot = np.array([-k1 * b1, -k2 * b1, 0.0])
+        d_wdot = d_sdot * (1.0 - k2 * w * np.sign(sdot) / c2)
+        d_wdot[1] -= k2 * (abs(sdot) + xi2) / c2
+        d_rdot = np.array([0.0, 0.0, -k3 * (abs(rate) + xi3) / c3])
+        return np.array([d_sdot, d_wdot, d_rdot])
+
     def breakpoints(self, t0, t1, x0, rate):
         """Times inside (t0, t1) where the right-hand side switches (contact)."""
         if self.spec.unilateral and rate != 0.0:
@@ -124,14 +143,14 @@ class RubberEquations:
         spec = self.spec
         (k1, _, _), (k2, _, _), (k3, _, _) = spec.elements
         if spec.unilateral and x <= 0.0:
-            return {"force": 0.0, "elastic": 0.0, "viscoelastic": 0.0}
+            return dict.fromkeys(self.names, 0.0)
         a0, a1, a2, a3 = spec.elastic
         elastic = a0 + a1 * x + a2 * x ** 2 + a3 * x ** 3
         viscoelastic = (1.0 + spec.h * abs(x - spec.x_ref)) * (k1 * y[0] + k2 * y[1] + k3 * y[2])
         force = elastic + viscoelastic
         if spec.unilateral:
             force = max(0.0, force)
-        return {"force": force, "elastic": elastic, "viscoelastic": viscoelastic}
+        return dict(zip(self.names, (force, elastic, viscoelastic)))
 
 
 class DamperEquations:
@@ -139,17 +158,35 @@ class DamperEquations:
 
     def __init__(self, spec):
         self.spec = spec
-        self.curve = PchipInterpolator(spec.rates, spec.torques, extrapolate=False)
-        self.end_slopes = (self.curve.derivative()(spec.rates[0]),
-                           self.curve.derivative()(spec.rates[-1]))
+        curve = PchipInterpolator(spec.rates, spec.torques, extrapolate=False)
+        # scipy's own piecewise-cubic coefficients, evaluated in plain Python: the solver
+        # calls this a million times per case, where a scalar call into scipy costs ~20 us.
+        self.knots = [float(r) for r in curve.x]
+        self.coefficients = [tuple(float(c) for c in column) for column in curve.c.T]
+        self.end_slopes = (self.coefficients[0][2], self._cubic(self.knots[-1])[1])
+        self.atol = np.array([spec.C2, 1.0]) * ATOL_FRACTION  # rotor angle (rad), rate (rad/s)
+
+    def _cubic(self, rate):
+        """(value, slope) of the PCHIP curve inside the table."""
+        i = min(max(bisect.bisect_right(self.knots, rate) - 1, 0), len(self.coefficients) - 1)
+        c3, c2, c1, c0 = self.coefficients[i]
+        d = rate - self.knots[i]
+        return ((c3 * d + c2) * d + c1) * d + c0, (3 * c3 * d + 2 * c2) * d + c1
+
+    def dashpot_slope(self, rate):
+        if rate < self.knots[0]:
+            return self.end_slopes[0]
+        if rate > self.knots[-1]:
+            return self.end_slopes[1]
+        return self._cubic(rate)[1]
 
     def dashpot(self, rate):
         spec = self.spec
-        if rate < spec.rates[0]:
-            return spec.torques[0] + self.end_slopes[0] * (rate - spec.rates[0])
-        if rate > spec.rates[-1]:
-            return spec.torques[-1] + self.end_slopes[1] * (rate - spec.rates[-1])
-        return float(self.curve(rate))
+        if rate < self.knots[0]:
+            return spec.torques[0] + self.end_slopes[0] * (rate - self.knots[0])
+        if rate > self.knots[-1]:
+            return spec.torques[-1] + self.end_slopes[1] * (rate - self.knots[-1])
+        return self._cubic(rate)[0]
 
     def gas(self, deflection):
         q = deflection / self.spec.C2
@@ -163,6 +200,12 @@ class DamperEquations:
         return [rotor_rate,
                 (self.gas(theta_of_t(t) - rotor_angle) - self.dashpot(rotor_rate)) / self.spec.I]
 
+    def jac(self, t, y, theta_of_t, rate):
+        q = (theta_of_t(t) - y[0]) / self.spec.C2
+        gas_slope = self.spec.C1 / self.spec.C2 * (1.0 / (1.0 - q) ** 2 + 1.0 / (1.0 + q) ** 2)
+        dashpot_slope = self.dashpot_slope(y[1])
+        return np.array([[0.0, 1.0], [-gas_slope / self.spec.I, -dashpot_slope / self.spec.I]])
+
     def breakpoints(self, t0, t1, x0, rate):
         return []
 
@@ -175,7 +218,7 @@ class DamperEquations:
 def equations_for(fmu_name):
     if fmu_name == "RotaryDamper":
         return DamperEquations(damper_spec())
-    return RubberEquations(rubber_spec(fmu_name))
+    return RubberEquations(rubber_spec(fmu_name), LOAD_NAMES[fmu_name])
 
 
 # --- solvers ---------------------------------------------------------------------------
@@ -187,8 +230,8 @@ def _integrate(equations, y, t_points, x_of_t, rate):
     states = []
     for a, b in zip(edges[:-1], edges[1:]):
         inside = [t for t in t_points[1:] if a < t <= b]
-        sol = solve_ivp(equations.rhs, (a, b), y, method="Radau", rtol=RTOL, atol=ATOL,
-                        args=(x_of_t, rate), t_eval=inside or None)
+        sol = solve_ivp(equations.rhs, (a, b), y, method="Radau", rtol=RTOL, atol=equations.atol,
+                        jac=equations.jac, args=(x_of_t, rate), t_eval=inside or None)
         if not sol.success:
             raise RuntimeError(f"reference solve failed on [{a}, {b}]: {sol.message}")
         if inside:
@@ -239,8 +282,11 @@ def solve_smooth(fmu_name, t_eval, x_of_t, v_of_t):
     def rhs(t, y):
         return equations.rhs(t, y, x_of_t, v_of_t(t))
 
-    sol = solve_ivp(rhs, (t_eval[0], t_eval[-1]), y0, method="Radau", rtol=RTOL, atol=ATOL,
-                    t_eval=t_eval, dense_output=False)
+    def jac(t, y):
+        return equations.jac(t, y, x_of_t, v_of_t(t))
+
+    sol = solve_ivp(rhs, (t_eval[0], t_eval[-1]), y0, method="Radau", rtol=RTOL, atol=equations.atol,
+                    jac=jac, t_eval=t_eval)
     if not sol.success:
         raise RuntimeError(f"reference solve failed: {sol.message}")
     rows = [equations.outputs(sol.y[:, i], x_of_t(t)) for i, t in enumerate(sol.t)]

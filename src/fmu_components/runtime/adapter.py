@@ -11,6 +11,7 @@ logged with fmi2Error status and reported through do_step's return value (fmi2Di
 """
 
 import math
+import sys
 import traceback
 from xml.etree.ElementTree import Element, SubElement
 
@@ -37,12 +38,26 @@ CAPABILITIES = {
     "providesDirectionalDerivative": "false",
 }
 
+# pythonfmu 0.7.0 finds the slave class by executing the entry module's source against the
+# module's namespace and then calls Py_DECREF on that namespace, a borrowed reference
+# (PyModule_GetDict). Each instantiation so drops a reference it never took: after the
+# first instance the entry module's namespace is freed and the next instantiation crashes
+# the host. The entry module takes one extra reference when it is imported, and every
+# instance gives back the one pythonfmu took (a list entry per instance).
+_NAMESPACE_REFERENCES = []
+
+
+def hold_module_namespace(namespace):
+    _NAMESPACE_REFERENCES.append(namespace)
+
+
 INSTANTIATED, INITIALIZATION, STEPPING, TERMINATED = (
     "instantiated", "initialization mode", "step mode", "terminated")
 
 
 class _RealWithUnit(Real):
-    """pythonfmu's Real with the unit and display unit it does not write itself."""
+    """pythonfmu's Real with the unit and display unit it does not write itself, and a
+    start value that round-trips (pythonfmu prints 16 digits, which can lose the last bit)."""
 
     def __init__(self, name, unit, display_unit, **kwargs):
         super().__init__(name, **kwargs)
@@ -52,6 +67,8 @@ class _RealWithUnit(Real):
     def to_xml(self):
         node = super().to_xml()
         real = node.find("Real")
+        if self.start is not None:
+            real.set("start", repr(float(self.start)))
         if self.unit:
             real.set("unit", self.unit)
         if self.display_unit:
@@ -72,6 +89,7 @@ class ComponentSlave(Fmi2Slave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
+        hold_module_namespace(vars(sys.modules[type(self).__module__]))
         definition = self.definition
         self.modelName = definition.name
         self.description = definition.description

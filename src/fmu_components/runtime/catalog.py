@@ -76,16 +76,15 @@ RUBBER_ELEMENTS = (
 )
 
 
-def _rubber_component(name, description, *, deflection, load, angular, elements, elastic,
-                      geometric, unilateral, measured_range):
+def _rubber_component(name, description, *, deflection, deflection_meaning, load, angular,
+                      elements, elastic, geometric, unilateral, measured_range):
     """elements: per element 1..3 (k, c, xi, thesis text); elastic: (a0..a3, thesis text);
     geometric: (h, x_ref, thesis text)."""
     length, load_unit = ("rad", "N.m") if angular else ("m", "N")
     display = "deg" if angular else "mm"
     stiffness = f"{load_unit}/{length}"
     inputs = (
-        Variable(deflection, "input", length, f"{deflection.replace('_', ' ').capitalize()}"
-                 f" x of the component ({length})", 0.0, display),
+        Variable(deflection, "input", length, deflection_meaning, 0.0, display),
         Variable(f"{deflection}_rate", "input", f"{length}/s",
                  f"Rate dx/dt of {deflection.replace('_', ' ')}, held over each communication step",
                  0.0, f"{display}/s"),
@@ -155,6 +154,7 @@ ROAD_WHEEL_TYRE = _rubber_component(
     "natural rubber, final three-Maxwell-element model (thesis sections 5-7, Appendix 4b). "
     "Unilateral contact: pushes, never pulls.",
     deflection="compression", load="force", angular=False,
+    deflection_meaning="Tyre compression x against the track link; x <= 0 is out of contact",
     elements=[(1500 / MM, 1000.0, 0.0067 * MM, ("1500 N/mm", "1000 N", "0.0067 mm/s")),
               (1500 / MM, 1000.0, 6.67 * MM, ("1500 N/mm", "1000 N", "6.67 mm/s")),
               (150 / MM, 500.0, 3.33 * MM, ("150 N/mm", "500 N", "3.33 mm/s"))],
@@ -168,6 +168,7 @@ TRACK_BUSH_RADIAL = _rubber_component(
     "Warrior track-link bush, radial (pin) deflection: carbon-black-filled natural rubber, "
     "final three-Maxwell-element model (thesis sections 5-7, Appendix 4b).",
     deflection="deflection", load="force", angular=False,
+    deflection_meaning="Radial deflection x of the track pin in its bush",
     elements=[(60000 / MM, 3800.0, 0.00063 * MM, ("60000 N/mm", "3800 N", "0.00063 mm/s")),
               (60000 / MM, 3800.0, 0.63 * MM, ("60000 N/mm", "3800 N", "0.63 mm/s")),
               (17000 / MM, 100000.0, 5.9 * MM, ("17000 N/mm", "100000 N", "5.9 mm/s"))],
@@ -182,6 +183,8 @@ TRACK_BUSH_TORSION = _rubber_component(
     "links in line, live angle about 10 deg. Final three-Maxwell-element model (thesis "
     "sections 5-7, Appendix 4b).",
     deflection="angle", load="torque", angular=True,
+    deflection_meaning="Angle x between adjacent track links, zero with the links in line "
+                       "(live angle about 10 deg)",
     elements=[(10 * PER_DEG, 20.0, 0.02 / PER_DEG, ("10 N.m/deg", "20 N.m", "0.02 deg/s")),
               (10 * PER_DEG, 20.0, 20 / PER_DEG, ("10 N.m/deg", "20 N.m", "20 deg/s")),
               (3 * PER_DEG, 40.0, 13.3 / PER_DEG, ("3 N.m/deg", "40 N.m", "13.3 deg/s"))],
