@@ -1,0 +1,200 @@
+"""The built FMUs through fmpy: conformance, simulation, step-size consistency, state,
+passivity."""
+
+import ast
+import math
+import sys
+import zipfile
+
+import numpy as np
+import pytest
+from fmpy import read_model_description, simulate_fmu
+from fmpy.validation import validate_fmu
+
+from fmu_components.runtime.catalog import COMPONENTS
+from fmu_components.signals import input_table, secant_rates, sine, time_grid
+
+from conftest import FMU_NAMES, THESIS_SINES, peak_to_peak
+from fmu_runner import FmuRunner
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_fmu_passes_fmpy_validation(built_fmus, name):
+    assert validate_fmu(str(built_fmus[name])) == []
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_every_variable_has_unit_description_and_thesis_start_value(built_fmus, name):
+    description = read_model_description(str(built_fmus[name]))
+    units = {u.name: [d.name for d in u.displayUnits] for u in description.unitDefinitions}
+    catalog = {v.name: v for v in COMPONENTS[name].variables}
+    assert [v.name for v in description.modelVariables] == list(catalog)
+    for variable in description.modelVariables:
+        expected = catalog[variable.name]
+        assert variable.unit == expected.unit and variable.unit in units
+        assert variable.description
+        if expected.display_unit:
+            assert variable.displayUnit in units[variable.unit]
+        if variable.causality == "parameter":
+            assert variable.variability == "fixed"
+            assert float(variable.start) == expected.start
+    assert description.defaultExperiment.tolerance is not None
+    assert description.coSimulation.canGetAndSetFMUstate
+    assert description.coSimulation.canSerializeFMUstate
+    assert not description.coSimulation.canInterpolateInputs
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_outputs_declare_direct_dependence_on_the_deflection(built_fmus, name):
+    description = read_model_description(str(built_fmus[name]))
+    deflection = description.modelVariables[0]
+    assert deflection.causality == "input"
+    direct = set(COMPONENTS[name].direct_outputs)
+    for unknown in description.outputs:
+        if unknown.variable.name in direct:
+            assert unknown.dependencies == [deflection]
+        else:
+            assert unknown.dependencies == []
+    assert COMPONENTS[name].outputs[0].name in direct
+    assert {u.variable.name for u in description.initialUnknowns} == {
+        v.name for v in COMPONENTS[name].outputs}
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_fmu_resources_import_only_the_standard_library(built_fmus, name):
+    allowed = set(sys.stdlib_module_names) | {"pythonfmu", "fmu_components", name}
+    with zipfile.ZipFile(built_fmus[name]) as archive:
+        sources = [n for n in archive.namelist() if n.startswith("resources/") and n.endswith(".py")]
+        assert any(n.endswith("runtime/integrator.py") for n in sources)
+        for source in sources:
+            tree = ast.parse(archive.read(source))
+            for node in ast.walk(tree):
+                if isinstance(node, ast.Import):
+                    modules = [alias.name for alias in node.names]
+                elif isinstance(node, ast.ImportFrom) and node.level == 0:
+                    modules = [node.module]
+                else:
+                    continue
+                for module in modules:
+                    assert module.split(".")[0] in allowed, f"{source} imports {module}"
+
+
+def sine_case(name, stop_time, step, frequency=None):
+    mean, amplitude, default_frequency = THESIS_SINES[name]
+    t = time_grid(stop_time, step)
+    return t, sine(t, mean, amplitude, frequency or default_frequency)
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_sine_simulation_gives_finite_outputs(built_fmus, name):
+    t, x = sine_case(name, 2.0, 1e-3)
+    result = simulate_fmu(str(built_fmus[name]), stop_time=t[-1], output_interval=1e-3,
+                          input=input_table(name, t, x))
+    for output in COMPONENTS[name].outputs:
+        assert np.all(np.isfinite(result[output.name])), output.name
+    assert peak_to_peak(result[COMPONENTS[name].outputs[0].name]) > 0
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_results_at_steps_1e_4_1e_3_1e_2_agree_at_common_times(built_fmus, name):
+    """Spec section 4: for the same input path, doStep(t, H) and n doSteps of H/n agree to
+    the integrator's tolerance. The path is a sine sampled every 10 ms and straight between
+    samples, so every step size sees the same deflection history."""
+    coarse = 1e-2
+    t_coarse, x_coarse = sine_case(name, 2.0, coarse)
+    v_coarse = secant_rates(t_coarse, x_coarse)
+    results = {}
+    for h in (1e-4, 1e-3, 1e-2):
+        t = time_grid(2.0, h)
+        segment = np.minimum((t / coarse + 1e-9).astype(int), len(t_coarse) - 1)
+        x = x_coarse[segment] + v_coarse[segment] * (t - t_coarse[segment])
+        runner = FmuRunner(built_fmus[name], instance_name=f"h{h}")
+        runner.initialize(x[0], v_coarse[0])
+        out = runner.run(x, v_coarse[segment], h)[:, 0]
+        runner.free()
+        stride = int(round(coarse / h))
+        results[h] = out[stride - 1::stride]
+    scale = peak_to_peak(results[1e-4])
+    rtol = COMPONENTS[name].default_experiment["tolerance"]
+    for h in (1e-3, 1e-2):
+        assert np.max(np.abs(results[h] - results[1e-4])) < 10 * rtol * scale, h
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_state_save_and_restore_continue_identically(built_fmus, name):
+    t, x = sine_case(name, 1.0, 1e-3)
+    v = secant_rates(t, x)
+    first = FmuRunner(built_fmus[name], instance_name="first")
+    first.initialize(x[0], v[0])
+    first.run(x[:401], v[:401], 1e-3)
+    saved_time = first.time
+    state = first.fmu.getFMUstate()
+    serialized = first.fmu.serializeFMUstate(state)
+    uninterrupted = first.run(x[400:], v[400:], 1e-3)
+
+    # Same instance, rewound.
+    first.fmu.setFMUstate(state)
+    first.time = saved_time
+    assert np.array_equal(first.run(x[400:], v[400:], 1e-3), uninterrupted)
+    first.fmu.freeFMUstate(state)
+    first.free()
+
+    # A fresh instance, from the serialized bytes.
+    second = FmuRunner(built_fmus[name], instance_name="second")
+    second.fmu.setupExperiment(startTime=0.0)
+    second.fmu.enterInitializationMode()
+    second.fmu.exitInitializationMode()
+    restored = second.fmu.deSerializeFMUstate(serialized)
+    second.fmu.setFMUstate(restored)
+    second.time = saved_time
+    assert np.array_equal(second.run(x[400:], v[400:], 1e-3), uninterrupted)
+    second.free()
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_each_closed_cycle_dissipates_energy(built_fmus, name):
+    """Passivity: the work done on the component over every closed cycle is >= 0."""
+    mean, amplitude, frequency = THESIS_SINES[name]
+    step = 1e-3
+    cycles = 3
+    t, x = sine_case(name, cycles / frequency, step)
+    runner = FmuRunner(built_fmus[name])
+    runner.initialize(x[0], secant_rates(t, x)[0])
+    force = np.concatenate([[runner.read()[0]], runner.run(x, secant_rates(t, x), step)[:, 0]])
+    runner.free()
+    per_cycle = int(round(1 / frequency / step))
+    for c in range(cycles):
+        k = slice(c * per_cycle, (c + 1) * per_cycle + 1)
+        work = np.trapezoid(force[k], x[k])
+        loop_scale = peak_to_peak(force[k]) * peak_to_peak(x[k])
+        assert work > 1e-3 * loop_scale, (c, work)
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_reset_returns_to_the_initial_state(built_fmus, name):
+    t, x = sine_case(name, 0.2, 1e-3)
+    v = secant_rates(t, x)
+    runner = FmuRunner(built_fmus[name])
+    runner.initialize(x[0], v[0])
+    before = runner.run(x, v, 1e-3)
+    runner.fmu.reset()
+    runner.initialize(x[0], v[0])
+    assert np.array_equal(runner.run(x, v, 1e-3), before)
+    runner.free()
+
+
+def test_many_instances_of_one_fmu_in_one_process(built_fmus):
+    """pythonfmu 0.7.0 frees the entry module's namespace after the first instance unless
+    the adapter compensates (see adapter.hold_module_namespace)."""
+    runners = [FmuRunner(built_fmus["TrackBushTorsion"], instance_name=f"joint{i}")
+               for i in range(12)]
+    outputs = []
+    for i, runner in enumerate(runners):
+        runner.initialize(math.radians(10 + i), 0.0)
+        outputs.append(runner.step(math.radians(10 + i), 0.1, 1e-3)[0])
+    assert len(set(outputs)) == 12 and all(np.isfinite(outputs))
+    for runner in runners:
+        runner.free()
+    for _ in range(2):
+        result = simulate_fmu(str(built_fmus["TrackBushTorsion"]), stop_time=0.01)
+        assert np.all(np.isfinite(result["torque"]))

@@ -1,0 +1,168 @@
+"""The shared stiff integrator: order, stability, error control, valid region, failures."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
+
+from fmu_components.runtime.catalog import ROTARY_DAMPER
+from fmu_components.runtime.integrator import ROS34PW2, Rosenbrock
+
+
+class LinearSystem:
+    """y' = A y: known solution expm(A t) y0."""
+
+    inside = None
+
+    def __init__(self, matrix, scale=1.0):
+        self.matrix = [list(map(float, row)) for row in matrix]
+        self.state_scale = [scale] * len(matrix)
+
+    def rhs(self, y, u):
+        return [sum(a * yj for a, yj in zip(row, y)) for row in self.matrix]
+
+    def jacobian(self, y, u):
+        return [row[:] for row in self.matrix]
+
+
+class ProtheroRobinson:
+    """y1' = lam (y1 - sin t) + cos t, t' = 1 (autonomous form): y1 = sin t from y1(0) = 0,
+    with stiffness lam."""
+
+    inside = None
+    state_scale = [1.0, 1.0]
+
+    def __init__(self, lam):
+        self.lam = lam
+
+    def rhs(self, y, u):
+        return [self.lam * (y[0] - math.sin(y[1])) + math.cos(y[1]), 1.0]
+
+    def jacobian(self, y, u):
+        return [[self.lam, -self.lam * math.cos(y[1]) - math.sin(y[1])], [0.0, 0.0]]
+
+
+# A stiff, non-normal 2x2 system: eigenvalues -1 and -1e4.
+P = np.array([[1.0, 1.0], [1.0, 2.0]])
+STIFF = P @ np.diag([-1.0, -1e4]) @ np.linalg.inv(P)
+
+
+def fixed_step_error(system, y0, t_end, n):
+    integrator = Rosenbrock(rtol=1.0)
+    y = list(y0)
+    h = t_end / n
+    for _ in range(n):
+        y, _ = integrator.step(system, y, 0.0, h)
+    exact = expm(np.array(system.matrix) * t_end) @ np.array(y0)
+    return float(np.max(np.abs(np.array(y) - exact)))
+
+
+def test_tableau_satisfies_order_conditions_and_is_l_stable():
+    tab = ROS34PW2
+    g = tab.gamma
+    alpha = np.array(tab.alpha)
+    beta = alpha + np.tril(np.array(tab.gamma_matrix), -1)
+    a_sum, b_sum = alpha.sum(axis=1), beta.sum(axis=1)
+    for weights, order in ((np.array(tab.b), 3), (np.array(tab.bhat), 2)):
+        assert weights.sum() == pytest.approx(1.0, abs=1e-14)
+        assert weights @ b_sum == pytest.approx(0.5 - g, abs=1e-14)
+        conditions_3 = (weights @ a_sum ** 2 - 1 / 3, weights @ beta @ b_sum - (1 / 6 - g + g * g))
+        if order == 3:
+            assert max(map(abs, conditions_3)) < 1e-14
+        else:
+            assert max(map(abs, conditions_3)) > 1e-3  # genuinely one order lower
+    # Stiffly accurate: the last stage is the solution, so R(infinity) = 0.
+    very_stiff = LinearSystem([[-1e12]])
+    y1, _ = Rosenbrock().step(very_stiff, [1.0], 0.0, 1.0)
+    assert abs(y1[0]) < 1e-10
+
+
+def test_observed_order_is_three_on_a_stiff_problem():
+    system = LinearSystem(STIFF)
+    errors = [fixed_step_error(system, [1.0, 0.5], 1.0, n) for n in (20, 40, 80, 160)]
+    orders = [math.log2(e0 / e1) for e0, e1 in zip(errors, errors[1:])]
+    assert all(2.7 < p < 3.3 for p in orders), orders
+
+
+@pytest.mark.parametrize("rtol", [1e-3, 1e-5, 1e-7])
+def test_error_control_meets_the_tolerance_on_prothero_robinson(rtol):
+    system = ProtheroRobinson(lam=-1e5)
+    integrator = Rosenbrock(rtol)
+    y = [0.0, 0.0]
+    for k in range(10):  # ten communication steps of 0.2 s
+        assert integrator.integrate(system, y, 0.0, 0.2) is None
+        assert abs(y[0] - math.sin(y[1])) < 10 * rtol
+    assert y[1] == pytest.approx(2.0, rel=1e-12)
+
+
+def test_tighter_tolerance_costs_more_steps_and_gives_smaller_error():
+    results = []
+    for rtol in (1e-3, 1e-6):
+        system = LinearSystem(STIFF)
+        integrator = Rosenbrock(rtol)
+        y = [1.0, 0.5]
+        assert integrator.integrate(system, y, 0.0, 1.0) is None
+        exact = expm(STIFF) @ np.array([1.0, 0.5])
+        results.append((integrator.accepted_steps, float(np.max(np.abs(np.array(y) - exact)))))
+    (steps_loose, error_loose), (steps_tight, error_tight) = results
+    assert steps_tight > steps_loose
+    assert error_tight < error_loose / 50
+
+
+class Asymptote:
+    """y' = 1 - y approaches 1 from below; the model is defined only for y < 1. An
+    L-stable, stiffly accurate step of any size lands exactly on 1 and must be rejected."""
+
+    state_scale = [1.0]
+
+    def inside(self, y):
+        return y[0] < 1.0
+
+    def rhs(self, y, u):
+        return [1.0 - y[0]]
+
+    def jacobian(self, y, u):
+        return [[-1.0]]
+
+
+def test_steps_leaving_the_valid_region_are_rejected_not_clipped():
+    integrator = Rosenbrock(1e-4)
+    integrator.h_next = 1e3  # a first guess far too large
+    y = [0.0]
+    assert integrator.integrate(Asymptote(), y, 0.0, 30.0) is None
+    assert y[0] < 1.0
+    assert y[0] == pytest.approx(1.0 - math.exp(-30.0), abs=1e-6)
+    assert integrator.rejected_steps > 0
+
+
+class Broken:
+    inside = None
+    state_scale = [1.0]
+
+    def rhs(self, y, u):
+        return [math.nan]
+
+    def jacobian(self, y, u):
+        return [[-1.0]]
+
+
+def test_failure_comes_back_as_a_message_with_the_state_untouched():
+    integrator = Rosenbrock()
+    y = [0.25]
+    message = integrator.integrate(Broken(), y, 0.0, 1e-3)
+    assert message and "step size" in message
+    assert y == [0.25]
+
+
+@pytest.mark.parametrize("duration", [1e-6, 1e-3, 1.0])
+def test_damper_system_integrates_any_step_from_1e_6_to_1_s(duration):
+    """The stiffest system here (rotor mode ~20 us) over one held-rate interval."""
+    damper = ROTARY_DAMPER.build_model({p.name: p.start for p in ROTARY_DAMPER.parameters})
+    integrator = Rosenbrock(1e-4)
+    y = [0.0, 0.0]  # gas deflection, rotor rate; the arm turns at 1 rad/s
+    assert integrator.integrate(damper, y, 1.0, duration) is None
+    assert abs(y[0]) < damper.gas_limit
+    if duration == 1.0:  # long enough to settle: rotor follows the arm, gas holds Td(1)
+        assert y[1] == pytest.approx(1.0, abs=1e-4)
+        assert damper.gas_torque(y[0]) == pytest.approx(3250.0, rel=1e-3)
