@@ -6,19 +6,28 @@
 
 Each FMU is pythonfmu's co-simulation wrapper around the generic adapter
 (fmu_components.runtime.adapter) and a generated entry class that names the component.
-Only the standard-library run-time package travels in the FMU's resources.
+Only the standard-library run-time package travels in the FMU's resources. The FMU's
+binary is the guard (src/fmu_components/native/fmi2_guard.c, compiled here with gcc) in
+front of pythonfmu's library: it returns fmi2Error for rejected calls, loads the Python
+shared library for C hosts, and never lets a failed instance crash the host. Building needs
+gcc; the FMUs are for linux64.
 """
 
 import argparse
 import math
 import shutil
+import subprocess
 import sys
+import sysconfig
 import tempfile
 import time
+import zipfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent
 SOURCE = ROOT / "src" / "fmu_components"
+GUARD_SOURCE = SOURCE / "native" / "fmi2_guard.c"
+PYTHONFMU_ENGINE = "libpythonfmu-export.so"  # the name fmi2_guard.c loads
 sys.path.insert(0, str(ROOT / "src"))
 
 from fmu_components.runtime.catalog import COMPONENTS  # noqa: E402
@@ -54,6 +63,41 @@ def stage_runtime(staging):
     return package
 
 
+def python_library():
+    """The shared library of the Python that builds (and so will run) the FMUs."""
+    soname = sysconfig.get_config_var("INSTSONAME") or ""
+    if ".so" in soname:
+        return soname
+    return f"libpython{sys.version_info.major}.{sys.version_info.minor}.so.1.0"
+
+
+def compile_guard(directory):
+    import fmpy
+
+    headers = Path(fmpy.__file__).parent / "c-code"
+    library = directory / "fmi2_guard.so"
+    subprocess.run(["gcc", "-shared", "-fPIC", "-O2", "-Wall", "-Wextra", "-Werror",
+                    f"-I{headers}", f'-DPYTHON_LIBRARY="{python_library()}"',
+                    str(GUARD_SOURCE), "-o", str(library), "-ldl", "-lpthread"], check=True)
+    return library
+
+
+def install_guard(fmu, guard):
+    """Make the guard the FMU's linux64 binary, with pythonfmu's library beside it; drop
+    pythonfmu's win64 binary, which would run without the guard."""
+    identifier = fmu.stem
+    binary = f"binaries/linux64/{identifier}.so"
+    rebuilt = fmu.with_suffix(".tmp")
+    with zipfile.ZipFile(fmu) as source, zipfile.ZipFile(rebuilt, "w", zipfile.ZIP_DEFLATED) as target:
+        for item in source.infolist():
+            if item.filename == binary:
+                target.writestr(f"binaries/linux64/{PYTHONFMU_ENGINE}", source.read(item))
+            elif not item.filename.startswith("binaries/"):
+                target.writestr(item, source.read(item))
+        target.write(guard, binary)
+    rebuilt.replace(fmu)
+
+
 def build(names, destination):
     from pythonfmu.builder import FmuBuilder
 
@@ -61,12 +105,14 @@ def build(names, destination):
     built = []
     with tempfile.TemporaryDirectory(prefix="fmu_components_") as tmp:
         staging = Path(tmp)
-        package = stage_runtime(staging)
+        guard = compile_guard(staging)
+        package = stage_runtime(staging / "runtime")
         for name in names:
             entry = staging / f"{name}.py"
             entry.write_text(ENTRY_TEMPLATE.format(name=name))
-            path = FmuBuilder.build_FMU(entry, dest=destination, project_files=[package])
-            built.append(Path(path))
+            path = Path(FmuBuilder.build_FMU(entry, dest=destination, project_files=[package]))
+            install_guard(path, guard)
+            built.append(path)
     return built
 
 

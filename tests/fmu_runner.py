@@ -1,21 +1,48 @@
 """Drive one FMU instance step by step through fmpy's FMU2Slave."""
 
+from ctypes import byref
+
 import numpy as np
-from fmpy import extract, read_model_description
-from fmpy.fmi2 import FMU2Slave
+from fmpy import calloc, extract, free, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+from fmpy.logging import addLoggerProxy
+
+OK, WARNING, DISCARD, ERROR, FATAL = range(5)
 
 
 class FmuRunner:
+    """One instance; every message it logs lands in `messages` as (status, text)."""
+
     def __init__(self, path, unzip_dir=None, instance_name="instance"):
         self.description = read_model_description(str(path))
         self.unzip_dir = unzip_dir or extract(str(path))
         self.vr = {v.name: v.valueReference for v in self.description.modelVariables}
         self.outputs = [v.name for v in self.description.modelVariables if v.causality == "output"]
         self.inputs = [v.name for v in self.description.modelVariables if v.causality == "input"]
+        self.messages = []
         self.fmu = FMU2Slave(guid=self.description.guid, unzipDirectory=self.unzip_dir,
                              modelIdentifier=self.description.coSimulation.modelIdentifier,
                              instanceName=instance_name)
-        self.fmu.instantiate()
+        self._callbacks = fmi2CallbackFunctions()
+        self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
+        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        addLoggerProxy(byref(self._callbacks))  # formats the message as a C host would
+        self.fmu.instantiate(callbacks=self._callbacks)
+        self.time = 0.0
+
+    def _log(self, environment, instance_name, status, category, message):
+        self.messages.append((status, message.decode("utf-8", "replace")))
+
+    def status(self, function, *args):
+        """The FMI status of a call (fmpy raises for statuses above fmi2Warning)."""
+        try:
+            result = function(*args)
+        except FMICallException as failure:
+            return failure.status
+        return result if isinstance(result, int) else OK
 
     def initialize(self, deflection, rate, start_time=0.0, tolerance=None, parameters=None):
         self.fmu.setupExperiment(tolerance=tolerance, startTime=start_time)

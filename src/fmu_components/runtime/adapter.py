@@ -2,14 +2,20 @@
 
 This is the only module that knows pythonfmu. Each FMU's entry script subclasses
 ``ComponentSlave`` and names its definition from the catalog; everything else (variables,
-units, parameter checks, the co-simulation step, state save and restore, the
-modelDescription's units and structure) is done here once for all four components.
+units, parameter checks, the FMI call sequence, the co-simulation step, state save and
+restore, the modelDescription's units and structure) is done here once for all four
+components.
 
-pythonfmu turns a Python exception into fmi2Fatal and then drops the instance, after which
-the next call crashes the host. So no method here lets an exception escape: failures are
-logged with fmi2Error status and reported through do_step's return value (fmi2Discard).
+How a call reports its outcome: the status it logs. pythonfmu itself can only return
+fmi2OK, fmi2Discard (do_step returned False) or fmi2Fatal (a Python exception, after which
+pythonfmu drops the instance and the next call crashes the host). The FMU's binary
+(native/fmi2_guard.c) returns the worst status logged during a call instead. So a method
+here never raises: it logs fmi2Error (or fmi2Warning, fmi2Discard) with a message that
+names the variable and the value, and leaves the instance as it was before the call.
 """
 
+import functools
+import json
 import math
 import sys
 import traceback
@@ -51,8 +57,45 @@ def hold_module_namespace(namespace):
     _NAMESPACE_REFERENCES.append(namespace)
 
 
-INSTANTIATED, INITIALIZATION, STEPPING, TERMINATED = (
-    "instantiated", "initialization mode", "step mode", "terminated")
+# FMI 2.0 co-simulation states (section 4.2.4) and the calls each allows.
+INSTANTIATED = "Instantiated"
+INITIALIZATION = "InitializationMode"
+STEP_COMPLETE = "StepComplete"
+STEP_FAILED = "StepFailed"
+TERMINATED = "Terminated"
+ANY_STATE = frozenset({INSTANTIATED, INITIALIZATION, STEP_COMPLETE, STEP_FAILED, TERMINATED})
+READABLE = frozenset({INITIALIZATION, STEP_COMPLETE, STEP_FAILED, TERMINATED})
+SETTABLE = frozenset({INSTANTIATED, INITIALIZATION, STEP_COMPLETE})
+
+
+def fmi_call(name, allowed, on_failure=None):
+    """Check the call sequence, and turn any unexpected exception into a logged fmi2Error
+    instead of pythonfmu's fatal path. `on_failure(self, *args)` is what the call returns
+    when it is refused."""
+
+    def decorate(method):
+        @functools.wraps(method)
+        def call(self, *args):
+            if self._mode not in allowed:
+                self._error(f"{name} is not allowed in state {self._mode} (allowed in: "
+                            f"{', '.join(sorted(allowed))}); call ignored")
+                return on_failure(self, *args) if on_failure else None
+            try:
+                return method(self, *args)
+            except Exception as exc:
+                detail = "".join(traceback.format_exception_only(type(exc), exc)).strip()
+                self._error(f"{name} failed inside the FMU ({detail}); call ignored")
+                return on_failure(self, *args) if on_failure else None
+        return call
+    return decorate
+
+
+def _nan_values(self, vrs):
+    return [math.nan] * len(vrs)
+
+
+def _false(self, *args):
+    return False
 
 
 class _RealWithUnit(Real):
@@ -114,7 +157,6 @@ class ComponentSlave(Fmi2Slave):
         self._start_time = 0.0
         self._tolerance = DEFAULT_RTOL
         self._cosim = None
-        self._failure = None  # a message that stops every further step
         self._outputs_stale = True
         self._warned = set()
 
@@ -123,68 +165,61 @@ class ComponentSlave(Fmi2Slave):
     def _error(self, message):
         self.log(message, Fmi2Status.error)
 
-    def _fail(self, message):
-        """Record a failure that makes every later doStep return fmi2Discard."""
-        self._failure = message
-        self._error(message)
-
-    def _unexpected(self, where, exc):
-        detail = "".join(traceback.format_exception_only(type(exc), exc)).strip()
-        self._fail(f"internal error in {where}: {detail}")
-
     # --- FMI life cycle -----------------------------------------------------------------
 
+    @fmi_call("fmi2SetupExperiment", {INSTANTIATED})
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
-        try:
-            self._start_time = float(start_time)
-            if tolerance is not None:
-                if not (tolerance > 0.0 and math.isfinite(tolerance)):
-                    self._fail(f"tolerance {tolerance!r} must be positive and finite")
-                else:
-                    self._tolerance = float(tolerance)
-        except Exception as exc:
-            self._unexpected("setupExperiment", exc)
+        if not math.isfinite(start_time):
+            self._error(f"fmi2SetupExperiment: startTime = {start_time!r} s is not finite; "
+                        f"call ignored")
+            return
+        if tolerance is not None and not (tolerance > 0.0 and math.isfinite(tolerance)):
+            self._error(f"fmi2SetupExperiment: tolerance = {tolerance!r} must be positive "
+                        f"and finite; call ignored")
+            return
+        self._start_time = float(start_time)
+        if tolerance is not None:
+            self._tolerance = float(tolerance)
 
+    @fmi_call("fmi2EnterInitializationMode", {INSTANTIATED})
     def enter_initialization_mode(self):
         self._mode = INITIALIZATION
 
+    @fmi_call("fmi2ExitInitializationMode", {INITIALIZATION})
     def exit_initialization_mode(self):
-        try:
-            problem = self.definition.check_parameters(self._parameter_values())
-            if problem:
-                self._fail(problem)
-                return
-            model = self.definition.build_model(self._parameter_values())
-            values = self._values
-            self._cosim = CoSimulation(model, self._tolerance, self._start_time,
-                                       values[self._deflection_vr], values[self._rate_vr])
-            self._mode = STEPPING
-            self._outputs_stale = True
-        except Exception as exc:
-            self._unexpected("exitInitializationMode", exc)
+        values = self._parameter_values()
+        problem = self.definition.check_parameters(values)
+        if problem:
+            # Stay in initialization mode: the host may correct the parameter and retry.
+            self._error(f"fmi2ExitInitializationMode: {problem}; still in initialization mode")
+            return
+        model = self.definition.build_model(values)
+        deflection, rate = self._values[self._deflection_vr], self._values[self._rate_vr]
+        self._cosim = CoSimulation(model, self._tolerance, self._start_time, deflection, rate)
+        self._mode = STEP_COMPLETE
+        self._outputs_stale = True
 
+    @fmi_call("fmi2Terminate", {STEP_COMPLETE, STEP_FAILED})
     def terminate(self):
         self._mode = TERMINATED
 
+    @fmi_call("fmi2DoStep", {STEP_COMPLETE}, on_failure=_false)
     def do_step(self, current_time, step_size):
-        try:
-            if self._failure:
-                self._error(f"doStep refused: {self._failure}")
-                return False
-            if self._mode != STEPPING:
-                self._error(f"doStep called in {self._mode}; call exitInitializationMode first")
-                return False
-            problem = self._cosim.do_step(current_time, step_size)
-            if problem:
-                self._error(problem)
-                return False
-            values = self._values
-            values[self._deflection_vr] = self._cosim.deflection
-            self._outputs_stale = True
-            return True
-        except Exception as exc:
-            self._unexpected("doStep", exc)
+        cosim = self._cosim
+        problem = cosim.check_step(current_time, step_size)
+        if problem:
+            self._error(f"fmi2DoStep: {problem}; step refused")
             return False
+        problem = cosim.do_step(current_time, step_size)
+        if problem:
+            # The step could not be completed and nothing changed: fmi2Discard, after
+            # which the host restores a state or retries (FMI 2.0 section 4.2.3).
+            self._mode = STEP_FAILED
+            self.log(f"fmi2DoStep: {problem}", Fmi2Status.discard)
+            return False
+        self._values[self._deflection_vr] = cosim.deflection
+        self._outputs_stale = True
+        return True
 
     # --- values ---------------------------------------------------------------------------
 
@@ -209,57 +244,63 @@ class ComponentSlave(Fmi2Slave):
             self._values[vr] = value
         self._outputs_stale = False
 
-    def get_real(self, vrs):
-        try:
-            if self._outputs_stale:
-                self._refresh_outputs()
-            values = self._values
-            return [values[vr] for vr in vrs]
-        except Exception as exc:
-            self._unexpected("getReal", exc)
-            return [math.nan] * len(vrs)
+    def _unknown(self, vrs):
+        return [vr for vr in vrs if not 0 <= vr < len(self._variables)]
 
+    @fmi_call("fmi2GetReal", READABLE | {INSTANTIATED}, on_failure=_nan_values)
+    def get_real(self, vrs):
+        unknown = self._unknown(vrs)
+        if unknown:
+            self._error(f"fmi2GetReal: no variable has value reference {unknown[0]}")
+            return _nan_values(self, vrs)
+        if self._outputs_stale:
+            self._refresh_outputs()
+        values = self._values
+        return [values[vr] for vr in vrs]
+
+    @fmi_call("fmi2SetReal", SETTABLE)
     def set_real(self, vrs, values):
-        try:
-            inputs_changed = False
-            for vr, value in zip(vrs, values):
-                problem = self._check_settable(vr, value)
-                if problem:
-                    self._error(problem)
-                    continue
-                if vr in (self._deflection_vr, self._rate_vr):
-                    inputs_changed = True
-                    self._warn_if_unmeasured(vr, value)
-                self._values[vr] = float(value)
-            if inputs_changed:
-                self._apply_inputs()
-            self._outputs_stale = True
-        except Exception as exc:
-            self._unexpected("setReal", exc)
+        accepted = []
+        for vr, value in zip(vrs, values):
+            problem = self._check_settable(vr, value)
+            if problem:
+                self._error(f"fmi2SetReal: {problem}; value ignored")
+            else:
+                accepted.append((vr, float(value)))
+        inputs = [self._values[self._deflection_vr], self._values[self._rate_vr]]
+        touches_inputs = False
+        for vr, value in accepted:
+            if vr <= self._rate_vr:
+                inputs[vr] = value
+                touches_inputs = True
+            else:
+                self._values[vr] = value
+        if touches_inputs:
+            self._apply_inputs(*inputs)
+        self._outputs_stale = True
 
     def _check_settable(self, vr, value):
         if not 0 <= vr < len(self._variables):
-            return f"setReal: no variable has value reference {vr}"
+            return f"no variable has value reference {vr}"
         variable = self._variables[vr]
         if variable.causality == "output":
-            return f"setReal: {variable.name} is an output and cannot be set"
+            return f"{variable.name} is an output"
         if variable.causality == "parameter" and self._mode not in (INSTANTIATED, INITIALIZATION):
-            return (f"setReal: parameter {variable.name} is fixed once initialization is "
-                    f"complete; set it before fmi2ExitInitializationMode")
-        if not math.isfinite(value):
-            return f"setReal: {variable.name} = {value!r} is not a finite number; value ignored"
-        return None
+            return (f"{variable.name} is a fixed parameter, settable only before "
+                    f"fmi2ExitInitializationMode")
+        return variable.check(value)
 
-    def _apply_inputs(self):
-        if self._cosim is None:
-            return
-        values = self._values
-        problem = self._cosim.set_inputs(values[self._deflection_vr], values[self._rate_vr])
-        if problem:
-            # Keep the inputs the model accepted last: the state stays consistent.
-            values[self._deflection_vr] = self._cosim.deflection
-            values[self._rate_vr] = self._cosim.rate
-            self._error(f"setReal: {problem}; value ignored")
+    def _apply_inputs(self, deflection, rate):
+        """Take both inputs, or neither: the model may reject a deflection (the damper's
+        gas spring has a limit), and then nothing changes."""
+        if self._cosim is not None:
+            problem = self._cosim.set_inputs(deflection, rate)
+            if problem:
+                self._error(f"fmi2SetReal: {problem}; values ignored")
+                return
+        for vr, value in ((self._deflection_vr, deflection), (self._rate_vr, rate)):
+            self._warn_if_unmeasured(vr, value)
+            self._values[vr] = value
 
     def _warn_if_unmeasured(self, vr, value):
         variable = self._variables[vr]
@@ -273,36 +314,79 @@ class ComponentSlave(Fmi2Slave):
                      f"thesis measured ({measured}); the model extrapolates. Warned once per "
                      f"instance.", Fmi2Status.warning)
 
+    # The FMUs have Real variables only (pythonfmu's own versions of these would raise).
+    def _refuse_non_real(self, call, vrs):
+        if vrs:
+            self._error(f"{call}: no variable of this type has value reference {vrs[0]}")
+
+    def get_integer(self, vrs):
+        self._refuse_non_real("fmi2GetInteger", vrs)
+        return [0] * len(vrs)
+
+    def get_boolean(self, vrs):
+        self._refuse_non_real("fmi2GetBoolean", vrs)
+        return [False] * len(vrs)
+
+    def get_string(self, vrs):
+        self._refuse_non_real("fmi2GetString", vrs)
+        return [""] * len(vrs)
+
+    def set_integer(self, vrs, values):
+        self._refuse_non_real("fmi2SetInteger", vrs)
+
+    def set_boolean(self, vrs, values):
+        self._refuse_non_real("fmi2SetBoolean", vrs)
+
+    def set_string(self, vrs, values):
+        self._refuse_non_real("fmi2SetString", vrs)
+
     # --- FMU state --------------------------------------------------------------------
 
+    @fmi_call("fmi2GetFMUstate", ANY_STATE, on_failure=lambda self: {})
     def _get_fmu_state(self):
-        try:
-            return {"values": self._values[:], "mode": self._mode,
-                    "start_time": self._start_time, "tolerance": self._tolerance,
-                    "failure": self._failure, "warned": sorted(self._warned),
-                    "cosim": self._cosim.snapshot() if self._cosim is not None else None}
-        except Exception as exc:
-            self._unexpected("getFMUstate", exc)
-            return {}
+        return {"model": self.definition.name, "values": self._values[:], "mode": self._mode,
+                "start_time": self._start_time, "tolerance": self._tolerance,
+                "warned": sorted(self._warned),
+                "cosim": self._cosim.snapshot() if self._cosim is not None else None}
 
+    @fmi_call("fmi2SetFMUstate", ANY_STATE)
     def _set_fmu_state(self, state):
+        problem = state.get("invalid") if isinstance(state, dict) else "not a state"
+        if not problem and state.get("model") != self.definition.name:
+            problem = (f"the state belongs to {state.get('model')!r}, not to "
+                       f"{self.definition.name}")
+        if problem:
+            self._error(f"fmi2SetFMUstate: {problem}; state unchanged")
+            return
+        values = list(state["values"])
+        cosim = None
+        if state["cosim"] is not None:
+            names = [v.name for v in self._variables]
+            model = self.definition.build_model(
+                {names[vr]: values[vr] for vr in self._parameter_vrs})
+            cosim = CoSimulation(model, state["tolerance"])
+            cosim.restore(state["cosim"])
+        self._values = values
+        self._mode = state["mode"]
+        self._start_time = state["start_time"]
+        self._tolerance = state["tolerance"]
+        self._warned = set(state["warned"])
+        self._cosim = cosim
+        self._outputs_stale = True
+
+    @staticmethod
+    def _fmu_state_to_bytes(state):
+        return json.dumps(state).encode("utf-8")
+
+    @staticmethod
+    def _fmu_state_from_bytes(state):
+        # No instance to log to here: a broken buffer becomes a state that
+        # fmi2SetFMUstate refuses with a message.
         try:
-            self._values = list(state["values"])
-            self._mode = state["mode"]
-            self._start_time = state["start_time"]
-            self._tolerance = state["tolerance"]
-            self._failure = state["failure"]
-            self._warned = set(state["warned"])
-            snapshot = state["cosim"]
-            if snapshot is None:
-                self._cosim = None
-            else:
-                model = self.definition.build_model(self._parameter_values())
-                self._cosim = CoSimulation(model, self._tolerance)
-                self._cosim.restore(snapshot)
-            self._outputs_stale = True
+            decoded = json.loads(state.decode("utf-8"))
+            return decoded if isinstance(decoded, dict) else {"invalid": "not a state"}
         except Exception as exc:
-            self._unexpected("setFMUstate", exc)
+            return {"invalid": f"the serialized state cannot be read ({exc})"}
 
     # --- modelDescription: what pythonfmu 0.7.0 leaves out ------------------------------
 

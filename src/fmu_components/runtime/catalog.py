@@ -17,30 +17,45 @@ PER_DEG = 180.0 / math.pi  # multiplies a per-degree value into per-radian
 MM = 1e-3
 
 
-class Variable:
-    __slots__ = ("name", "causality", "unit", "display_unit", "description", "start")
+POSITIVE, NON_NEGATIVE = "positive", "zero or positive"
 
-    def __init__(self, name, causality, unit, description, start=None, display_unit=None):
+
+class Variable:
+    __slots__ = ("name", "causality", "unit", "display_unit", "description", "start",
+                 "constraint")
+
+    def __init__(self, name, causality, unit, description, start=None, display_unit=None,
+                 constraint=None):
         self.name = name
         self.causality = causality
         self.unit = unit
         self.display_unit = display_unit
         self.description = description
         self.start = start
+        self.constraint = constraint  # POSITIVE, NON_NEGATIVE or None (any finite value)
+
+    def check(self, value):
+        """A message if the value cannot be this variable's, else None."""
+        if not math.isfinite(value):
+            return f"{self.name} = {value!r} {self.unit} is not a finite number"
+        if (self.constraint == POSITIVE and value <= 0.0) or (
+                self.constraint == NON_NEGATIVE and value < 0.0):
+            return f"{self.name} = {value!r} {self.unit} must be {self.constraint}"
+        return None
 
 
 class ComponentDefinition:
     """Everything the generic FMU adapter needs to know about one component."""
 
     def __init__(self, name, description, inputs, outputs, parameters, build_model,
-                 check_parameters, direct_outputs, measured_ranges, stop_time=2.0):
+                 direct_outputs, measured_ranges, check_together=None, stop_time=2.0):
         self.name = name
         self.description = description
         self.inputs = inputs  # (deflection, rate)
         self.outputs = outputs
         self.parameters = parameters
         self.build_model = build_model  # dict name -> value  ->  model
-        self.check_parameters = check_parameters  # dict -> message or None
+        self.check_together = check_together  # dict -> message or None, across parameters
         self.direct_outputs = direct_outputs  # outputs that depend directly on the deflection
         self.measured_ranges = measured_ranges  # input name -> (low, high, what the thesis measured)
         self.default_experiment = {"startTime": 0.0, "stopTime": stop_time,
@@ -50,20 +65,14 @@ class ComponentDefinition:
     def variables(self):
         return list(self.inputs) + list(self.outputs) + list(self.parameters)
 
-
-def _positive(values, names, units):
-    for name in names:
-        value = values[name]
-        if not (value > 0.0 and math.isfinite(value)):
-            return f"parameter {name} = {value!r} {units[name]} must be positive and finite"
-    return None
-
-
-def _finite(values, names, units):
-    for name in names:
-        if not math.isfinite(values[name]):
-            return f"parameter {name} = {values[name]!r} {units[name]} must be finite"
-    return None
+    def check_parameters(self, values):
+        """A message naming the first parameter (or combination) that makes no physical
+        sense, else None."""
+        for parameter in self.parameters:
+            problem = parameter.check(values[parameter.name])
+            if problem:
+                return f"parameter {problem}"
+        return self.check_together(values) if self.check_together else None
 
 
 # --- rubber components (spec section 2) ---------------------------------------------------
@@ -103,11 +112,13 @@ def _rubber_component(name, description, *, deflection, deflection_meaning, load
     for (index, role), (k, c, xi, thesis) in zip(RUBBER_ELEMENTS, elements):
         parameters += [
             Variable(f"k{index}", "parameter", stiffness, f"Spring stiffness of the {role} "
-                     f"(Appendix 4b: {thesis[0]})", k, f"{load_unit}/{display}"),
+                     f"(Appendix 4b: {thesis[0]})", k, f"{load_unit}/{display}", POSITIVE),
             Variable(f"c{index}", "parameter", load_unit, f"Maximum damping force c of the "
-                     f"{role}: viscosity c/(|rate| + xi) (Appendix 4b: {thesis[1]})", c),
+                     f"{role}: viscosity c/(|rate| + xi) (Appendix 4b: {thesis[1]})", c,
+                     constraint=POSITIVE),
             Variable(f"xi{index}", "parameter", f"{length}/s", f"Rate constant xi of the {role};"
-                     f" time constant c/(k xi) (Appendix 4b: {thesis[2]})", xi, f"{display}/s"),
+                     f" time constant c/(k xi) (Appendix 4b: {thesis[2]})", xi, f"{display}/s",
+                     POSITIVE),
         ]
     a, elastic_thesis = elastic
     for power, coefficient in enumerate(a):
@@ -118,20 +129,11 @@ def _rubber_component(name, description, *, deflection, deflection_meaning, load
     h, x_ref, geometric_thesis = geometric
     parameters += [
         Variable("geometric.h", "parameter", f"1/{length}", f"Slope h of the geometric "
-                 f"multiplier f(x) = 1 + h*|x - x_ref| ({geometric_thesis})", h, f"1/{display}"),
+                 f"multiplier f(x) = 1 + h*|x - x_ref| ({geometric_thesis})", h, f"1/{display}",
+                 NON_NEGATIVE),
         Variable("geometric.x_ref", "parameter", length, f"Reference deflection x_ref of the "
                  f"geometric multiplier ({geometric_thesis})", x_ref, display),
     ]
-    units = {p.name: p.unit for p in parameters}
-
-    def check(values):
-        return (_positive(values, [f"{symbol}{i}" for i, _ in RUBBER_ELEMENTS
-                                   for symbol in ("k", "c", "xi")], units)
-                or _finite(values, [f"elastic.a{p}" for p in range(4)] + ["geometric.x_ref"], units)
-                or (None if values["geometric.h"] >= 0.0 and math.isfinite(values["geometric.h"])
-                    else f"parameter geometric.h = {values['geometric.h']!r} 1/{length} must be "
-                         f"zero or positive and finite"))
-
     def build(values):
         def element(i):
             return MaxwellElement(values[f"k{i}"], values[f"c{i}"], values[f"xi{i}"])
@@ -143,7 +145,7 @@ def _rubber_component(name, description, *, deflection, deflection_meaning, load
             unilateral=unilateral)
 
     return ComponentDefinition(
-        name, description, inputs, outputs, parameters, build, check,
+        name, description, inputs, outputs, parameters, build,
         direct_outputs=[o.name for o in outputs],
         measured_ranges={deflection: measured_range})
 
@@ -246,27 +248,22 @@ def _damper_component():
     )
     parameters = [
         Variable("C1", "parameter", "N.m", "Gas-spring torque constant C1 (Eq. A5-16; the "
-                 "thesis prints 0.8e6 in N.mm, section 13.0)", 800.0),
+                 "thesis prints 0.8e6 in N.mm, section 13.0)", 800.0, constraint=POSITIVE),
         Variable("C2", "parameter", "rad", "Gas-spring deflection limit C2 (Eq. A5-16, "
-                 "section 13.0: 0.03 rad)", 0.03, "deg"),
+                 "section 13.0: 0.03 rad)", 0.03, "deg", POSITIVE),
         Variable("I", "parameter", "kg.m2", "Rotor inertia at the node between gas spring "
-                 "and dashpot (section 12.6: 0.118 kg.m2)", 0.118),
+                 "and dashpot (section 12.6: 0.118 kg.m2)", 0.118, constraint=POSITIVE),
     ]
     for i, (rate, torque) in enumerate(zip(DAMPER_TABLE_RATES, DAMPER_TABLE_TORQUES)):
         parameters.append(Variable(_rate_name(i), "parameter", "rad/s", f"Dashpot curve point "
                                    f"{i + 1}: angular rate (Table A6-1)", rate, "deg/s"))
         parameters.append(Variable(_torque_name(i), "parameter", "N.m", f"Dashpot curve point "
                                    f"{i + 1}: torque, smoothed column (Table A6-1)", torque))
-    units = {p.name: p.unit for p in parameters}
-
     def table(values):
         return ([values[_rate_name(i)] for i in range(TABLE_SIZE)],
                 [values[_torque_name(i)] for i in range(TABLE_SIZE)])
 
-    def check(values):
-        problem = _positive(values, ["C1", "C2", "I"], units)
-        if problem:
-            return problem
+    def check_table(values):
         rates, torques = table(values)
         problem = check_monotone_table(rates, torques)
         if problem:
@@ -286,8 +283,8 @@ def _damper_component():
         "Warrior rotary suspension damper at the wheel-arm pivot: Table A6-1 dashpot "
         "(laminar, turbulent, blow-off) in series with an isothermal entrapped-gas spring, "
         "rotor inertia between them (thesis chapters 9-14, Appendices 5 and 6).",
-        inputs, outputs, parameters, build, check,
-        direct_outputs=["torque", "gas_deflection", "stiffness"],
+        inputs, outputs, parameters, build,
+        direct_outputs=["torque", "gas_deflection", "stiffness"], check_together=check_table,
         measured_ranges={"angle": (-math.pi / 4, math.pi / 4, "rotation about +/-45 deg, section 9.1"),
                          "angle_rate": (-14.0, 14.0, "Table A6-1 spans +/-14 rad/s")})
 

@@ -34,21 +34,28 @@ class CoSimulation:
         self._outputs = None
         return None
 
-    def do_step(self, current_time, step_size):
-        """Advance to current_time + step_size. Returns None or an error message; on
-        error nothing has changed."""
+    def check_step(self, current_time, step_size):
+        """A message if doStep(current_time, step_size) cannot follow the last step."""
         if not (step_size > 0.0 and math.isfinite(step_size)):
-            return f"communication step size must be positive and finite, got {step_size!r}"
-        if abs(current_time - self.time) > 1e-9 * max(1.0, abs(self.time)):
-            return (f"doStep at t = {current_time!r} s does not follow from the last step, "
-                    f"which ended at t = {self.time!r} s")
+            return f"communication step size {step_size!r} s must be positive and finite"
+        if not (abs(current_time - self.time) <= 1e-9 * max(1.0, abs(self.time))):
+            return (f"current time {current_time!r} s does not follow from the last step, "
+                    f"which ended at {self.time!r} s")
+        return None
+
+    def do_step(self, current_time, step_size):
+        """Advance to current_time + step_size (checked by check_step). Returns None or a
+        message; on failure, and on any exception, nothing has changed."""
         saved_state = self.state[:]
         saved_h = self.integrator.h_next
-        problem = self.model.advance(self.state, self.deflection, self.rate, step_size,
-                                     self.integrator)
+        try:
+            problem = self.model.advance(self.state, self.deflection, self.rate, step_size,
+                                         self.integrator)
+        except BaseException:
+            self.state, self.integrator.h_next = saved_state, saved_h
+            raise
         if problem:
-            self.state = saved_state
-            self.integrator.h_next = saved_h
+            self.state, self.integrator.h_next = saved_state, saved_h
             return f"step from t = {current_time:.9g} s by {step_size:.6g} s failed: {problem}"
         self.time = current_time + step_size
         self.deflection = self.deflection + self.rate * step_size

@@ -11,18 +11,33 @@ rotor-node angle theta_r and rate omega_r:
     output torque = Tg
 
 Td is the smoothed torque-velocity curve of Table A6-1 (laminar, turbulent and blow-off
-regions), interpolated monotone and C1. Within a step the arm rate is held, so the
-integrated state (xd, omega_r) obeys an autonomous system; the gas spring bounds it to
-|xd| < C2, which the integrator respects by rejecting steps, never by clipping.
+regions), interpolated monotone and C1.
+
+The gas spring is integrated in z, with xd = C2 tanh(z). Then Eq. A5-16 reads
+Tg = C1 sinh(2z): the pole at |xd| = C2 becomes an exponential, an error in z is a relative
+error in torque, and |xd| < C2 holds by construction. In xd itself, a fixed absolute
+tolerance lets a hard-driven solution creep onto the pole, where no step size is small
+enough. Within a step the arm rate is held, so (z, omega_r) obey an autonomous system:
+
+    dz/dt = (omega - omega_r) cosh(z)^2 / C2
+    d(omega_r)/dt = (C1 sinh(2z) - Td(omega_r)) / I
+
+The integrator keeps |z| < Z_LIMIT (where tanh still differs from 1 in double precision)
+by rejecting and shrinking steps.
 """
+
+import math
 
 from .hermite import MonotoneCubic
 
+Z_LIMIT = 18.0  # tanh(18) = 1 - 4.6e-16: beyond it xd is C2 to the last bit
+
 
 class RotaryDamper:
-    """State layout: [theta_r, omega_r]."""
+    """State layout: [z, omega_r, theta_z], z being the gas-spring coordinate for the arm
+    angle theta_z; a host that moves the arm discontinuously shifts z accordingly."""
 
-    state_size = 2
+    state_size = 3
     integrated_size = 2
 
     def __init__(self, gas_force, gas_limit, rotor_inertia, table_rates, table_torques):
@@ -30,61 +45,74 @@ class RotaryDamper:
         self.gas_limit = gas_limit  # C2
         self.rotor_inertia = rotor_inertia  # I
         self.dashpot = MonotoneCubic(table_rates, table_torques)
-        # Typical magnitudes for the absolute tolerance: the deflection range C2 and a
-        # rate of 1 rad/s (the thesis rig's range, section 11.0).
-        self.state_scale = [gas_limit, 1.0]
+        # Typical magnitudes for the absolute tolerance: z is dimensionless, and the rotor
+        # rate is taken on the scale of 1 rad/s (the thesis rig's range, section 11.0).
+        self.state_scale = [1.0, 1.0]
 
     def initial_state(self, theta, omega):
         """Rotor node moving with the arm: zero gas deflection, tau(0) = 0 (spec 3)."""
-        return [theta, omega]
+        return [0.0, omega, theta]
+
+    def _unchecked_deflection(self, state, theta):
+        return self.gas_limit * math.tanh(state[0]) + (theta - state[2])
 
     def check_input(self, state, theta):
-        deflection = theta - state[0]
+        deflection = self._unchecked_deflection(state, theta)
         if abs(deflection) >= self.gas_limit:
-            return (f"angle {theta:.9g} rad puts the gas-spring deflection at {deflection:.6g} rad, "
-                    f"outside its limit |xd| < C2 = {self.gas_limit:.6g} rad")
+            return (f"angle {theta:.9g} rad puts the gas-spring deflection at {deflection:.6g} "
+                    f"rad, outside its limit |xd| < C2 = {self.gas_limit:.6g} rad")
         return None
 
-    def gas_torque(self, deflection):
-        q = deflection / self.gas_limit
-        return self.gas_force * (1.0 / (1.0 - q) - 1.0 / (1.0 + q))
+    def _z_at(self, state, theta):
+        """z for arm angle theta: the state's own z unless a host moved the arm by a jump."""
+        if theta == state[2]:
+            return state[0]
+        return math.atanh(self._unchecked_deflection(state, theta) / self.gas_limit)
 
-    def gas_stiffness(self, deflection):
-        q = deflection / self.gas_limit
-        return self.gas_force / self.gas_limit * (1.0 / (1.0 - q) ** 2 + 1.0 / (1.0 + q) ** 2)
+    def torque(self, z):
+        return self.gas_force * math.sinh(2.0 * z)  # Eq. A5-16 with xd = C2 tanh(z)
 
-    # --- integrator system over y = [xd, omega_r], input u = arm rate ------------------
+    # --- integrator system over y = [z, omega_r], input u = arm rate --------------------
 
     def inside(self, y):
-        return abs(y[0]) < self.gas_limit
+        return abs(y[0]) < Z_LIMIT
 
     def rhs(self, y, omega):
-        deflection, rotor_rate = y
+        z, rotor_rate = y
+        cosh_z = math.cosh(z)
         dashpot_torque = self.dashpot.value_and_slope(rotor_rate)[0]
-        return [omega - rotor_rate,
-                (self.gas_torque(deflection) - dashpot_torque) / self.rotor_inertia]
+        return [(omega - rotor_rate) * cosh_z * cosh_z / self.gas_limit,
+                (self.torque(z) - dashpot_torque) / self.rotor_inertia]
 
     def jacobian(self, y, omega):
-        deflection, rotor_rate = y
+        z, rotor_rate = y
+        cosh_z = math.cosh(z)
         dashpot_slope = self.dashpot.value_and_slope(rotor_rate)[1]
         inertia = self.rotor_inertia
-        return [[0.0, -1.0],
-                [self.gas_stiffness(deflection) / inertia, -dashpot_slope / inertia]]
+        return [[(omega - rotor_rate) * math.sinh(2.0 * z) / self.gas_limit,
+                 -cosh_z * cosh_z / self.gas_limit],
+                [2.0 * self.gas_force * math.cosh(2.0 * z) / inertia, -dashpot_slope / inertia]]
 
     def advance(self, state, theta, omega, h, integrator):
-        y = [theta - state[0], state[1]]
+        y = [self._z_at(state, theta), state[1]]
         problem = integrator.integrate(self, y, omega, h)
         if problem:
-            return problem
-        state[0] = (theta + omega * h) - y[0]
-        state[1] = y[1]
+            # Almost always an arm rate that jumped far from the rotor's: the gas spring can
+            # only stop that with a torque spike beyond any step size (e.g. 0 -> 100 rad/s
+            # in one step gives ~1e14 N.m in the model).
+            return (f"{problem}; the arm rate {omega:.6g} rad/s met the rotor at "
+                    f"{state[1]:.6g} rad/s, a jump the gas spring cannot absorb within the "
+                    f"step: ramp the rate over several steps")
+        state[0], state[1], state[2] = y[0], y[1], theta + omega * h
         return None
 
     def outputs(self, state, theta, omega):
         """(torque, gas-spring deflection, rotor-node rate, dashpot torque, tangent
         stiffness d torque/d theta). The rotor inertia keeps theta_r from responding
         instantly, so the instantaneous tangent is the gas-spring stiffness."""
-        deflection = theta - state[0]
+        z = self._z_at(state, theta)
+        cosh_z = math.cosh(z)
+        stiffness = 2.0 * self.gas_force * math.cosh(2.0 * z) * cosh_z * cosh_z / self.gas_limit
         rotor_rate = state[1]
-        return (self.gas_torque(deflection), deflection, rotor_rate,
-                self.dashpot(rotor_rate), self.gas_stiffness(deflection))
+        return (self.torque(z), self.gas_limit * math.tanh(z), rotor_rate,
+                self.dashpot(rotor_rate), stiffness)

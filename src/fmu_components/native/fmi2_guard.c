@@ -1,0 +1,447 @@
+/*
+ * The binary of every FMU here: a thin FMI 2.0 layer in front of pythonfmu's library.
+ *
+ * pythonfmu's library (shipped next to this one as PYTHONFMU_ENGINE) runs the Python
+ * adapter, but it can only answer fmi2OK, fmi2Discard (a step returned False) or fmi2Fatal
+ * (a Python exception, after which the instance is gone and the next call crashes the host),
+ * and it expects the Python C API to be present in the process already. This layer
+ *
+ *  - returns, for every call, the worst of pythonfmu's status and the statuses the adapter
+ *    logged during the call, so a rejected input is fmi2Error and a warning fmi2Warning;
+ *  - loads the Python shared library (PYTHON_LIBRARY) with global symbols when the host
+ *    process has no Python of its own, so C hosts need no LD_PRELOAD;
+ *  - stops calling an instance that reported fmi2Fatal, so the host is never crashed by it;
+ *  - always lets pythonfmu log (it drops every message unless debug logging is on) and
+ *    applies the host's logging choice itself: errors and warnings always reach the host,
+ *    other messages when the host switched debug logging on for their category;
+ *  - answers fmi2GetRealStatus(fmi2LastSuccessfulTime) after a discarded step.
+ *
+ * Everything else is forwarded unchanged.
+ */
+
+#define _GNU_SOURCE
+#include <dlfcn.h>
+#include <pthread.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fmi2Functions.h"
+
+#ifndef PYTHON_LIBRARY
+#error "build with -DPYTHON_LIBRARY=\"libpython3.X.so.1.0\""
+#endif
+#define PYTHONFMU_ENGINE "libpythonfmu-export.so"
+
+/* pythonfmu's functions, looked up once per process. */
+static struct {
+    fmi2InstantiateTYPE *instantiate;
+    fmi2FreeInstanceTYPE *freeInstance;
+    fmi2SetDebugLoggingTYPE *setDebugLogging;
+    fmi2SetupExperimentTYPE *setupExperiment;
+    fmi2EnterInitializationModeTYPE *enterInitializationMode;
+    fmi2ExitInitializationModeTYPE *exitInitializationMode;
+    fmi2TerminateTYPE *terminate;
+    fmi2ResetTYPE *reset;
+    fmi2GetRealTYPE *getReal;
+    fmi2GetIntegerTYPE *getInteger;
+    fmi2GetBooleanTYPE *getBoolean;
+    fmi2GetStringTYPE *getString;
+    fmi2SetRealTYPE *setReal;
+    fmi2SetIntegerTYPE *setInteger;
+    fmi2SetBooleanTYPE *setBoolean;
+    fmi2SetStringTYPE *setString;
+    fmi2GetFMUstateTYPE *getFMUstate;
+    fmi2SetFMUstateTYPE *setFMUstate;
+    fmi2FreeFMUstateTYPE *freeFMUstate;
+    fmi2SerializedFMUstateSizeTYPE *serializedFMUstateSize;
+    fmi2SerializeFMUstateTYPE *serializeFMUstate;
+    fmi2DeSerializeFMUstateTYPE *deSerializeFMUstate;
+    fmi2GetDirectionalDerivativeTYPE *getDirectionalDerivative;
+    fmi2SetRealInputDerivativesTYPE *setRealInputDerivatives;
+    fmi2GetRealOutputDerivativesTYPE *getRealOutputDerivatives;
+    fmi2DoStepTYPE *doStep;
+    fmi2CancelStepTYPE *cancelStep;
+} engine;
+
+static pthread_once_t engine_once = PTHREAD_ONCE_INIT;
+static char engine_problem[8192]; /* empty when the engine loaded */
+
+#define MAX_CATEGORIES 16
+
+typedef struct {
+    fmi2Component engine;
+    fmi2CallbackFunctions engine_callbacks; /* the host's, with our logger in between */
+    fmi2CallbackLogger host_logger;
+    fmi2ComponentEnvironment host_environment;
+    char *instance_name;
+    fmi2Boolean debug_logging;               /* the host's choice */
+    size_t n_categories;                     /* 0: every category */
+    char *categories[MAX_CATEGORIES];
+    fmi2Status worst; /* worst status logged during the current call */
+    int fatal;        /* the engine reported fmi2Fatal: never call it again */
+    fmi2Real last_successful_time;
+} Guard;
+
+static void load_engine(void) {
+    /* A Python host already has the interpreter; a C host needs the shared library, with
+       its symbols global because pythonfmu's library leaves them undefined. */
+    if (dlsym(RTLD_DEFAULT, "Py_IsInitialized") == NULL &&
+        dlopen(PYTHON_LIBRARY, RTLD_NOW | RTLD_GLOBAL) == NULL) {
+        snprintf(engine_problem, sizeof engine_problem,
+                 "this FMU runs Python: the shared library %s must be on the loader path (%s)",
+                 PYTHON_LIBRARY, dlerror());
+        return;
+    }
+    Dl_info self;
+    if (!dladdr((void *)&load_engine, &self) || self.dli_fname == NULL) {
+        snprintf(engine_problem, sizeof engine_problem, "cannot locate the FMU's binary folder");
+        return;
+    }
+    char path[4096];
+    const char *slash = strrchr(self.dli_fname, '/');
+    int folder = slash ? (int)(slash - self.dli_fname + 1) : 0;
+    snprintf(path, sizeof path, "%.*s%s", folder, self.dli_fname, PYTHONFMU_ENGINE);
+    void *library = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+    if (library == NULL) {
+        snprintf(engine_problem, sizeof engine_problem, "cannot load %s: %s", path, dlerror());
+        return;
+    }
+#define LOAD(field, name)                                                                   \
+    if ((*(void **)&engine.field = dlsym(library, #name)) == NULL) {                        \
+        snprintf(engine_problem, sizeof engine_problem, "%s lacks " #name, path);          \
+        return;                                                                             \
+    }
+    LOAD(instantiate, fmi2Instantiate)
+    LOAD(freeInstance, fmi2FreeInstance)
+    LOAD(setDebugLogging, fmi2SetDebugLogging)
+    LOAD(setupExperiment, fmi2SetupExperiment)
+    LOAD(enterInitializationMode, fmi2EnterInitializationMode)
+    LOAD(exitInitializationMode, fmi2ExitInitializationMode)
+    LOAD(terminate, fmi2Terminate)
+    LOAD(reset, fmi2Reset)
+    LOAD(getReal, fmi2GetReal)
+    LOAD(getInteger, fmi2GetInteger)
+    LOAD(getBoolean, fmi2GetBoolean)
+    LOAD(getString, fmi2GetString)
+    LOAD(setReal, fmi2SetReal)
+    LOAD(setInteger, fmi2SetInteger)
+    LOAD(setBoolean, fmi2SetBoolean)
+    LOAD(setString, fmi2SetString)
+    LOAD(getFMUstate, fmi2GetFMUstate)
+    LOAD(setFMUstate, fmi2SetFMUstate)
+    LOAD(freeFMUstate, fmi2FreeFMUstate)
+    LOAD(serializedFMUstateSize, fmi2SerializedFMUstateSize)
+    LOAD(serializeFMUstate, fmi2SerializeFMUstate)
+    LOAD(deSerializeFMUstate, fmi2DeSerializeFMUstate)
+    LOAD(getDirectionalDerivative, fmi2GetDirectionalDerivative)
+    LOAD(setRealInputDerivatives, fmi2SetRealInputDerivatives)
+    LOAD(getRealOutputDerivatives, fmi2GetRealOutputDerivatives)
+    LOAD(doStep, fmi2DoStep)
+    LOAD(cancelStep, fmi2CancelStep)
+#undef LOAD
+}
+
+/* Messages go on as the format string with any '%' doubled: hosts that format print them
+   exactly, and hosts that do not (fmpy's logger takes no arguments) still get the text. */
+static void pass_on(fmi2CallbackLogger logger, fmi2ComponentEnvironment environment,
+                    fmi2String instance_name, fmi2Status status, fmi2String category,
+                    const char *message) {
+    if (logger == NULL) return;
+    if (strchr(message, '%') == NULL) {
+        logger(environment, instance_name, status, category, message);
+        return;
+    }
+    char *escaped = malloc(2 * strlen(message) + 1);
+    if (escaped == NULL) return;
+    char *out = escaped;
+    for (const char *in = message; *in; in++) {
+        if (*in == '%') *out++ = '%';
+        *out++ = *in;
+    }
+    *out = '\0';
+    logger(environment, instance_name, status, category, escaped);
+    free(escaped);
+}
+
+/* The guard's own error messages. */
+static fmi2Status guard_error(const Guard *guard, const char *format, ...) {
+    char message[1024];
+    va_list args;
+    va_start(args, format);
+    vsnprintf(message, sizeof message, format, args);
+    va_end(args);
+    pass_on(guard->host_logger, guard->host_environment, guard->instance_name, fmi2Error,
+            "logStatusError", message);
+    return fmi2Error;
+}
+
+/* Remember the worst status seen during the call, and pass the message on if wanted. */
+static int host_wants(const Guard *guard, fmi2Status status, fmi2String category) {
+    if (status >= fmi2Warning) return 1;
+    if (!guard->debug_logging) return 0;
+    if (guard->n_categories == 0) return 1;
+    for (size_t i = 0; i < guard->n_categories; i++)
+        if (category && strcmp(category, guard->categories[i]) == 0) return 1;
+    return 0;
+}
+
+static void guard_logger(fmi2ComponentEnvironment environment, fmi2String instance_name,
+                         fmi2Status status, fmi2String category, fmi2String message, ...) {
+    Guard *guard = (Guard *)environment;
+    if (status > guard->worst) guard->worst = status;
+    if (host_wants(guard, status, category))
+        pass_on(guard->host_logger, guard->host_environment, instance_name, status, category,
+                message ? message : "");
+}
+
+static void forget_categories(Guard *guard) {
+    for (size_t i = 0; i < guard->n_categories; i++) free(guard->categories[i]);
+    guard->n_categories = 0;
+}
+
+static fmi2Status refuse(Guard *guard, const char *function) {
+    return guard_error(guard, "%s refused: this instance failed fatally; free it", function);
+}
+
+static fmi2Status settle(Guard *guard, fmi2Status status) {
+    if (status > guard->worst) guard->worst = status;
+    if (guard->worst == fmi2Fatal) guard->fatal = 1;
+    return guard->worst;
+}
+
+/* Forward one call to pythonfmu and report the worst status seen during it. */
+#define FORWARD(c, call)                                                                    \
+    do {                                                                                    \
+        Guard *guard = (Guard *)(c);                                                        \
+        if (guard == NULL) return fmi2Error;                                                \
+        if (guard->fatal) return refuse(guard, __func__);                                   \
+        guard->worst = fmi2OK;                                                              \
+        return settle(guard, engine.call);                                                  \
+    } while (0)
+
+const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
+const char *fmi2GetVersion(void) { return fmi2Version; }
+
+fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
+                              fmi2String fmuResourceLocation,
+                              const fmi2CallbackFunctions *functions, fmi2Boolean visible,
+                              fmi2Boolean loggingOn) {
+    pthread_once(&engine_once, load_engine);
+    if (engine_problem[0]) {
+        if (functions)
+            pass_on(functions->logger, functions->componentEnvironment, instanceName, fmi2Error,
+                    "logStatusError", engine_problem);
+        return NULL;
+    }
+    Guard *guard = calloc(1, sizeof *guard);
+    if (guard == NULL) return NULL;
+    guard->instance_name = strdup(instanceName ? instanceName : "");
+    if (functions) {
+        guard->engine_callbacks = *functions;
+        guard->host_logger = functions->logger;
+        guard->host_environment = functions->componentEnvironment;
+    }
+    guard->debug_logging = loggingOn;
+    guard->engine_callbacks.logger = guard_logger;
+    guard->engine_callbacks.componentEnvironment = guard;
+    guard->engine = engine.instantiate(instanceName, fmuType, fmuGUID, fmuResourceLocation,
+                                       &guard->engine_callbacks, visible, fmi2True);
+    if (guard->engine == NULL || guard->worst >= fmi2Error) {
+        /* A half-made instance is not freed through pythonfmu: it may be broken. */
+        free(guard->instance_name);
+        free(guard);
+        return NULL;
+    }
+    return guard;
+}
+
+void fmi2FreeInstance(fmi2Component c) {
+    Guard *guard = (Guard *)c;
+    if (guard == NULL) return;
+    if (!guard->fatal) {
+        guard->worst = fmi2OK;
+        engine.freeInstance(guard->engine);
+    }
+    forget_categories(guard);
+    free(guard->instance_name);
+    free(guard);
+}
+
+/* Recorded here, not passed on: pythonfmu must keep logging everything. */
+fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
+                               const fmi2String categories[]) {
+    Guard *guard = (Guard *)c;
+    if (guard == NULL) return fmi2Error;
+    if (nCategories > MAX_CATEGORIES)
+        return guard_error(guard, "fmi2SetDebugLogging: %zu categories given, at most %d are "
+                                  "kept", nCategories, MAX_CATEGORIES);
+    forget_categories(guard);
+    guard->debug_logging = loggingOn;
+    for (size_t i = 0; i < nCategories; i++)
+        guard->categories[guard->n_categories++] = strdup(categories[i] ? categories[i] : "");
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+                               fmi2Real startTime, fmi2Boolean stopTimeDefined,
+                               fmi2Real stopTime) {
+    if (c) ((Guard *)c)->last_successful_time = startTime;
+    FORWARD(c, setupExperiment(guard->engine, toleranceDefined, tolerance, startTime,
+                               stopTimeDefined, stopTime));
+}
+
+fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
+    FORWARD(c, enterInitializationMode(guard->engine));
+}
+
+fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
+    FORWARD(c, exitInitializationMode(guard->engine));
+}
+
+fmi2Status fmi2Terminate(fmi2Component c) { FORWARD(c, terminate(guard->engine)); }
+
+fmi2Status fmi2Reset(fmi2Component c) { FORWARD(c, reset(guard->engine)); }
+
+fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                       fmi2Real value[]) {
+    FORWARD(c, getReal(guard->engine, vr, nvr, value));
+}
+
+fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                          fmi2Integer value[]) {
+    FORWARD(c, getInteger(guard->engine, vr, nvr, value));
+}
+
+fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                          fmi2Boolean value[]) {
+    FORWARD(c, getBoolean(guard->engine, vr, nvr, value));
+}
+
+fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                         fmi2String value[]) {
+    FORWARD(c, getString(guard->engine, vr, nvr, value));
+}
+
+fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                       const fmi2Real value[]) {
+    FORWARD(c, setReal(guard->engine, vr, nvr, value));
+}
+
+fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                          const fmi2Integer value[]) {
+    FORWARD(c, setInteger(guard->engine, vr, nvr, value));
+}
+
+fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                          const fmi2Boolean value[]) {
+    FORWARD(c, setBoolean(guard->engine, vr, nvr, value));
+}
+
+fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                         const fmi2String value[]) {
+    FORWARD(c, setString(guard->engine, vr, nvr, value));
+}
+
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
+    FORWARD(c, getFMUstate(guard->engine, FMUstate));
+}
+
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
+    FORWARD(c, setFMUstate(guard->engine, FMUstate));
+}
+
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
+    FORWARD(c, freeFMUstate(guard->engine, FMUstate));
+}
+
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
+    FORWARD(c, serializedFMUstateSize(guard->engine, FMUstate, size));
+}
+
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[],
+                                 size_t size) {
+    FORWARD(c, serializeFMUstate(guard->engine, FMUstate, serializedState, size));
+}
+
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
+                                   fmi2FMUstate *FMUstate) {
+    FORWARD(c, deSerializeFMUstate(guard->engine, serializedState, size, FMUstate));
+}
+
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[],
+                                        size_t nUnknown, const fmi2ValueReference vKnown_ref[],
+                                        size_t nKnown, const fmi2Real dvKnown[],
+                                        fmi2Real dvUnknown[]) {
+    FORWARD(c, getDirectionalDerivative(guard->engine, vUnknown_ref, nUnknown, vKnown_ref,
+                                        nKnown, dvKnown, dvUnknown));
+}
+
+fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                       const fmi2Integer order[], const fmi2Real value[]) {
+    FORWARD(c, setRealInputDerivatives(guard->engine, vr, nvr, order, value));
+}
+
+fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[],
+                                        size_t nvr, const fmi2Integer order[],
+                                        fmi2Real value[]) {
+    FORWARD(c, getRealOutputDerivatives(guard->engine, vr, nvr, order, value));
+}
+
+fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
+                      fmi2Real communicationStepSize, fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
+    Guard *guard = (Guard *)c;
+    if (guard == NULL) return fmi2Error;
+    if (guard->fatal) return refuse(guard, __func__);
+    guard->worst = fmi2OK;
+    fmi2Status status = settle(guard, engine.doStep(guard->engine, currentCommunicationPoint,
+                                                    communicationStepSize,
+                                                    noSetFMUStatePriorToCurrentPoint));
+    /* A completed step ends at t + h; a discarded one leaves the instance at t. A refused
+       call (fmi2Error) did nothing, so the last successful time stays. */
+    if (status <= fmi2Warning)
+        guard->last_successful_time = currentCommunicationPoint + communicationStepSize;
+    else if (status == fmi2Discard)
+        guard->last_successful_time = currentCommunicationPoint;
+    return status;
+}
+
+fmi2Status fmi2CancelStep(fmi2Component c) { FORWARD(c, cancelStep(guard->engine)); }
+
+static fmi2Status unsupported_status(fmi2Component c, const char *function) {
+    if (c == NULL) return fmi2Error;
+    return guard_error((Guard *)c, "%s: steps run synchronously, there is no status to ask for",
+                       function);
+}
+
+fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
+    (void)s, (void)value;
+    return unsupported_status(c, __func__);
+}
+
+fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
+    Guard *guard = (Guard *)c;
+    if (guard == NULL) return fmi2Error;
+    if (s != fmi2LastSuccessfulTime) return unsupported_status(c, __func__);
+    *value = guard->last_successful_time;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
+    (void)s, (void)value;
+    return unsupported_status(c, __func__);
+}
+
+fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
+    Guard *guard = (Guard *)c;
+    if (guard == NULL) return fmi2Error;
+    if (s != fmi2Terminated) return unsupported_status(c, __func__);
+    *value = fmi2False; /* the FMU never asks to end the simulation */
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {
+    (void)s, (void)value;
+    return unsupported_status(c, __func__);
+}
