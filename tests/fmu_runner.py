@@ -1,13 +1,12 @@
 """Drive one FMU instance step by step through fmpy's FMU2Slave."""
 
-from ctypes import byref
+from ctypes import c_double, c_uint
 
 import numpy as np
 from fmpy import calloc, extract, free, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
                        fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
-from fmpy.logging import addLoggerProxy
 
 OK, WARNING, DISCARD, ERROR, FATAL = range(5)
 
@@ -29,12 +28,13 @@ class FmuRunner:
         self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
         self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
         self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        addLoggerProxy(byref(self._callbacks))  # formats the message as a C host would
+        # No fmpy logger proxy: it keeps one logger for the whole process. The FMUs pass
+        # each message finished, as a format string with '%' doubled.
         self.fmu.instantiate(callbacks=self._callbacks)
         self.time = 0.0
 
     def _log(self, environment, instance_name, status, category, message):
-        self.messages.append((status, message.decode("utf-8", "replace")))
+        self.messages.append((status, message.decode("utf-8", "replace").replace("%%", "%")))
 
     def status(self, function, *args):
         """The FMI status of a call (fmpy raises for statuses above fmi2Warning)."""
@@ -43,6 +43,12 @@ class FmuRunner:
         except FMICallException as failure:
             return failure.status
         return result if isinstance(result, int) else OK
+
+    def set_real_status(self, names, values):
+        """fmi2SetReal's own status code (fmpy's setReal does not return it)."""
+        n = len(names)
+        vrs = (c_uint * n)(*[self.vr[name] for name in names])
+        return self.status(self.fmu.fmi2SetReal, self.fmu.component, vrs, n, (c_double * n)(*values))
 
     def initialize(self, deflection, rate, start_time=0.0, tolerance=None, parameters=None):
         self.fmu.setupExperiment(tolerance=tolerance, startTime=start_time)

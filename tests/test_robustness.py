@@ -1,0 +1,250 @@
+"""Bad input never crashes and never corrupts: each is answered with fmi2Error (fmi2Discard
+for a step the integrator cannot complete) and a message naming the variable and the value,
+the instance keeps the state it had, and the run can go on, or restart from a saved state."""
+
+import math
+
+import numpy as np
+import pytest
+from fmpy.fmi2 import fmi2LastSuccessfulTime
+
+from fmu_components.runtime.catalog import COMPONENTS
+from fmu_components.signals import secant_rates, sine, time_grid
+
+from conftest import FMU_NAMES, THESIS_SINES
+from fmu_runner import DISCARD, ERROR, OK, WARNING, FmuRunner
+
+STEP = 1e-3
+
+
+def sine_history(name, stop_time=0.4):
+    mean, amplitude, frequency = THESIS_SINES[name]
+    t = time_grid(stop_time, STEP)
+    x = sine(t, mean, amplitude, frequency)
+    return t, x, secant_rates(t, x)
+
+
+def started(path, name, steps=200):
+    """An instance run `steps` steps into a sine, and the rest of the history."""
+    t, x, v = sine_history(name)
+    runner = FmuRunner(path)
+    runner.initialize(x[0], v[0])
+    runner.run(x[:steps + 1], v[:steps + 1], STEP)
+    return runner, x[steps:], v[steps:]
+
+
+def uninterrupted(path, name, steps=200):
+    runner, x, v = started(path, name, steps)
+    result = runner.run(x, v, STEP)
+    runner.free()
+    return result
+
+
+def last_error(runner):
+    errors = [text for status, text in runner.messages if status == ERROR]
+    assert errors, runner.messages
+    return errors[-1]
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+@pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf], ids=["nan", "inf", "-inf"])
+@pytest.mark.parametrize("which", [0, 1], ids=["deflection", "rate"])
+def test_non_finite_input_is_refused_and_changes_nothing(built_fmus, name, bad, which):
+    expected = uninterrupted(built_fmus[name], name)
+    runner, x, v = started(built_fmus[name], name)
+    before = runner.read()
+    input_name = runner.inputs[which]
+    assert runner.status(runner.fmu.setReal, [runner.vr[input_name]], [bad]) == ERROR
+    message = last_error(runner)
+    assert input_name in message and repr(bad) in message
+    assert runner.read() == before
+    assert np.array_equal(runner.run(x, v, STEP), expected)
+    runner.free()
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+@pytest.mark.parametrize("time_offset, step", [(0.0, 0.0), (0.0, -STEP), (0.0, math.nan),
+                                               (0.5, STEP), (-STEP, STEP)],
+                         ids=["zero-step", "negative-step", "nan-step", "time-jump", "time-back"])
+def test_bad_do_step_is_refused_and_changes_nothing(built_fmus, name, time_offset, step):
+    expected = uninterrupted(built_fmus[name], name)
+    runner, x, v = started(built_fmus[name], name)
+    runner.set_inputs(x[0], v[0])
+    assert runner.status(runner.fmu.doStep, runner.time + time_offset, step) == ERROR
+    assert "step" in last_error(runner) or "time" in last_error(runner)
+    assert runner.fmu.getRealStatus(fmi2LastSuccessfulTime) == pytest.approx(runner.time)
+    assert np.array_equal(runner.run(x, v, STEP), expected)
+    runner.free()
+
+
+NONSENSE = {
+    "RoadWheelTyre": [("k1", 0.0), ("c2", -1000.0), ("xi3", 0.0), ("geometric.h", -1.0)],
+    "TrackBushRadial": [("k3", -1.7e7), ("c1", 0.0), ("xi2", -6.3e-4)],
+    "TrackBushTorsion": [("k2", 0.0), ("c3", -40.0), ("xi1", 0.0)],
+    "RotaryDamper": [("C1", 0.0), ("C2", -0.03), ("I", 0.0), ("dashpot.rate[3]", math.nan)],
+}
+
+
+@pytest.mark.parametrize("name, parameter, value",
+                         [(n, p, v) for n in FMU_NAMES for p, v in NONSENSE[n]])
+def test_nonsense_parameter_is_refused_when_set(built_fmus, name, parameter, value):
+    t, x, v = sine_history(name)
+    runner = FmuRunner(built_fmus[name])
+    runner.fmu.setupExperiment(startTime=0.0)
+    runner.fmu.enterInitializationMode()
+    assert runner.status(runner.fmu.setReal, [runner.vr[parameter]], [value]) == ERROR
+    message = last_error(runner)
+    assert parameter in message and repr(value) in message
+    # The value was not taken: initialization completes with the thesis value.
+    runner.set_inputs(x[0], v[0])
+    assert runner.status(runner.fmu.exitInitializationMode) == OK
+    assert np.all(np.isfinite(runner.run(x[:50], v[:50], STEP)))
+    runner.free()
+
+
+def test_non_monotone_damper_table_is_refused_at_initialization(built_fmus):
+    runner = FmuRunner(built_fmus["RotaryDamper"])
+    runner.fmu.setupExperiment(startTime=0.0)
+    runner.fmu.enterInitializationMode()
+    # Each point on its own is a finite number; together they make a non-monotone curve.
+    assert runner.status(runner.fmu.setReal, [runner.vr["dashpot.torque[30]"]], [0.0]) == OK
+    assert runner.status(runner.fmu.exitInitializationMode) == ERROR
+    message = last_error(runner)
+    assert "dashpot table" in message and "point 30" in message
+    # Still in initialization mode: the host can correct the point and carry on.
+    assert runner.status(runner.fmu.setReal, [runner.vr["dashpot.torque[30]"]], [3250.0]) == OK
+    assert runner.status(runner.fmu.exitInitializationMode) == OK
+    assert runner.status(runner.fmu.doStep, 0.0, STEP) == OK
+    runner.free()
+
+
+def test_feeding_torque_into_the_dashpot_is_refused(built_fmus):
+    runner = FmuRunner(built_fmus["RotaryDamper"])
+    runner.fmu.setupExperiment(startTime=0.0)
+    runner.fmu.enterInitializationMode()
+    # Monotone, but negative torque at a positive rate would feed energy in.
+    rates_at_or_below = [runner.vr[f"dashpot.torque[{i}]"] for i in range(1, 26)]
+    runner.fmu.setReal(rates_at_or_below, [-9000.0] * 25)
+    assert runner.status(runner.fmu.exitInitializationMode) == ERROR
+    assert "feed energy in" in last_error(runner)
+    runner.fmu.freeInstance()  # still in initialization mode, where terminate is not allowed
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_calls_out_of_sequence_are_refused(built_fmus, name):
+    runner = FmuRunner(built_fmus[name])
+    fmu, vr = runner.fmu, runner.vr
+    deflection, parameter, output = runner.inputs[0], COMPONENTS[name].parameters[0].name, runner.outputs[0]
+    assert runner.status(fmu.doStep, 0.0, STEP) == ERROR
+    assert "fmi2DoStep is not allowed in state Instantiated" in last_error(runner)
+    assert runner.status(fmu.exitInitializationMode) == ERROR
+    runner.initialize(THESIS_SINES[name][0], 0.0)
+    assert runner.status(fmu.setupExperiment, None, 0.0) == ERROR
+    assert runner.status(fmu.enterInitializationMode) == ERROR
+    assert runner.status(fmu.setReal, [vr[parameter]], [1.0]) == ERROR
+    assert parameter in last_error(runner) and "fixed parameter" in last_error(runner)
+    assert runner.status(fmu.setReal, [vr[output]], [1.0]) == ERROR
+    assert runner.status(fmu.getReal, [10_000]) == ERROR
+    assert runner.status(fmu.getInteger, [0]) == ERROR
+    assert runner.status(fmu.setBoolean, [0], [True]) == ERROR
+    assert runner.status(fmu.getString, [0]) == ERROR
+    # None of it disturbed the instance.
+    assert runner.status(fmu.doStep, 0.0, STEP) == OK
+    assert np.all(np.isfinite(runner.read()))
+    fmu.terminate()
+    assert runner.status(fmu.doStep, STEP, STEP) == ERROR
+    fmu.freeInstance()
+
+
+@pytest.mark.parametrize("name, value", [("RoadWheelTyre", 12e-3), ("TrackBushRadial", 0.8e-3),
+                                         ("TrackBushTorsion", math.radians(60)),
+                                         ("RotaryDamper", math.radians(50))])
+def test_input_outside_the_measured_range_simulates_with_one_warning(built_fmus, name, value):
+    runner = FmuRunner(built_fmus[name])
+    runner.initialize(THESIS_SINES[name][0], 0.0)
+    # Get there by a ramp, as a host would.
+    start = THESIS_SINES[name][0]
+    ramp = np.linspace(start, value, 101)
+    statuses = []
+    for k in range(100):
+        rate = (ramp[k + 1] - ramp[k]) / STEP
+        statuses.append(runner.set_real_status(runner.inputs, [ramp[k], rate]))
+        assert runner.status(runner.fmu.doStep, runner.time, STEP) == OK
+        runner.time += STEP
+        assert np.all(np.isfinite(runner.read()))
+    warnings = [text for status, text in runner.messages if status == WARNING]
+    assert statuses.count(WARNING) == 1 and len(warnings) == 1
+    assert runner.inputs[0] in warnings[0] and "outside the range the thesis measured" in warnings[0]
+    runner.free()
+
+
+def test_damper_refuses_an_angle_jump_beyond_the_gas_spring_limit(built_fmus):
+    runner = FmuRunner(built_fmus["RotaryDamper"])
+    runner.initialize(0.0, 0.0)
+    runner.step(0.0, 0.0, STEP)
+    before = runner.read()
+    assert runner.status(runner.fmu.setReal, [runner.vr["angle"]], [0.05]) == ERROR
+    assert "outside its limit" in last_error(runner) and "0.05" in last_error(runner)
+    assert runner.read() == before
+    runner.free()
+
+
+def test_a_step_the_integrator_cannot_complete_is_discarded_and_recoverable(built_fmus):
+    """An arm rate jumping from rest to 150 rad/s in one step asks the gas spring for a
+    torque spike no step size can follow. The step is discarded, the instance is where it
+    was, and a saved state restarts it."""
+    runner = FmuRunner(built_fmus["RotaryDamper"])
+    runner.initialize(0.0, 0.0)
+    runner.step(0.0, 0.0, STEP)
+    saved = runner.fmu.getFMUstate()
+    before = runner.read()
+    runner.set_inputs(0.0, 150.0)
+    assert runner.status(runner.fmu.doStep, runner.time, STEP) == DISCARD
+    assert "ramp the rate" in [text for s, text in runner.messages if s == DISCARD][-1]
+    assert runner.fmu.getRealStatus(fmi2LastSuccessfulTime) == pytest.approx(runner.time)
+    assert runner.read() == before  # the state did not move
+    # FMI: after a discarded step the host restores a state before stepping again.
+    assert runner.status(runner.fmu.doStep, runner.time, STEP) == ERROR
+    runner.fmu.setFMUstate(saved)
+    angle, outputs = 0.0, []
+    for k in range(40):  # the same rate, reached by a ramp
+        rate = 150.0 * k / 39
+        outputs.append(runner.step(angle, rate, STEP))
+        angle += rate * STEP
+    assert np.all(np.isfinite(outputs))
+    runner.free()
+
+
+def test_a_broken_serialized_state_is_refused(built_fmus):
+    runner = FmuRunner(built_fmus["TrackBushTorsion"])
+    runner.initialize(math.radians(10), 0.0)
+    before = runner.step(math.radians(10), 0.1, STEP)
+    broken = runner.fmu.deSerializeFMUstate(b"{not json")
+    assert runner.status(runner.fmu.setFMUstate, broken) == ERROR
+    assert "cannot be read" in last_error(runner)
+    assert runner.read() == before
+    runner.free()
+
+
+def test_a_state_of_another_component_is_refused(built_fmus):
+    damper = FmuRunner(built_fmus["RotaryDamper"])
+    damper.initialize(0.0, 0.0)
+    foreign = damper.fmu.serializeFMUstate(damper.fmu.getFMUstate())
+    bush = FmuRunner(built_fmus["TrackBushTorsion"])
+    bush.initialize(math.radians(10), 0.0)
+    state = bush.fmu.deSerializeFMUstate(foreign)
+    assert bush.status(bush.fmu.setFMUstate, state) == ERROR
+    assert "RotaryDamper" in last_error(bush)
+    damper.free()
+    bush.free()
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_after_an_error_a_saved_state_continues_identically(built_fmus, name):
+    expected = uninterrupted(built_fmus[name], name)
+    runner, x, v = started(built_fmus[name], name)
+    saved = runner.fmu.getFMUstate()
+    assert runner.status(runner.fmu.doStep, runner.time + 1.0, STEP) == ERROR
+    runner.fmu.setFMUstate(saved)
+    assert np.array_equal(runner.run(x, v, STEP), expected)
+    runner.free()
