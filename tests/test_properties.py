@@ -5,12 +5,13 @@ Outputs stay finite, every closed history from the relaxed state absorbs energy
 import math
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from fmu_components.runtime.catalog import COMPONENTS
 
-from conftest import default_parameters
+from conftest import FMU_NAMES, default_parameters
 from fmu_runner import FmuRunner
 
 # Base deflection and the excursion allowed around it: the thesis's measured ranges.
@@ -65,30 +66,9 @@ def check_history(built_fmus, name, history):
         assert np.all(np.abs(outputs[:, gas]) < default_parameters(name)["C2"])
 
 
-SETTINGS = settings(max_examples=40, deadline=None,
-                    suppress_health_check=[HealthCheck.function_scoped_fixture,
-                                           HealthCheck.too_slow])
-
-
-@SETTINGS
-@given(history=closed_history("RoadWheelTyre"))
-def test_tyre_random_histories(built_fmus, history):
-    check_history(built_fmus, "RoadWheelTyre", history)
-
-
-@SETTINGS
-@given(history=closed_history("TrackBushRadial"))
-def test_bush_radial_random_histories(built_fmus, history):
-    check_history(built_fmus, "TrackBushRadial", history)
-
-
-@SETTINGS
-@given(history=closed_history("TrackBushTorsion"))
-def test_bush_torsion_random_histories(built_fmus, history):
-    check_history(built_fmus, "TrackBushTorsion", history)
-
-
-@SETTINGS
-@given(history=closed_history("RotaryDamper"))
-def test_damper_random_histories(built_fmus, history):
-    check_history(built_fmus, "RotaryDamper", history)
+@pytest.mark.parametrize("name", FMU_NAMES)
+@settings(max_examples=40, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@given(data=st.data())
+def test_random_closed_histories(built_fmus, name, data):
+    check_history(built_fmus, name, data.draw(closed_history(name), label="history"))
