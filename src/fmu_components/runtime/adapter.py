@@ -26,7 +26,7 @@ from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Causality, Fmi2Status, Fmi2Variability
 from pythonfmu.variables import Real
 
-from .cosim import CoSimulation
+from .cosim import REFUSED, CoSimulation
 from .integrator import DEFAULT_RTOL
 from .units import UNITS
 
@@ -77,14 +77,12 @@ def fmi_call(name, allowed, on_failure=None):
         @functools.wraps(method)
         def call(self, *args):
             if self._mode not in allowed:
-                self._error(f"{name} is not allowed in state {self._mode} (allowed in: "
-                            f"{', '.join(sorted(allowed))}); call ignored")
+                self._refuse_out_of_sequence(name, allowed)
                 return on_failure(self, *args) if on_failure else None
             try:
                 return method(self, *args)
             except Exception as exc:
-                detail = "".join(traceback.format_exception_only(type(exc), exc)).strip()
-                self._error(f"{name} failed inside the FMU ({detail}); call ignored")
+                self._internal_error(name, exc)
                 return on_failure(self, *args) if on_failure else None
         return call
     return decorate
@@ -92,10 +90,6 @@ def fmi_call(name, allowed, on_failure=None):
 
 def _nan_values(self, vrs):
     return [math.nan] * len(vrs)
-
-
-def _false(self, *args):
-    return False
 
 
 class _RealWithUnit(Real):
@@ -165,6 +159,14 @@ class ComponentSlave(Fmi2Slave):
     def _error(self, message):
         self.log(message, Fmi2Status.error)
 
+    def _refuse_out_of_sequence(self, name, allowed):
+        self._error(f"{name} is not allowed in state {self._mode} (allowed in: "
+                    f"{', '.join(sorted(allowed))}); call ignored")
+
+    def _internal_error(self, name, exc):
+        detail = "".join(traceback.format_exception_only(type(exc), exc)).strip()
+        self._error(f"{name} failed inside the FMU ({detail}); call ignored")
+
     # --- FMI life cycle -----------------------------------------------------------------
 
     @fmi_call("fmi2SetupExperiment", {INSTANTIATED})
@@ -203,23 +205,30 @@ class ComponentSlave(Fmi2Slave):
     def terminate(self):
         self._mode = TERMINATED
 
-    @fmi_call("fmi2DoStep", {STEP_COMPLETE}, on_failure=_false)
     def do_step(self, current_time, step_size):
-        cosim = self._cosim
-        problem = cosim.check_step(current_time, step_size)
-        if problem:
-            self._error(f"fmi2DoStep: {problem}; step refused")
+        # The hottest call: fmi_call's sequence check and exception guard, written inline.
+        if self._mode != STEP_COMPLETE:
+            self._refuse_out_of_sequence("fmi2DoStep", {STEP_COMPLETE})
             return False
-        problem = cosim.do_step(current_time, step_size)
-        if problem:
-            # The step could not be completed and nothing changed: fmi2Discard, after
-            # which the host restores a state or retries (FMI 2.0 section 4.2.3).
-            self._mode = STEP_FAILED
-            self.log(f"fmi2DoStep: {problem}", Fmi2Status.discard)
+        try:
+            cosim = self._cosim
+            outcome = cosim.do_step(current_time, step_size)
+            if outcome is None:
+                self._values[self._deflection_vr] = cosim.deflection
+                self._outputs_stale = True
+                return True
+            kind, problem = outcome
+            if kind == REFUSED:
+                self._error(f"fmi2DoStep: {problem}; step refused")
+            else:
+                # The step could not be completed and nothing changed: fmi2Discard, after
+                # which the host restores a state or retries (FMI 2.0 section 4.2.3).
+                self._mode = STEP_FAILED
+                self.log(f"fmi2DoStep: {problem}", Fmi2Status.discard)
             return False
-        self._values[self._deflection_vr] = cosim.deflection
-        self._outputs_stale = True
-        return True
+        except Exception as exc:
+            self._internal_error("fmi2DoStep", exc)
+            return False
 
     # --- values ---------------------------------------------------------------------------
 

@@ -4,7 +4,9 @@
   and the deflection moves with it: x(t) = x(tc) + v(tc)*(t - tc).
 * Outputs read after the step belong to tc + h. New inputs change the outputs at once,
   computed from the current internal state (the output depends directly on x).
-* A step either completes or leaves everything as it was, with a message.
+* A step either completes or leaves everything as it was, with a message that says whether
+  the call was refused (it cannot follow the last step) or failed (the integrator could not
+  complete it).
 
 The FMU adapter wraps this class; benchmarks and tests can drive it directly.
 """
@@ -12,6 +14,8 @@ The FMU adapter wraps this class; benchmarks and tests can drive it directly.
 import math
 
 from .integrator import DEFAULT_RTOL, Rosenbrock
+
+REFUSED, FAILED = "refused", "failed"  # the two ways a doStep can come back unfinished
 
 
 class CoSimulation:
@@ -34,31 +38,33 @@ class CoSimulation:
         self._outputs = None
         return None
 
-    def check_step(self, current_time, step_size):
-        """A message if doStep(current_time, step_size) cannot follow the last step."""
-        if not (step_size > 0.0 and math.isfinite(step_size)):
-            return f"communication step size {step_size!r} s must be positive and finite"
-        if not (abs(current_time - self.time) <= 1e-9 * max(1.0, abs(self.time))):
-            return (f"current time {current_time!r} s does not follow from the last step, "
-                    f"which ended at {self.time!r} s")
-        return None
-
     def do_step(self, current_time, step_size):
-        """Advance to current_time + step_size (checked by check_step). Returns None or a
-        message; on failure, and on any exception, nothing has changed."""
-        saved_state = self.state[:]
-        saved_h = self.integrator.h_next
+        """Advance to current_time + step_size.
+
+        Returns None, (REFUSED, message) when the call cannot follow the last step, or
+        (FAILED, message) when the step could not be completed. Either way nothing has
+        changed: the models write their state only once the whole step has succeeded, and
+        the integrator's memory is put back here.
+        """
+        if not 0.0 < step_size < math.inf:
+            return REFUSED, f"communication step size {step_size!r} s must be positive and finite"
+        time = self.time
+        if not abs(current_time - time) <= 1e-9 * max(1.0, abs(time)):
+            return REFUSED, (f"current time {current_time!r} s does not follow from the last "
+                             f"step, which ended at {time!r} s")
+        integrator = self.integrator
+        memory = integrator.h_next, integrator.w
         try:
             problem = self.model.advance(self.state, self.deflection, self.rate, step_size,
-                                         self.integrator)
+                                         integrator)
         except BaseException:
-            self.state, self.integrator.h_next = saved_state, saved_h
+            integrator.h_next, integrator.w = memory
             raise
         if problem:
-            self.state, self.integrator.h_next = saved_state, saved_h
-            return f"step from t = {current_time:.9g} s by {step_size:.6g} s failed: {problem}"
+            integrator.h_next, integrator.w = memory
+            return FAILED, f"step from t = {current_time:.9g} s by {step_size:.6g} s failed: {problem}"
         self.time = current_time + step_size
-        self.deflection = self.deflection + self.rate * step_size
+        self.deflection += self.rate * step_size
         self._outputs = None
         return None
 
@@ -70,7 +76,7 @@ class CoSimulation:
     def snapshot(self):
         """Everything a continuation depends on, as plain JSON-able data."""
         return {"time": self.time, "deflection": self.deflection, "rate": self.rate,
-                "state": self.state[:], "h_next": self.integrator.h_next,
+                "state": self.state[:], "integrator": self.integrator.memory(),
                 "rtol": self.integrator.rtol}
 
     def restore(self, snapshot):
@@ -78,6 +84,6 @@ class CoSimulation:
         self.deflection = snapshot["deflection"]
         self.rate = snapshot["rate"]
         self.state = list(snapshot["state"])
-        self.integrator.h_next = snapshot["h_next"]
+        self.integrator.recall(snapshot["integrator"])
         self.integrator.rtol = snapshot["rtol"]
         self._outputs = None

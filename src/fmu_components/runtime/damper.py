@@ -81,17 +81,17 @@ class RotaryDamper:
         z, rotor_rate = y
         cosh_z = math.cosh(z)
         dashpot_torque = self.dashpot.value_and_slope(rotor_rate)[0]
-        return [(omega - rotor_rate) * cosh_z * cosh_z / self.gas_limit,
-                (self.torque(z) - dashpot_torque) / self.rotor_inertia]
+        return ((omega - rotor_rate) * cosh_z * cosh_z / self.gas_limit,
+                (self.gas_force * math.sinh(2.0 * z) - dashpot_torque) / self.rotor_inertia)
 
     def jacobian(self, y, omega):
         z, rotor_rate = y
         cosh_z = math.cosh(z)
         dashpot_slope = self.dashpot.value_and_slope(rotor_rate)[1]
         inertia = self.rotor_inertia
-        return [[(omega - rotor_rate) * math.sinh(2.0 * z) / self.gas_limit,
-                 -cosh_z * cosh_z / self.gas_limit],
-                [2.0 * self.gas_force * math.cosh(2.0 * z) / inertia, -dashpot_slope / inertia]]
+        return (((omega - rotor_rate) * math.sinh(2.0 * z) / self.gas_limit,
+                 -cosh_z * cosh_z / self.gas_limit),
+                (2.0 * self.gas_force * math.cosh(2.0 * z) / inertia, -dashpot_slope / inertia))
 
     def advance(self, state, theta, omega, h, integrator):
         y = [self._z_at(state, theta), state[1]]

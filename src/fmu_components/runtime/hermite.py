@@ -65,28 +65,23 @@ class MonotoneCubic:
         d[0] = _end_slope(h[0], h[1], m[0], m[1])
         d[-1] = _end_slope(h[-1], h[-2], m[-1], m[-2])
         self.slopes = d
-        self._h = h
-        self._last = n - 2
+        # Each interval's cubic in powers of (x - x_i): y_i + d_i t + c2 t^2 + c3 t^3.
+        self._cubics = [(self.ys[i], d[i], (3.0 * m[i] - 2.0 * d[i] - d[i + 1]) / h[i],
+                         (d[i] + d[i + 1] - 2.0 * m[i]) / (h[i] * h[i])) for i in range(n - 1)]
+        self._interval = 0  # where the last lookup landed: the next is usually the same
 
     def value_and_slope(self, x):
         xs = self.xs
-        if x <= xs[0]:
-            return self.ys[0] + self.slopes[0] * (x - xs[0]), self.slopes[0]
-        if x >= xs[-1]:
-            return self.ys[-1] + self.slopes[-1] * (x - xs[-1]), self.slopes[-1]
-        i = min(bisect.bisect_right(xs, x) - 1, self._last)
-        h = self._h[i]
-        t = (x - xs[i]) / h
-        y0, y1 = self.ys[i], self.ys[i + 1]
-        d0, d1 = self.slopes[i] * h, self.slopes[i + 1] * h
-        # Cubic Hermite basis on t in [0, 1].
-        t2 = t * t
-        t3 = t2 * t
-        value = ((2 * t3 - 3 * t2 + 1) * y0 + (t3 - 2 * t2 + t) * d0
-                 + (-2 * t3 + 3 * t2) * y1 + (t3 - t2) * d1)
-        slope = ((6 * t2 - 6 * t) * y0 + (3 * t2 - 4 * t + 1) * d0
-                 + (-6 * t2 + 6 * t) * y1 + (3 * t2 - 2 * t) * d1) / h
-        return value, slope
+        i = self._interval
+        if not xs[i] <= x < xs[i + 1]:
+            if x <= xs[0]:
+                return self.ys[0] + self.slopes[0] * (x - xs[0]), self.slopes[0]
+            if x >= xs[-1]:
+                return self.ys[-1] + self.slopes[-1] * (x - xs[-1]), self.slopes[-1]
+            i = self._interval = bisect.bisect_right(xs, x) - 1
+        y0, d0, c2, c3 = self._cubics[i]
+        t = x - xs[i]
+        return y0 + t * (d0 + t * (c2 + t * c3)), d0 + t * (2.0 * c2 + 3.0 * t * c3)
 
     def __call__(self, x):
         return self.value_and_slope(x)[0]

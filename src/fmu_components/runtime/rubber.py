@@ -74,6 +74,11 @@ class RubberModel:
         self.state_scale = []
         for b in self.nested_branches:
             self.state_scale += [b.outer.c / b.outer.k, b.nested.c / b.nested.k]
+        # Plain numbers for the hot loops: (k1, c1, xi1, k2, k2/c2, xi2) per nested branch,
+        # (k, c, xi) per plain branch.
+        self._nested = [(b.outer.k, b.outer.c, b.outer.xi, b.nested.k, b.nested.k / b.nested.c,
+                         b.nested.xi) for b in self.nested_branches]
+        self._plain = [(b.outer.k, b.outer.c, b.outer.xi) for b in self.plain_branches]
 
     # --- initial state and step -------------------------------------------------------
 
@@ -100,71 +105,72 @@ class RubberModel:
         return ((crossing, 0.0), (h - crossing, v))
 
     def advance(self, state, x, v, h, integrator):
-        """Advance the state in place over a step of length h with rate v held.
-        Returns None, or an error message with the state unchanged."""
+        """Advance the state over a step of length h with rate v held. Returns None, or an
+        error message with the state untouched: it is written only once all of the step
+        has succeeded."""
         n = self.integrated_size
-        integrated = state[:n]
+        integrated, plain = state[:n], state[n:]
         for duration, rate in self.rate_segments(x, v, h):
-            if duration <= 0.0:
-                continue
-            if n:
-                problem = integrator.integrate(self, integrated, rate, duration)
-                if problem:
-                    return problem
-            self._advance_plain(state, rate, duration)
-        state[:n] = integrated
+            if duration > 0.0:
+                if n:
+                    problem = integrator.integrate(self, integrated, rate, duration)
+                    if problem:
+                        return problem
+                self._advance_plain(plain, rate, duration)
+        state[:] = integrated + plain
         return None
 
-    def _advance_plain(self, state, v, duration):
+    def _advance_plain(self, plain, v, duration):
         """Exact solution of dr/dt = v - a*r, a = k(|v| + xi)/c, for constant v."""
         speed = abs(v)
-        for i, branch in enumerate(self.plain_branches, start=self.integrated_size):
-            e = branch.outer
-            a = e.k * (speed + e.xi) / e.c
+        for i, (k, c, xi) in enumerate(self._plain):
+            a = k * (speed + xi) / c
             r_steady = v / a
-            state[i] = r_steady + (state[i] - r_steady) * math.exp(-a * duration)
+            plain[i] = r_steady + (plain[i] - r_steady) * math.exp(-a * duration)
 
     # --- integrator system: the nested branches ---------------------------------------
 
     def rhs(self, y, v):
         speed = abs(v)
         dydt = []
-        for i, branch in enumerate(self.nested_branches):
-            outer, nested = branch.outer, branch.nested
-            s, w = y[2 * i], y[2 * i + 1]
-            force = outer.k * s + nested.k * w
-            sdot = v - force * (speed + outer.xi) / outer.c
-            wdot = sdot - nested.k * w * (abs(sdot) + nested.xi) / nested.c
-            dydt += [sdot, wdot]
+        i = 0
+        for k1, c1, xi1, k2, g, xi2 in self._nested:
+            w = y[i + 1]
+            sdot = v - (k1 * y[i] + k2 * w) * (speed + xi1) / c1
+            dydt += (sdot, sdot - g * w * (abs(sdot) + xi2))
+            i += 2
         return dydt
 
     def jacobian(self, y, v):
         n = self.integrated_size
-        jac = [[0.0] * n for _ in range(n)]
         speed = abs(v)
-        for i, branch in enumerate(self.nested_branches):
-            outer, nested = branch.outer, branch.nested
-            s, w = y[2 * i], y[2 * i + 1]
-            b = (speed + outer.xi) / outer.c
-            sdot = v - (outer.k * s + nested.k * w) * b
-            g = nested.k / nested.c
+        rows = []
+        i = 0
+        for k1, c1, xi1, k2, g, xi2 in self._nested:
+            w = y[i + 1]
+            b = (speed + xi1) / c1
+            sdot = v - (k1 * y[i] + k2 * w) * b
             # d|sdot|/dy = sign(sdot) * d sdot/dy
             nested_factor = 1.0 - g * w * math.copysign(1.0, sdot)
-            j = 2 * i
-            jac[j][j] = -outer.k * b
-            jac[j][j + 1] = -nested.k * b
-            jac[j + 1][j] = -outer.k * b * nested_factor
-            jac[j + 1][j + 1] = -nested.k * b * nested_factor - g * (abs(sdot) + nested.xi)
-        return jac
+            top, bottom = [0.0] * n, [0.0] * n
+            top[i], top[i + 1] = -k1 * b, -k2 * b
+            bottom[i] = -k1 * b * nested_factor
+            bottom[i + 1] = -k2 * b * nested_factor - g * (abs(sdot) + xi2)
+            rows += (top, bottom)
+            i += 2
+        return rows
 
     # --- outputs ----------------------------------------------------------------------
 
     def branch_force(self, state):
         total = 0.0
-        for i, branch in enumerate(self.nested_branches):
-            total += branch.outer.k * state[2 * i] + branch.nested.k * state[2 * i + 1]
-        for i, branch in enumerate(self.plain_branches, start=self.integrated_size):
-            total += branch.outer.k * state[i]
+        i = 0
+        for k1, _, _, k2, _, _ in self._nested:
+            total += k1 * state[i] + k2 * state[i + 1]
+            i += 2
+        for k, _, _ in self._plain:
+            total += k * state[i]
+            i += 1
         return total
 
     def _branch_stiffness(self, state, direction):
@@ -172,16 +178,17 @@ class RubberModel:
         the rate-independent tangent of Eq. 4.2.7-2, dF/dx = k(1 - sgn(v) F/c), with the
         nested element riding on the outer spring's rate."""
         total = 0.0
-        for i, branch in enumerate(self.nested_branches):
-            outer, nested = branch.outer, branch.nested
-            s, w = state[2 * i], state[2 * i + 1]
-            outer_slip = 1.0 - direction * (outer.k * s + nested.k * w) / outer.c
-            nested_direction = direction * math.copysign(1.0, outer_slip)
-            nested_slip = 1.0 - nested_direction * nested.k * w / nested.c
-            total += outer_slip * (outer.k + nested.k * nested_slip)
-        for i, branch in enumerate(self.plain_branches, start=self.integrated_size):
-            e = branch.outer
-            total += e.k * (1.0 - direction * e.k * state[i] / e.c)
+        i = 0
+        for k1, c1, _, k2, g, _ in self._nested:
+            w = state[i + 1]
+            outer_slip = 1.0 - direction * (k1 * state[i] + k2 * w) / c1
+            nested_direction = direction if outer_slip >= 0.0 else -direction
+            nested_slip = 1.0 - nested_direction * g * w
+            total += outer_slip * (k1 + k2 * nested_slip)
+            i += 2
+        for k, c, _ in self._plain:
+            total += k * (1.0 - direction * k * state[i] / c)
+            i += 1
         return total
 
     def outputs(self, state, x, v):
@@ -197,22 +204,22 @@ class RubberModel:
         elastic = a0 + x * (a1 + x * (a2 + x * a3))
         elastic_slope = a1 + x * (2.0 * a2 + 3.0 * a3 * x)
         offset = x - self.geometric_reference
-        multiplier = 1.0 + self.geometric_slope * abs(offset)
+        h = self.geometric_slope
+        multiplier = 1.0 + h * abs(offset)
         branch_force = self.branch_force(state)
         viscoelastic = multiplier * branch_force
         force = elastic + viscoelastic
         if self.unilateral and force <= 0.0:
             return 0.0, elastic, viscoelastic, 0.0
-
-        def slope(direction):
-            side = math.copysign(1.0, offset) if offset != 0.0 else direction
-            return (self.geometric_slope * side * branch_force
-                    + multiplier * self._branch_stiffness(state, direction))
-
-        if v > 0.0:
-            visco_slope = slope(1.0)
-        elif v < 0.0:
-            visco_slope = slope(-1.0)
+        # d/dx of f(x) * F_branch: f' F_branch + f dF_branch/dx, in the rate's direction.
+        if v != 0.0:
+            direction = 1.0 if v > 0.0 else -1.0
+            side = direction if offset == 0.0 else (1.0 if offset > 0.0 else -1.0)
+            visco_slope = (h * side * branch_force
+                           + multiplier * self._branch_stiffness(state, direction))
         else:
-            visco_slope = 0.5 * (slope(1.0) + slope(-1.0))
+            # f' averages to zero at the kink; elsewhere it is the same both ways.
+            side = 0.0 if offset == 0.0 else (1.0 if offset > 0.0 else -1.0)
+            visco_slope = h * side * branch_force + multiplier * 0.5 * (
+                self._branch_stiffness(state, 1.0) + self._branch_stiffness(state, -1.0))
         return force, elastic, viscoelastic, elastic_slope + visco_slope
