@@ -233,12 +233,15 @@ class Rosenbrock:
         self.accepted_steps = 0
         self.rejected_steps = 0
         self._exponent = -1.0 / (tableau.embedded_order + 1)
+        self._last_compiled = (None, None)
 
     def compiled(self, n):
-        key = (self.tableau.name, n)
-        if key not in self._compiled:
-            self._compiled[key] = compile_step(self.tableau, n)
-        return self._compiled[key]
+        if self._last_compiled[0] != n:
+            key = (self.tableau.name, n)
+            if key not in self._compiled:
+                self._compiled[key] = compile_step(self.tableau, n)
+            self._last_compiled = (n, self._compiled[key])
+        return self._last_compiled[1]
 
     def step(self, system, y, u, h):
         """One step of size h with a fresh Jacobian: (y_new, error_norm), or None."""
