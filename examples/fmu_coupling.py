@@ -281,3 +281,38 @@ class HostCoupling:
     def free(self):
         for component, _ in self.entries:
             component.free()
+
+
+# --- the exudyn side (everything above works with any host) -------------------------------
+
+def connector_state(mbs, connector):
+    """Displacement and velocity of a connector at the host's current (accepted) state,
+    as its force user function receives them."""
+    import exudyn as exu
+
+    return (mbs.GetObjectOutput(connector, exu.OutputVariableType.Displacement),
+            mbs.GetObjectOutput(connector, exu.OutputVariableType.Velocity))
+
+
+def solve_fixed_step(mbs, coupling, end_time, step, start_time=0.0):
+    """Start the components at the host's initial state, then integrate with exudyn's
+    implicit generalized-alpha at a fixed step (no rejected steps: every post-step is an
+    accepted step), stepping the components from the post-step hook."""
+    import exudyn as exu
+
+    coupling.start(start_time)
+    mbs.SetPostStepUserFunction(lambda mbs, t: coupling.post_step(t) or True)
+    settings = exu.SimulationSettings()
+    settings.timeIntegration.startTime = start_time
+    settings.timeIntegration.endTime = end_time
+    settings.timeIntegration.numberOfSteps = int(round((end_time - start_time) / step))
+    settings.timeIntegration.adaptiveStep = False
+    settings.timeIntegration.verboseMode = 0
+    settings.solution.file.write = False
+    settings.solution.sensors.active = False
+    try:
+        ok = mbs.SolveDynamic(settings, solverType=exu.DynamicSolverType.GeneralizedAlpha)
+    finally:
+        coupling.free()
+    if not ok:
+        raise RuntimeError("exudyn's dynamic solver failed")

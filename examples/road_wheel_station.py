@@ -40,8 +40,8 @@ from exudyn.itemInterface import (CoordinateConstraint, MarkerBodyPosition,
                                   ObjectConnectorCoordinateSpringDamper, ObjectGround,
                                   ObjectJointRevolute2D, ObjectRigidBody2D)
 
-from fmu_coupling import (FmuComponent, HostCoupling, KelvinElement, fmu_path,
-                          harmonic_kelvin_equivalent)
+from fmu_coupling import (FmuComponent, HostCoupling, KelvinElement, connector_state,
+                          fmu_path, harmonic_kelvin_equivalent, solve_fixed_step)
 
 GRAVITY = 9.81
 STATIONS = 12
@@ -238,7 +238,6 @@ class Station:
         self.coupling = HostCoupling(record=self._record)
         self.coupling.add(tyre, self._tyre_state)
         self.coupling.add(damper, self._damper_state)
-        mbs.SetPostStepUserFunction(self._post_step)
         mbs.Assemble()
         self.records = []
 
@@ -256,24 +255,13 @@ class Station:
         compression, rate = self._compression(t, displacement, velocity)
         return [0.0, -TYRES_PER_WHEEL * self.tyre.host_load(compression, rate), 0.0]
 
-    def _connector_state(self, connector):
-        mbs = self.mbs
-        return (mbs.GetObjectOutput(connector, exu.OutputVariableType.Displacement),
-                mbs.GetObjectOutput(connector, exu.OutputVariableType.Velocity))
-
     def _tyre_state(self):
         return self._compression(self.mbs.systemData.GetTime(),
-                                 *self._connector_state(self.tyre_connector))
+                                 *connector_state(self.mbs, self.tyre_connector))
 
     def _damper_state(self):
-        rotation, rate = self._connector_state(self.damper_connector)
+        rotation, rate = connector_state(self.mbs, self.damper_connector)
         return float(rotation), float(rate)
-
-    # --- post step ----------------------------------------------------------------------
-
-    def _post_step(self, mbs, t):
-        self.coupling.post_step(t)
-        return True
 
     def _record(self, t):
         mbs = self.mbs
@@ -287,21 +275,7 @@ class Station:
 
     def run(self, end_time, step):
         """Integrate to end_time with a fixed host step; returns the recorded histories."""
-        self.coupling.start(0.0)
-        settings = exu.SimulationSettings()
-        settings.timeIntegration.endTime = end_time
-        settings.timeIntegration.numberOfSteps = int(round(end_time / step))
-        settings.timeIntegration.adaptiveStep = False
-        settings.timeIntegration.verboseMode = 0
-        settings.solution.file.write = False
-        settings.solution.sensors.active = False
-        settings.timeIntegration.generalizedAlpha.spectralRadius = 0.9
-        try:
-            ok = self.mbs.SolveDynamic(settings, solverType=exu.DynamicSolverType.GeneralizedAlpha)
-        finally:
-            self.coupling.free()
-        if not ok:
-            raise RuntimeError("exudyn's dynamic solver failed")
+        solve_fixed_step(self.mbs, self.coupling, end_time, step)
         names = ("time", "hull_acceleration", "hull_force", "arm_angle", "damper_torque",
                  "dashpot_torque", "rotor_rate", "tyre_compression", "tyre_force")
         data = np.array(self.records)
