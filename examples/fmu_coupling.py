@@ -215,20 +215,27 @@ class KelvinElement:
         pass
 
 
+def kelvin_coefficients(deflection, rate, load, moving_mass=0.0):
+    """Equivalent linear stiffness and damping of a recorded response (whole cycles, or a
+    long record), thesis section 10.1 after Hagedorn and Wallaschek, with mean values:
+
+        c_eq = mean((F - mean F) * xdot) / mean(xdot^2)                       Eq. 10.1-2
+        k_eq = (mean(F x) - mean F * mean x + m mean(xdot^2)) / (mean(x^2) - (mean x)^2)
+                                                                              Eq. 10.1-3
+    """
+    x, xdot, force = (np.asarray(a, dtype=float) for a in (deflection, rate, load))
+    c_eq = np.mean((force - force.mean()) * xdot) / np.mean(xdot ** 2)
+    k_eq = ((np.mean(force * x) - force.mean() * x.mean() + moving_mass * np.mean(xdot ** 2))
+            / (np.mean(x ** 2) - x.mean() ** 2))
+    return float(k_eq), float(c_eq)
+
+
 def harmonic_kelvin_equivalent(path, mean, amplitude, frequency, cycles=6, step=1e-3,
                                parameters=None):
-    """Equivalent linear stiffness and damping of an FMU about `mean` for the sine
-    x = mean + amplitude sin(2 pi f t), from its response over the last two of `cycles`
-    cycles (the first ones carry the start-up transient).
-
-    Thesis section 10.1 (Hagedorn and Wallaschek), with mean values over whole cycles and
-    no moving mass inside the component (m = 0 in Eq. 10.1-3):
-
-        c_eq = mean((F - mean F) * xdot) / mean(xdot^2)                   Eq. 10.1-2
-        k_eq = (mean(F x) - mean F * mean x) / (mean(x^2) - (mean x)^2)   Eq. 10.1-3
-
-    Returns (k_eq, c_eq, mean load over the recorded cycles).
-    """
+    """Kelvin equivalent of an FMU about `mean` for the sine x = mean + amplitude
+    sin(2 pi f t), from its response over the last two of `cycles` cycles (the first ones
+    carry the start-up transient). The component has no moving mass of its own outside
+    the FMU (m = 0 in Eq. 10.1-3). Returns (k_eq, c_eq, mean load over those cycles)."""
     component = FmuComponent(path, f"linearise_{Path(path).stem}", parameters=parameters)
     try:
         omega = 2.0 * math.pi * frequency
@@ -246,11 +253,9 @@ def harmonic_kelvin_equivalent(path, mean, amplitude, frequency, cycles=6, step=
         component.free()
     # The last two cycles, each sample once (the end point closes the cycle).
     window = slice(n - 2 * samples_per_cycle, n)
-    xw, fw = x[window], load[window]
-    xdot = amplitude * omega * np.cos(omega * t[window])
-    c_eq = np.mean((fw - fw.mean()) * xdot) / np.mean(xdot ** 2)
-    k_eq = (np.mean(fw * xw) - fw.mean() * xw.mean()) / (np.mean(xw ** 2) - xw.mean() ** 2)
-    return float(k_eq), float(c_eq), float(fw.mean())
+    k_eq, c_eq = kelvin_coefficients(x[window], amplitude * omega * np.cos(omega * t[window]),
+                                     load[window])
+    return k_eq, c_eq, float(load[window].mean())
 
 
 class HostCoupling:
