@@ -303,15 +303,23 @@ def cumulative_trapezoid(y, x):
     return np.concatenate(([0.0], np.cumsum(0.5 * (y[1:] + y[:-1]) * np.diff(x))))
 
 
-def peaks(result):
-    """Figures of what the hull feels: peak |acceleration| and the force range."""
-    return {"peak_hull_acceleration": float(np.max(np.abs(result["hull_acceleration"]))),
-            "rms_hull_acceleration": float(np.sqrt(np.mean(result["hull_acceleration"] ** 2))),
-            "max_hull_force": float(np.max(result["hull_force"])),
-            "min_hull_force": float(np.min(result["hull_force"])),
-            "max_tyre_force": float(np.max(result["tyre_force"])),
-            "peak_damper_torque": float(np.max(np.abs(result["damper_torque"]))),
-            "damper_work": float(result["damper_work"][-1])}
+def peaks(result, ripple_from=None):
+    """Figures of what the hull feels: peak |acceleration|, the force range and, from
+    `ripple_from` (s) on, the rms hull acceleration and damper torque on the ripple."""
+    found = {"peak_hull_acceleration": float(np.max(np.abs(result["hull_acceleration"]))),
+             "max_hull_force": float(np.max(result["hull_force"])),
+             "min_hull_force": float(np.min(result["hull_force"])),
+             "max_tyre_force": float(np.max(result["tyre_force"])),
+             "peak_damper_torque": float(np.max(np.abs(result["damper_torque"]))),
+             "damper_work": float(result["damper_work"][-1])}
+    ripple = result["time"] >= (ripple_from if ripple_from is not None else np.inf)
+    if ripple.any():
+        for key in ("hull_acceleration", "damper_torque"):
+            found[f"ripple_rms_{key}"] = float(np.sqrt(np.mean(result[key][ripple] ** 2)))
+    return found
+
+
+RIPPLE_DELAY = 0.5  # s after the bump: the ripple figures start there
 
 
 # --- plots --------------------------------------------------------------------------------
@@ -495,20 +503,22 @@ def main(argv=None):
 
     print(f"Linear Kelvin equivalents (Eqs. 10.1-2, 10.1-3): {linear.describe()}")
     runs = {}
-    print(f"\n{'speed':>6s} {'model':>7s} {'peak |a| hull':>14s} {'rms a':>6s} {'hull force max':>15s} "
-          f"{'min':>8s} {'tyre max':>9s} {'damper |T|':>10s} {'damper work':>11s}")
+    print(f"\n{'speed':>6s} {'model':>7s} {'peak |a| hull':>14s} {'hull force max':>15s} "
+          f"{'min':>8s} {'tyre max':>9s} {'damper |T|':>10s} {'damper work':>11s} "
+          f"{'ripple: rms a':>14s} {'rms T':>7s}")
     for speed in args.speeds:
         nonlinear = simulate(speed, profile, args.step, args.fmu_dir, end_time=args.end_time)
         linearised = simulate(speed, profile, args.step, args.fmu_dir, linear,
                               end_time=args.end_time)
         runs[speed] = nonlinear, linearised
         for model, result in (("FMUs", nonlinear), ("linear", linearised)):
-            p = peaks(result)
+            p = peaks(result, ripple_from=profile.end / speed + RIPPLE_DELAY)
             print(f"{speed:5g}  {model:>7s} {p['peak_hull_acceleration']:10.2f} m/s2 "
-                  f"{p['rms_hull_acceleration']:6.2f} "
                   f"{p['max_hull_force'] / 1e3:11.1f} kN {p['min_hull_force'] / 1e3:6.1f} kN "
                   f"{p['max_tyre_force'] / 1e3:6.1f} kN {p['peak_damper_torque'] / 1e3:6.2f} kNm "
-                  f"{p['damper_work'] / 1e3:8.2f} kJ")
+                  f"{p['damper_work'] / 1e3:8.2f} kJ "
+                  f"{p.get('ripple_rms_hull_acceleration', math.nan):9.2f} m/s2 "
+                  f"{p.get('ripple_rms_damper_torque', math.nan):7.0f}")
         plot_speed(args.out / f"station_{speed:g}mps.png", speed, profile, nonlinear, linearised)
     plot_difference(args.out / "station_difference.png", runs)
     print(f"\nstatic hull force {HULL_MASS * GRAVITY / 1e3:.2f} kN; wrote plots to {args.out}/; "
