@@ -332,7 +332,7 @@ PANELS = (("hull_acceleration", "hull vertical\nacceleration (m/s2)", 1.0),
 
 
 def plot_speed(path, speed, profile, nonlinear, linear):
-    import matplotlib.pyplot as plt
+    from plotting import plt, save_figure
 
     figure, axes = plt.subplots(len(PANELS) + 1, 1, figsize=(9, 12), sharex=True)
     t = nonlinear["time"]
@@ -349,14 +349,12 @@ def plot_speed(path, speed, profile, nonlinear, linear):
         axis.grid(alpha=0.3)
     axes[1].legend(loc="upper right", fontsize=8)
     axes[-1].set_xlabel("time (s)")
-    figure.tight_layout()
-    figure.savefig(path, dpi=110)
-    plt.close(figure)
+    save_figure(figure, path)
 
 
 def plot_difference(path, runs):
     """What the hull feels, nonlinear minus linear, for every speed."""
-    import matplotlib.pyplot as plt
+    from plotting import plt, save_figure
 
     figure, axes = plt.subplots(2, 1, figsize=(9, 7), sharex=False)
     for speed, (nonlinear, linear) in runs.items():
@@ -373,9 +371,7 @@ def plot_difference(path, runs):
         axis.grid(alpha=0.3)
         axis.legend(fontsize=8)
     axes[0].set_title("Do the nonlinearities matter for the hull? Difference of the runs")
-    figure.tight_layout()
-    figure.savefig(path, dpi=110)
-    plt.close(figure)
+    save_figure(figure, path)
 
 
 # --- coupling accuracy --------------------------------------------------------------------
@@ -440,7 +436,7 @@ def print_study(table):
 
 
 def plot_study(path, table, steps=STUDY_STEPS):
-    import matplotlib.pyplot as plt
+    from plotting import plt, save_figure
 
     figure, axes = plt.subplots(1, 3, figsize=(14, 4.8))
     for axis, key in zip(axes, ("hull_acceleration", "damper_torque", "peak_hull_acceleration")):
@@ -458,17 +454,12 @@ def plot_study(path, table, steps=STUDY_STEPS):
     axes[0].legend(fontsize=7)
     figure.suptitle("Road-wheel station: FMU coupling error against host step (missing "
                     "points: the run diverged)")
-    figure.tight_layout()
-    figure.savefig(path, dpi=110)
-    plt.close(figure)
+    save_figure(figure, path)
 
 
 # --- command line -------------------------------------------------------------------------
 
 def main(argv=None):
-    import matplotlib
-    matplotlib.use("Agg")
-
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--speeds", type=float, nargs="+", default=[3.0, 8.0, 15.0],
                         help="forward speeds, m/s")

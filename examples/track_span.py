@@ -201,7 +201,7 @@ def seat_deflection(displacement, velocity):
 # --- plots --------------------------------------------------------------------------------
 
 def plot_span(path, result, span):
-    import matplotlib.pyplot as plt
+    from plotting import plt, save_figure
 
     t = result["time"]
     figure, axes = plt.subplots(4, 1, figsize=(9, 12), sharex=True)
@@ -229,14 +229,12 @@ def plot_span(path, result, span):
     axes[0].set_title(f"Track span: {span.links} links, {TENSION / 1e3:g} kN, end lifted "
                       f"{span.lift * 1e3:g} mm at {span.frequency:g} Hz (colour: joint/link "
                       f"from sprocket to wheel)")
-    figure.tight_layout()
-    figure.savefig(path, dpi=110)
-    plt.close(figure)
+    save_figure(figure, path)
 
 
 def plot_shapes(path, result, span):
     """Vertical position of every link centre along the span at a few instants."""
-    import matplotlib.pyplot as plt
+    from plotting import plt, save_figure
 
     figure, axis = plt.subplots(figsize=(9, 4))
     # The held joint at the sprocket, the link centres, the lifted joint at the wheel.
@@ -251,15 +249,10 @@ def plot_shapes(path, result, span):
     axis.set_title("Span shape (static sag at t = 0)")
     axis.grid(alpha=0.3)
     axis.legend(fontsize=7, ncol=3)
-    figure.tight_layout()
-    figure.savefig(path, dpi=110)
-    plt.close(figure)
+    save_figure(figure, path)
 
 
 def main(argv=None):
-    import matplotlib
-    matplotlib.use("Agg")
-
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--links", type=int, default=10)
     parser.add_argument("--lift", type=float, default=0.01, help="end lift, m")
