@@ -69,11 +69,11 @@ STIFFNESS_COUPLED = ("tyre",)
 DEFAULT_STEP = 1e-4  # s, host step (README: coupling accuracy)
 
 # The linear equivalents are fitted to each FMU's steady response to a sine about the
-# static point, at amplitudes and frequencies the station shows over the bump at 8 m/s
-# (tyre compression +-1 mm about 3.2 mm, the arm +-0.1 rad) and at the 1 to 10 Hz of the
-# body and wheel motion (see README: "Using the FMUs in a multibody host").
+# static point, at the amplitudes the station shows over the default bump (tyre
+# compression 1 to 3 mm either side of 3.25 mm, the arm 2 to 4 deg either side of static)
+# and at frequencies between its bounce (about 1.2 Hz) and wheel hop (50 to 70 Hz).
 TYRE_SINE = (1e-3, 10.0)  # amplitude (m), frequency (Hz)
-DAMPER_SINE = (0.1, 2.0)  # amplitude (rad), frequency (Hz)
+DAMPER_SINE = (0.06, 2.0)  # amplitude (rad), frequency (Hz)
 
 
 class RoadProfile:
@@ -122,19 +122,22 @@ def torsion_bar_preload(tyre_load_per_wheel):
 class Linearisation:
     """Kelvin equivalents of the tyre and damper about the station's static point."""
 
-    def __init__(self, fmu_dir, static_compression):
+    def __init__(self, fmu_dir, static_compression, tyre_sine=TYRE_SINE,
+                 damper_sine=DAMPER_SINE):
         self.static_compression = static_compression
+        self.tyre_sine, self.damper_sine = tyre_sine, damper_sine
         self.tyre = harmonic_kelvin_equivalent(fmu_path("RoadWheelTyre", fmu_dir),
-                                               static_compression, *TYRE_SINE)
+                                               static_compression, *tyre_sine)
         self.damper = harmonic_kelvin_equivalent(fmu_path("RotaryDamper", fmu_dir), 0.0,
-                                                 *DAMPER_SINE)
+                                                 *damper_sine)
 
     def describe(self):
         (kt, ct, _), (kd, cd, _) = self.tyre, self.damper
+        (tyre_amplitude, tyre_f), (damper_amplitude, damper_f) = self.tyre_sine, self.damper_sine
         return (f"tyre (one half-wheel) about {self.static_compression * 1e3:.3f} mm, "
-                f"+-{TYRE_SINE[0] * 1e3:g} mm at {TYRE_SINE[1]:g} Hz: k_eq = {kt / 1e3:.0f} "
-                f"N/mm, c_eq = {ct:.0f} N.s/m; damper +-{DAMPER_SINE[0]:g} rad at "
-                f"{DAMPER_SINE[1]:g} Hz: k_eq = {kd:.0f} N.m/rad, c_eq = {cd:.0f} N.m.s/rad")
+                f"+-{tyre_amplitude * 1e3:g} mm at {tyre_f:g} Hz: k_eq = {kt / 1e3:.0f} "
+                f"N/mm, c_eq = {ct:.0f} N.s/m; damper +-{damper_amplitude:g} rad at "
+                f"{damper_f:g} Hz: k_eq = {kd:.0f} N.m/rad, c_eq = {cd:.0f} N.m.s/rad")
 
 
 class Station:
@@ -468,6 +471,12 @@ def main(argv=None):
     parser.add_argument("--bump-length", type=float, default=1.0, help="m")
     parser.add_argument("--ripple-depth", type=float, default=1e-3,
                         help="dip at each track-link joint, m")
+    parser.add_argument("--damper-sine", type=float, nargs=2, default=DAMPER_SINE,
+                        metavar=("AMPLITUDE", "FREQUENCY"),
+                        help="sine (rad, Hz) the damper's Kelvin equivalent is fitted to")
+    parser.add_argument("--tyre-sine", type=float, nargs=2, default=TYRE_SINE,
+                        metavar=("AMPLITUDE", "FREQUENCY"),
+                        help="sine (m, Hz) the tyre's Kelvin equivalent is fitted to")
     parser.add_argument("--end-time", type=float, help="s; default: bump passed + 1 s")
     parser.add_argument("--fmu-dir", type=Path, help="default: fmus/")
     parser.add_argument("--out", type=Path, default=Path("reports") / "road_wheel_station")
@@ -479,7 +488,8 @@ def main(argv=None):
     started = time.perf_counter()
 
     tyre = FmuComponent(fmu_path("RoadWheelTyre", args.fmu_dir), "tyre_static")
-    linear = Linearisation(args.fmu_dir, static_tyre_compression(tyre))
+    linear = Linearisation(args.fmu_dir, static_tyre_compression(tyre), args.tyre_sine,
+                           args.damper_sine)
     tyre.free()
     if args.coupling_study:
         table = coupling_study(args.speeds[0], profile, linear, args.fmu_dir,
