@@ -1,0 +1,530 @@
+"""One Warrior road-wheel station in 2D, in the exudyn multibody host, driven over a bump
+and the track-link ripple: RoadWheelTyre.fmu at the wheel-track contact, RotaryDamper.fmu
+at the arm pivot, each stepped once per accepted host step (fmu_coupling.py).
+
+    python examples/road_wheel_station.py                  # speeds 3, 8 and 15 m/s
+    python examples/road_wheel_station.py --speeds 8 --step 5e-4
+    python examples/road_wheel_station.py --coupling-study # accuracy against host step
+
+Every speed is run twice: with the FMUs, and with both components replaced by their linear
+Kelvin equivalents at the static point (Eqs. 10.1-2 and 10.1-3, thesis section 10.1). The
+plots go to reports/road_wheel_station/ (or --out).
+
+The model (x forward, y up, angles counter-clockwise):
+* hull: the station's share of the vehicle, guided vertically (no pitch, no surge);
+* trailing arm, 0.4 m (section 9.1), pivoted on the hull, trailing down at 30 deg at the
+  static point, with a linear torsion bar preloaded to carry the station;
+* road wheel, 613 mm diameter (section 5.1.1), free to spin at the arm's end;
+* tyre: one RoadWheelTyre instance is the tyre of one half-wheel (section 5.1.1); the two
+  half-wheels of a wheel run on the same track link and see the same compression in 2D,
+  so the wheel gets twice its force (TYRES_PER_WHEEL);
+* damper: RotaryDamper between hull and arm, input the arm's rotation from its static
+  position, positive in bump (wheel up), as the damper's rotor turns with the arm (9.1);
+* ground: the track link under the wheel follows the road profile, a smooth bump plus the
+  ripple of the track-link pitch; the tyre touches it under the wheel centre.
+"""
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy.optimize import brentq
+
+import exudyn as exu
+from exudyn.itemInterface import (CoordinateConstraint, MarkerBodyPosition,
+                                  LoadForceVector, MarkerNodeCoordinate, NodePointGround,
+                                  NodeRigidBody2D, ObjectConnectorCartesianSpringDamper,
+                                  ObjectConnectorCoordinateSpringDamper, ObjectGround,
+                                  ObjectJointRevolute2D, ObjectRigidBody2D)
+
+from fmu_coupling import (FmuComponent, HostCoupling, KelvinElement, connector_state,
+                          fmu_path, harmonic_kelvin_equivalent, solve_fixed_step)
+
+GRAVITY = 9.81
+STATIONS = 12
+VEHICLE_MASS = 27000.0  # kg, section 5.1.1
+STATION_MASS = VEHICLE_MASS / STATIONS  # what one station's tyres carry: 2250 kg
+WHEEL_MASS = 80.0  # two half-wheels: cast aluminium hubs and tyres (estimate)
+WHEEL_INERTIA = 3.0  # kg.m2 about the axle (estimate; the wheel spins freely)
+ARM_MASS = 40.0  # kg (estimate)
+HULL_MASS = STATION_MASS - WHEEL_MASS - ARM_MASS  # the sprung share, 2130 kg
+ARM_LENGTH = 0.4  # m, section 9.1
+ARM_STATIC_ANGLE = math.radians(30.0)  # below horizontal, trailing (estimate)
+WHEEL_RADIUS = 0.613 / 2  # m, section 5.1.1
+TYRES_PER_WHEEL = 2
+# Torsion bar rate: about 1.2 Hz bounce of the sprung share (section 9.0: pitch ~1 Hz).
+TORSION_BAR_STIFFNESS = 15000.0  # N.m/rad
+TRACK_PITCH = 0.15  # m
+
+# Components whose `stiffness` output goes into the host's Jacobian (fmu_coupling.py). The
+# tyre needs it: its contact stiffness (2 x 1e7 N/m) against the wheel makes the plain
+# one-step lag unstable at millisecond host steps. The damper must not use it at these
+# steps: its output is the gas-spring stiffness, which holds only until the rotor follows
+# the arm (a fraction of a millisecond; up to 7e6 N.m/rad near blow-off), so as a step
+# tangent it over-predicts the torque by about K w h / 2 (README: coupling accuracy).
+STIFFNESS_COUPLED = ("tyre",)
+DEFAULT_STEP = 1e-4  # s, host step (README: coupling accuracy)
+
+# The linear equivalents are fitted to each FMU's steady response to a sine about the
+# static point, at the amplitudes the station shows over the default bump (tyre
+# compression 1 to 3 mm either side of 3.25 mm, the arm 2 to 4 deg either side of static)
+# and at frequencies between its bounce (about 1.2 Hz) and wheel hop (50 to 70 Hz).
+TYRE_SINE = (1e-3, 10.0)  # amplitude (m), frequency (Hz)
+DAMPER_SINE = (0.06, 2.0)  # amplitude (rad), frequency (Hz)
+
+
+class RoadProfile:
+    """Height of the track link under the wheel against distance s along the road: a
+    (1 - cos) bump, and a dip of `ripple_depth` at every track-link joint (the wheel
+    rides on the link pitch). Starts flat on a link's middle: no slope at s = 0."""
+
+    def __init__(self, bump_height=0.03, bump_length=1.0, bump_start=1.0, ripple_depth=1e-3,
+                 pitch=TRACK_PITCH):
+        self.bump_height = bump_height
+        self.bump_length = bump_length
+        self.bump_start = bump_start
+        self.ripple_depth = ripple_depth
+        self.pitch = pitch
+
+    def height_and_slope(self, s):
+        ripple_k = 2 * math.pi / self.pitch
+        height = -0.5 * self.ripple_depth * (1 - math.cos(ripple_k * s))
+        slope = -0.5 * self.ripple_depth * ripple_k * math.sin(ripple_k * s)
+        u = (s - self.bump_start) / self.bump_length
+        if 0.0 < u < 1.0:
+            bump_k = 2 * math.pi / self.bump_length
+            height += 0.5 * self.bump_height * (1 - math.cos(2 * math.pi * u))
+            slope += 0.5 * self.bump_height * bump_k * math.sin(2 * math.pi * u)
+        return height, slope
+
+    @property
+    def end(self):
+        return self.bump_start + self.bump_length
+
+
+def static_tyre_compression(tyre):
+    """Compression at which the relaxed tyre carries its share of the station's weight
+    (the thesis: about 11 kN at 3.24 mm), from the FMU's own output."""
+    share = STATION_MASS * GRAVITY / TYRES_PER_WHEEL
+    return brentq(lambda x: tyre.relaxed_outputs(x)[tyre.load_name] - share, 1e-4, 6e-3,
+                  xtol=1e-12)
+
+
+def torsion_bar_preload(tyre_load_per_wheel):
+    """Bar torque at the static point: moment balance of arm and wheel about the pivot."""
+    lever = ARM_LENGTH * math.cos(ARM_STATIC_ANGLE)
+    return (tyre_load_per_wheel - WHEEL_MASS * GRAVITY - 0.5 * ARM_MASS * GRAVITY) * lever
+
+
+class Linearisation:
+    """Kelvin equivalents of the tyre and damper about the station's static point."""
+
+    def __init__(self, fmu_dir, static_compression, tyre_sine=TYRE_SINE,
+                 damper_sine=DAMPER_SINE):
+        self.static_compression = static_compression
+        self.tyre_sine, self.damper_sine = tyre_sine, damper_sine
+        self.tyre = harmonic_kelvin_equivalent(fmu_path("RoadWheelTyre", fmu_dir),
+                                               static_compression, *tyre_sine)
+        self.damper = harmonic_kelvin_equivalent(fmu_path("RotaryDamper", fmu_dir), 0.0,
+                                                 *damper_sine)
+
+    def describe(self):
+        (kt, ct, _), (kd, cd, _) = self.tyre, self.damper
+        (tyre_amplitude, tyre_f), (damper_amplitude, damper_f) = self.tyre_sine, self.damper_sine
+        return (f"tyre (one half-wheel) about {self.static_compression * 1e3:.3f} mm, "
+                f"+-{tyre_amplitude * 1e3:g} mm at {tyre_f:g} Hz: k_eq = {kt / 1e3:.0f} "
+                f"N/mm, c_eq = {ct:.0f} N.s/m; damper +-{damper_amplitude:g} rad at "
+                f"{damper_f:g} Hz: k_eq = {kd:.0f} N.m/rad, c_eq = {cd:.0f} N.m.s/rad")
+
+
+class Station:
+    """The station in exudyn with its two components; `run` drives it at one speed."""
+
+    def __init__(self, speed, profile, fmu_dir=None, linear=None, linearised=("tyre", "damper"),
+                 stiffness_coupled=STIFFNESS_COUPLED, tolerance=None):
+        """linear: a Linearisation, whose Kelvin elements replace the `linearised`
+        components; without it both components are the FMUs."""
+        self.speed = speed
+        self.profile = profile
+        SC = exu.SystemContainer()
+        mbs = SC.AddSystem()
+        self.SC, self.mbs = SC, mbs
+
+        tyre = FmuComponent(fmu_path("RoadWheelTyre", fmu_dir), "tyre", tolerance=tolerance,
+                            unilateral=True, use_stiffness="tyre" in stiffness_coupled)
+        self.static_compression = static_tyre_compression(tyre)
+        static_tyre_load = tyre.relaxed_outputs(self.static_compression)[tyre.load_name]
+        linearised = linearised if linear else ()
+        if "tyre" in linearised:
+            tyre.free()
+            stiffness, damping, _ = linear.tyre
+            tyre = KelvinElement("tyre", "force", stiffness, damping, self.static_compression,
+                                 static_tyre_load, unilateral=True)
+        if "damper" in linearised:
+            stiffness, damping, _ = linear.damper
+            damper = KelvinElement("damper", "torque", stiffness, damping, 0.0, 0.0)
+        else:
+            damper = FmuComponent(fmu_path("RotaryDamper", fmu_dir), "damper",
+                                  tolerance=tolerance,
+                                  use_stiffness="damper" in stiffness_coupled)
+        self.tyre, self.damper = tyre, damper
+        self.bar_preload = torsion_bar_preload(TYRES_PER_WHEEL * static_tyre_load)
+
+        # Geometry at the static point: pivot at the origin, arm trailing down to the wheel.
+        arm_direction = np.array([-math.cos(ARM_STATIC_ANGLE), -math.sin(ARM_STATIC_ANGLE)])
+        arm_centre = 0.5 * ARM_LENGTH * arm_direction
+        wheel_centre = ARM_LENGTH * arm_direction
+        self.ground_level = wheel_centre[1] - WHEEL_RADIUS + self.static_compression
+        arm_angle = math.pi + ARM_STATIC_ANGLE
+
+        ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
+        hull_node = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[0.0, 0.0, 0.0]))
+        arm_node = mbs.AddNode(NodeRigidBody2D(
+            referenceCoordinates=[arm_centre[0], arm_centre[1], arm_angle]))
+        wheel_node = mbs.AddNode(NodeRigidBody2D(
+            referenceCoordinates=[wheel_centre[0], wheel_centre[1], 0.0]))
+        # The hull's share is guided vertically: its rotation and surge belong to the rest
+        # of the vehicle.
+        hull = mbs.AddObject(ObjectRigidBody2D(mass=HULL_MASS, inertia=1.0,
+                                               nodeNumber=hull_node))
+        arm = mbs.AddObject(ObjectRigidBody2D(mass=ARM_MASS,
+                                              inertia=ARM_MASS * ARM_LENGTH ** 2 / 12,
+                                              nodeNumber=arm_node))
+        wheel = mbs.AddObject(ObjectRigidBody2D(mass=WHEEL_MASS, inertia=WHEEL_INERTIA,
+                                                nodeNumber=wheel_node))
+
+        def coordinate(node, index):
+            return mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=index))
+
+        for index in (0, 2):
+            mbs.AddObject(CoordinateConstraint(markerNumbers=[coordinate(ground, index),
+                                                              coordinate(hull_node, index)]))
+        self.pivot = mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[
+            mbs.AddMarker(MarkerBodyPosition(bodyNumber=hull, localPosition=[0.0, 0.0, 0.0])),
+            mbs.AddMarker(MarkerBodyPosition(bodyNumber=arm,
+                                             localPosition=[-0.5 * ARM_LENGTH, 0.0, 0.0]))]))
+        mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[
+            mbs.AddMarker(MarkerBodyPosition(bodyNumber=arm,
+                                             localPosition=[0.5 * ARM_LENGTH, 0.0, 0.0])),
+            mbs.AddMarker(MarkerBodyPosition(bodyNumber=wheel, localPosition=[0.0, 0.0, 0.0]))]))
+        for body, mass in ((hull, HULL_MASS), (arm, ARM_MASS), (wheel, WHEEL_MASS)):
+            mbs.AddLoad(LoadForceVector(
+                markerNumber=mbs.AddMarker(MarkerBodyPosition(bodyNumber=body)),
+                loadVector=[0.0, -mass * GRAVITY, 0.0]))
+
+        # Arm rotation relative to the hull, from the static point, positive in bump
+        # (the wheel moving up turns the trailing arm clockwise): q_hull - q_arm.
+        # A coordinate spring-damper applies +f to its first marker (the arm) and -f to
+        # the second (the hull), f its force: so f is the component's torque.
+        arm_rotation, hull_rotation = coordinate(arm_node, 2), coordinate(hull_node, 2)
+        mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
+            markerNumbers=[arm_rotation, hull_rotation], stiffness=TORSION_BAR_STIFFNESS,
+            offset=-self.bar_preload / TORSION_BAR_STIFFNESS))
+        self.damper_connector = mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
+            markerNumbers=[arm_rotation, hull_rotation],
+            springForceUserFunction=lambda mbs, t, item, rotation, rate, *_:
+                damper.host_load(rotation, rate)))
+
+        # Tyre: a Cartesian spring-damper from the wheel centre's static position (on
+        # ground) to the wheel centre; it pushes the wheel up by the wheels' tyre force.
+        wheel_static = mbs.AddObject(ObjectGround(
+            referencePosition=[wheel_centre[0], wheel_centre[1], 0.0]))
+        self.tyre_connector = mbs.AddObject(ObjectConnectorCartesianSpringDamper(
+            markerNumbers=[mbs.AddMarker(MarkerBodyPosition(bodyNumber=wheel_static)),
+                           mbs.AddMarker(MarkerBodyPosition(bodyNumber=wheel))],
+            springForceUserFunction=self._tyre_force))
+
+        self.hull_node, self.arm_node, self.wheel_node = hull_node, arm_node, wheel_node
+        self.coupling = HostCoupling(record=self._record)
+        self.coupling.add(tyre, self._tyre_state)
+        self.coupling.add(damper, self._damper_state)
+        mbs.Assemble()
+        self.records = []
+
+    # --- kinematics shared by the force functions and the post-step hook ------------------
+
+    def _compression(self, t, displacement, velocity):
+        """Tyre compression and its rate from the wheel centre's displacement from static."""
+        dx, dy = displacement[0], displacement[1]
+        height, slope = self.profile.height_and_slope(self.speed * t + dx)
+        compression = self.static_compression - dy + height
+        rate = -velocity[1] + slope * (self.speed + velocity[0])
+        return compression, rate
+
+    def _tyre_force(self, mbs, t, item, displacement, velocity, *_):
+        compression, rate = self._compression(t, displacement, velocity)
+        return [0.0, -TYRES_PER_WHEEL * self.tyre.host_load(compression, rate), 0.0]
+
+    def _tyre_state(self):
+        return self._compression(self.mbs.systemData.GetTime(),
+                                 *connector_state(self.mbs, self.tyre_connector))
+
+    def _damper_state(self):
+        rotation, rate = connector_state(self.mbs, self.damper_connector)
+        return float(rotation), float(rate)
+
+    def _record(self, t):
+        mbs = self.mbs
+        hull_acceleration = mbs.GetNodeOutput(self.hull_node, exu.OutputVariableType.Acceleration)[1]
+        pivot_force = mbs.GetObjectOutput(self.pivot, exu.OutputVariableType.Force)[1]
+        damper = self.damper.outputs
+        self.records.append((
+            t, hull_acceleration, pivot_force, self.damper.deflection, damper["torque"],
+            damper.get("dashpot_torque", math.nan), damper.get("rotor_rate", math.nan),
+            self.tyre.deflection, TYRES_PER_WHEEL * self.tyre.load))
+
+    def run(self, end_time, step):
+        """Integrate to end_time with a fixed host step; returns the recorded histories."""
+        solve_fixed_step(self.mbs, self.coupling, end_time, step)
+        names = ("time", "hull_acceleration", "hull_force", "arm_angle", "damper_torque",
+                 "dashpot_torque", "rotor_rate", "tyre_compression", "tyre_force")
+        data = np.array(self.records)
+        return {name: data[:, i] for i, name in enumerate(names)}
+
+
+SETTLE_TIME = 1.0  # s after the bump: the body's bounce dies out
+
+
+def simulate(speed, profile, step, fmu_dir=None, linear=None, linearised=("tyre", "damper"),
+             stiffness_coupled=STIFFNESS_COUPLED, end_time=None):
+    """One drive at `speed` (m/s); histories plus the damper's energy balance."""
+    if end_time is None:
+        end_time = profile.end / speed + SETTLE_TIME
+    result = Station(speed, profile, fmu_dir, linear, linearised,
+                     stiffness_coupled).run(end_time, step)
+    # Work done on the damper, and what its dashpot dissipated (FMU only): J.
+    result["damper_work"] = cumulative_trapezoid(result["damper_torque"], result["arm_angle"])
+    result["dashpot_dissipation"] = cumulative_trapezoid(
+        result["dashpot_torque"] * result["rotor_rate"], result["time"])
+    return result
+
+
+def cumulative_trapezoid(y, x):
+    return np.concatenate(([0.0], np.cumsum(0.5 * (y[1:] + y[:-1]) * np.diff(x))))
+
+
+def peaks(result, ripple_from=None):
+    """Figures of what the hull feels: peak |acceleration|, the force range and, from
+    `ripple_from` (s) on, the rms hull acceleration and damper torque on the ripple."""
+    found = {"peak_hull_acceleration": float(np.max(np.abs(result["hull_acceleration"]))),
+             "max_hull_force": float(np.max(result["hull_force"])),
+             "min_hull_force": float(np.min(result["hull_force"])),
+             "max_tyre_force": float(np.max(result["tyre_force"])),
+             "peak_damper_torque": float(np.max(np.abs(result["damper_torque"]))),
+             "damper_work": float(result["damper_work"][-1])}
+    ripple = result["time"] >= (ripple_from if ripple_from is not None else np.inf)
+    if ripple.any():
+        for key in ("hull_acceleration", "damper_torque"):
+            found[f"ripple_rms_{key}"] = float(np.sqrt(np.mean(result[key][ripple] ** 2)))
+    return found
+
+
+RIPPLE_DELAY = 0.5  # s after the bump: the ripple figures start there
+
+
+# --- plots --------------------------------------------------------------------------------
+
+PANELS = (("hull_acceleration", "hull vertical\nacceleration (m/s2)", 1.0),
+          ("hull_force", "force into\nhull (kN)", 1e-3),
+          ("arm_angle", "arm angle from\nstatic, bump + (deg)", 180 / math.pi),
+          ("damper_torque", "damper torque\n(kN.m)", 1e-3),
+          ("tyre_force", "tyre force,\nwheel (kN)", 1e-3))
+
+
+def plot_speed(path, speed, profile, nonlinear, linear):
+    from plotting import plt, save_figure
+
+    figure, axes = plt.subplots(len(PANELS) + 1, 1, figsize=(9, 12), sharex=True)
+    t = nonlinear["time"]
+    ground = [profile.height_and_slope(speed * ti)[0] * 1e3 for ti in t]
+    axes[0].plot(t, ground, color="k")
+    axes[0].set_ylabel("road under\nwheel (mm)")
+    axes[0].set_title(f"Road-wheel station at {speed:g} m/s ({speed * 3.6:.0f} km/h): "
+                      f"FMUs against linear Kelvin equivalents")
+    for axis, (key, label, scale) in zip(axes[1:], PANELS):
+        axis.plot(t, nonlinear[key] * scale, label="FMUs (nonlinear)", lw=1.0)
+        axis.plot(linear["time"], linear[key] * scale, label="linear Kelvin equivalents",
+                  lw=1.0, ls="--")
+        axis.set_ylabel(label)
+        axis.grid(alpha=0.3)
+    axes[1].legend(loc="upper right", fontsize=8)
+    axes[-1].set_xlabel("time (s)")
+    save_figure(figure, path)
+
+
+def plot_difference(path, runs):
+    """What the hull feels, nonlinear minus linear, for every speed."""
+    from plotting import plt, save_figure
+
+    figure, axes = plt.subplots(2, 1, figsize=(9, 7), sharex=False)
+    for speed, (nonlinear, linear) in runs.items():
+        distance = nonlinear["time"] * speed
+        for axis, key, scale in ((axes[0], "hull_acceleration", 1.0),
+                                 (axes[1], "hull_force", 1e-3)):
+            difference = (nonlinear[key] - np.interp(nonlinear["time"], linear["time"],
+                                                     linear[key])) * scale
+            axis.plot(distance, difference, lw=0.8, label=f"{speed:g} m/s")
+    axes[0].set_ylabel("hull acceleration,\nFMUs - linear (m/s2)")
+    axes[1].set_ylabel("force into hull,\nFMUs - linear (kN)")
+    for axis in axes:
+        axis.set_xlabel("distance travelled (m)")
+        axis.grid(alpha=0.3)
+        axis.legend(fontsize=8)
+    axes[0].set_title("Do the nonlinearities matter for the hull? Difference of the runs")
+    save_figure(figure, path)
+
+
+# --- coupling accuracy --------------------------------------------------------------------
+
+STUDY_STEPS = (4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4, 1e-4)
+STUDY_REFERENCE_STEP = 3.125e-5
+STUDY_VARIANTS = {"FMUs: tyre stiffness to host, damper lagged (default)": ("tyre",),
+                  "FMUs: tyre and damper stiffness to host": ("tyre", "damper"),
+                  "FMUs: plain one-step lag for both": ()}
+LINEAR_VARIANT = "linear Kelvin components (exact: host error only)"
+STUDY_KEYS = ("hull_acceleration", "hull_force", "tyre_force", "damper_torque")
+STUDY_PEAKS = ("peak_hull_acceleration", "max_hull_force")
+
+
+def coupling_study(speed, profile, linear, fmu_dir=None, steps=STUDY_STEPS,
+                   reference_step=STUDY_REFERENCE_STEP, end_time=None):
+    """Errors against a run at a host step far below every time scale of the station:
+    for each history its max error on the coarsest grid, and the error of the peaks, in %
+    of the reference's range (peaks: of the reference's peak). The FMU variants share one
+    reference (the default coupling); the linear Kelvin station, applied exactly by the
+    host, shows what the host's own integration contributes."""
+    def study(variants, reference):
+        grid = np.arange(0.0, reference["time"][-1] + 1e-12, max(steps))
+        reference_peaks = peaks(reference)
+
+        def errors(result):
+            found = {key: 100 * np.max(np.abs(np.interp(grid, result["time"], result[key])
+                                              - np.interp(grid, reference["time"],
+                                                          reference[key])))
+                     / np.ptp(reference[key]) for key in STUDY_KEYS}
+            found.update({key: 100 * abs(peaks(result)[key] / reference_peaks[key] - 1)
+                          for key in STUDY_PEAKS})
+            return found
+
+        for name, run in variants.items():
+            for step in steps:
+                try:
+                    table[name, step] = errors(run(step))
+                except RuntimeError as failure:  # a coupling that goes unstable
+                    table[name, step] = str(failure).splitlines()[0]
+
+    table = {}
+    study({name: lambda step, coupled=coupled: simulate(
+        speed, profile, step, fmu_dir, stiffness_coupled=coupled, end_time=end_time)
+        for name, coupled in STUDY_VARIANTS.items()},
+        simulate(speed, profile, reference_step, fmu_dir, end_time=end_time))
+    study({LINEAR_VARIANT: lambda step: simulate(speed, profile, step, fmu_dir, linear,
+                                                 end_time=end_time)},
+          simulate(speed, profile, reference_step, fmu_dir, linear, end_time=end_time))
+    return table
+
+
+def print_study(table):
+    columns = STUDY_KEYS + STUDY_PEAKS
+    print(f"\n{'coupling':54s} {'step ms':>7s} " + " ".join(f"{k[:14]:>14s}" for k in columns))
+    for (name, step), errors in table.items():
+        if isinstance(errors, str):
+            row = f"failed: {errors}"
+        else:
+            row = " ".join(f"{errors[k]:13.3g}%" for k in columns)
+        print(f"{name:54s} {step * 1e3:7.3g} {row}")
+
+
+def plot_study(path, table, steps=STUDY_STEPS):
+    from plotting import plt, save_figure
+
+    figure, axes = plt.subplots(1, 3, figsize=(14, 4.8))
+    for axis, key in zip(axes, ("hull_acceleration", "damper_torque", "peak_hull_acceleration")):
+        for name in list(STUDY_VARIANTS) + [LINEAR_VARIANT]:
+            values = [(step * 1e3, table[name, step][key]) for step in steps
+                      if not isinstance(table[name, step], str) and table[name, step][key] > 0]
+            if values:
+                axis.loglog(*zip(*values), "o-", label=name)
+        axis.set_xlabel("host step (ms)")
+        what = ("error of the peak |hull acceleration|\n(% of the peak)"
+                if key.startswith("peak") else
+                f"max error of {key.replace('_', ' ')}\n(% of its range)")
+        axis.set_ylabel(what)
+        axis.grid(alpha=0.3, which="both")
+    axes[0].legend(fontsize=7)
+    figure.suptitle("Road-wheel station: FMU coupling error against host step (missing "
+                    "points: the run diverged)")
+    save_figure(figure, path)
+
+
+# --- command line -------------------------------------------------------------------------
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--speeds", type=float, nargs="+", default=[3.0, 8.0, 15.0],
+                        help="forward speeds, m/s")
+    parser.add_argument("--step", type=float, default=DEFAULT_STEP, help="host step, s")
+    parser.add_argument("--bump-height", type=float, default=0.03, help="m")
+    parser.add_argument("--bump-length", type=float, default=1.0, help="m")
+    parser.add_argument("--ripple-depth", type=float, default=1e-3,
+                        help="dip at each track-link joint, m")
+    parser.add_argument("--damper-sine", type=float, nargs=2, default=DAMPER_SINE,
+                        metavar=("AMPLITUDE", "FREQUENCY"),
+                        help="sine (rad, Hz) the damper's Kelvin equivalent is fitted to")
+    parser.add_argument("--tyre-sine", type=float, nargs=2, default=TYRE_SINE,
+                        metavar=("AMPLITUDE", "FREQUENCY"),
+                        help="sine (m, Hz) the tyre's Kelvin equivalent is fitted to")
+    parser.add_argument("--end-time", type=float, help="s; default: bump passed + 1 s")
+    parser.add_argument("--fmu-dir", type=Path, help="default: fmus/")
+    parser.add_argument("--out", type=Path, default=Path("reports") / "road_wheel_station")
+    parser.add_argument("--coupling-study", action="store_true",
+                        help="errors against host step at the first speed, instead of the runs")
+    args = parser.parse_args(argv)
+    profile = RoadProfile(args.bump_height, args.bump_length, ripple_depth=args.ripple_depth)
+    args.out.mkdir(parents=True, exist_ok=True)
+    started = time.perf_counter()
+
+    tyre = FmuComponent(fmu_path("RoadWheelTyre", args.fmu_dir), "tyre_static")
+    linear = Linearisation(args.fmu_dir, static_tyre_compression(tyre), args.tyre_sine,
+                           args.damper_sine)
+    tyre.free()
+    if args.coupling_study:
+        table = coupling_study(args.speeds[0], profile, linear, args.fmu_dir,
+                               end_time=args.end_time)
+        print(f"Road-wheel station at {args.speeds[0]:g} m/s: errors against host step "
+              f"{STUDY_REFERENCE_STEP * 1e3:g} ms")
+        print_study(table)
+        plot_study(args.out / "coupling_accuracy.png", table)
+        print(f"\nwrote {args.out / 'coupling_accuracy.png'}; "
+              f"wall time {time.perf_counter() - started:.1f} s")
+        return
+
+    print(f"Linear Kelvin equivalents (Eqs. 10.1-2, 10.1-3): {linear.describe()}")
+    runs = {}
+    print(f"\n{'speed':>6s} {'model':>7s} {'peak |a| hull':>14s} {'hull force max':>15s} "
+          f"{'min':>8s} {'tyre max':>9s} {'damper |T|':>10s} {'damper work':>11s} "
+          f"{'ripple: rms a':>14s} {'rms T':>7s}")
+    for speed in args.speeds:
+        nonlinear = simulate(speed, profile, args.step, args.fmu_dir, end_time=args.end_time)
+        linearised = simulate(speed, profile, args.step, args.fmu_dir, linear,
+                              end_time=args.end_time)
+        runs[speed] = nonlinear, linearised
+        for model, result in (("FMUs", nonlinear), ("linear", linearised)):
+            p = peaks(result, ripple_from=profile.end / speed + RIPPLE_DELAY)
+            print(f"{speed:5g}  {model:>7s} {p['peak_hull_acceleration']:10.2f} m/s2 "
+                  f"{p['max_hull_force'] / 1e3:11.1f} kN {p['min_hull_force'] / 1e3:6.1f} kN "
+                  f"{p['max_tyre_force'] / 1e3:6.1f} kN {p['peak_damper_torque'] / 1e3:6.2f} kNm "
+                  f"{p['damper_work'] / 1e3:8.2f} kJ "
+                  f"{p.get('ripple_rms_hull_acceleration', math.nan):9.2f} m/s2 "
+                  f"{p.get('ripple_rms_damper_torque', math.nan):7.0f}")
+        plot_speed(args.out / f"station_{speed:g}mps.png", speed, profile, nonlinear, linearised)
+    plot_difference(args.out / "station_difference.png", runs)
+    print(f"\nstatic hull force {HULL_MASS * GRAVITY / 1e3:.2f} kN; wrote plots to {args.out}/; "
+          f"wall time {time.perf_counter() - started:.1f} s")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,285 @@
+"""A span of Warrior track links in 2D, in the exudyn multibody host: ten links of 150 mm
+pitch under 13 kN tension, every joint a TrackBushRadial and a TrackBushTorsion FMU
+instance (22 instances of two FMUs in one process), each stepped once per accepted host
+step (fmu_coupling.py). One end of the span is lifted sinusoidally.
+
+    python examples/track_span.py                        # 10 links, 6 Hz, 10 mm lift, 1 s
+    python examples/track_span.py --links 12 --frequency 4 --lift 0.02
+
+The plots go to reports/track_span/ (or --out).
+
+The model (x along the span, y up, angles counter-clockwise): the span runs from the
+sprocket, where its first joint is held (position and link direction fixed), to a wheel
+that the tensioner pulls with the track tension (horizontal force, free to move along the
+span) and that lifts the last joint by lift (1 - cos 2 pi f t) / 2 without turning.
+* A joint's radial deflection is the distance between the pin seats of its two links (the
+  bush is round): the TrackBushRadial force acts along that line, pulling the seats
+  together.
+* A joint's angle is the angle between its two links, zero in line, positive when the
+  span bends towards the wheels (downwards, as over the sprocket): so the straight span is
+  10 deg off the bush's live angle, the -130 N.m of Eq. 5.3.1-1, which the fixed link
+  directions at both ends hold (section 5.1.2).
+* The static state at t = 0 is the host's static solve with every FMU relaxed at its
+  deflection (its output before the first step is the relaxed component's): gravity
+  sags the span against the tension.
+"""
+
+import argparse
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+import exudyn as exu
+from exudyn.itemInterface import (CoordinateConstraint, LoadForceVector, MarkerBodyPosition,
+                                  MarkerNodeCoordinate, NodePointGround, NodeRigidBody2D,
+                                  ObjectConnectorCartesianSpringDamper,
+                                  ObjectConnectorCoordinateSpringDamper, ObjectGround,
+                                  ObjectRigidBody2D)
+
+from fmu_coupling import FmuComponent, HostCoupling, connector_state, fmu_path, solve_fixed_step
+
+GRAVITY = 9.81
+TENSION = 13e3  # N, section 5.1.2
+PITCH = 0.15  # m
+LINK_MASS = 15.0  # kg (estimate for a steel link casting with its pads)
+LINK_DEPTH = 0.06  # m, for the link's inertia (estimate)
+LINK_INERTIA = LINK_MASS * (PITCH ** 2 + LINK_DEPTH ** 2) / 12
+WHEEL_MASS = 100.0  # kg, the lifting wheel's share moving along the span (estimate)
+DEFAULT_STEP = 5e-4  # s
+
+
+class TrackSpan:
+    def __init__(self, links=10, lift=0.01, frequency=6.0, fmu_dir=None, tolerance=None):
+        self.links, self.lift, self.frequency = links, lift, frequency
+        SC = exu.SystemContainer()
+        mbs = SC.AddSystem()
+        self.SC, self.mbs = SC, mbs
+        joints = links + 1
+        self.coupling = HostCoupling(record=self._record)
+        self.radial = [FmuComponent(fmu_path("TrackBushRadial", fmu_dir), f"radial_{j}",
+                                    tolerance=tolerance) for j in range(joints)]
+        self.torsion = [FmuComponent(fmu_path("TrackBushTorsion", fmu_dir), f"torsion_{j}",
+                                     tolerance=tolerance) for j in range(joints)]
+        # The straight span under tension, before gravity: each bush deflected to carry it.
+        seat_gap = self._deflection_for(self.radial[0], TENSION)
+
+        ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
+        sprocket = mbs.AddObject(ObjectGround(referencePosition=[0.0, 0.0, 0.0]))
+
+        def coordinate(node, index):
+            return mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=index))
+
+        def seat(body, x):
+            return mbs.AddMarker(MarkerBodyPosition(bodyNumber=body, localPosition=[x, 0, 0]))
+
+        # Bodies along the span: (right pin seat marker, rotation marker) of the body left
+        # of each joint, and (left seat, rotation) of the body right of it.
+        left = (seat(sprocket, 0.0), coordinate(ground, 2))
+        self.link_nodes = []
+        self.radial_connectors, self.torsion_connectors = [], []
+        for j in range(joints):
+            if j < links:
+                x_centre = j * PITCH + (j + 1) * seat_gap + 0.5 * PITCH
+                node = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[x_centre, 0.0, 0.0]))
+                body = mbs.AddObject(ObjectRigidBody2D(mass=LINK_MASS, inertia=LINK_INERTIA,
+                                                       nodeNumber=node))
+                mbs.AddLoad(LoadForceVector(markerNumber=seat(body, 0.0),
+                                            loadVector=[0.0, -LINK_MASS * GRAVITY, 0.0]))
+                self.link_nodes.append(node)
+                right = (seat(body, -0.5 * PITCH), coordinate(node, 2))
+                next_left = (seat(body, 0.5 * PITCH), coordinate(node, 2))
+            else:
+                right = self._lifting_wheel(ground, coordinate, seat,
+                                            links * PITCH + joints * seat_gap)
+            self._add_joint(j, left, right)
+            if j < links:
+                left = next_left
+        mbs.Assemble()
+        self.records = []
+
+    @staticmethod
+    def _deflection_for(bush, force):
+        """Deflection at which the relaxed bush carries `force` (its elastic force is
+        linear: one secant from the FMU's own output)."""
+        probe = 1e-4
+        return probe * force / bush.relaxed_outputs(probe)[bush.load_name]
+
+    def _lifting_wheel(self, ground, coordinate, seat, x):
+        """The wheel at the span's far end: pulled along the span by the tension, lifted
+        by the prescribed motion, not turning."""
+        mbs = self.mbs
+        node = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[x, 0.0, 0.0]))
+        body = mbs.AddObject(ObjectRigidBody2D(mass=WHEEL_MASS, inertia=1.0, nodeNumber=node))
+        mbs.AddLoad(LoadForceVector(markerNumber=seat(body, 0.0), loadVector=[TENSION, 0, 0]))
+        mbs.AddObject(CoordinateConstraint(
+            markerNumbers=[coordinate(ground, 1), coordinate(node, 1)],
+            offsetUserFunction=lambda mbs, t, item, offset: self.lift_at(t)))
+        mbs.AddObject(CoordinateConstraint(markerNumbers=[coordinate(ground, 2),
+                                                          coordinate(node, 2)]))
+        self.wheel_node = node
+        return seat(body, 0.0), coordinate(node, 2)
+
+    def lift_at(self, t):
+        return 0.5 * self.lift * (1.0 - math.cos(2 * math.pi * self.frequency * t))
+
+    def _add_joint(self, j, left, right):
+        """Radial and torsion bush between the body left of joint j and the one right of
+        it. Connector convention: the force f of a spring-damper acts as -f on its second
+        marker (the right body) and +f on its first."""
+        mbs = self.mbs
+        radial, torsion = self.radial[j], self.torsion[j]
+
+        def radial_force(mbs, t, item, displacement, velocity, *_):
+            deflection, rate = seat_deflection(displacement, velocity)
+            if deflection == 0.0:
+                return [0.0, 0.0, 0.0]
+            scale = radial.host_load(deflection, rate) / deflection
+            return [scale * displacement[0], scale * displacement[1], 0.0]
+
+        def torsion_torque(mbs, t, item, rotation, rate, *_):
+            # Joint angle = left link's rotation - right link's = -rotation.
+            return -torsion.host_load(-rotation, -rate)
+
+        radial_connector = mbs.AddObject(ObjectConnectorCartesianSpringDamper(
+            markerNumbers=[left[0], right[0]], springForceUserFunction=radial_force))
+        torsion_connector = mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
+            markerNumbers=[left[1], right[1]], springForceUserFunction=torsion_torque))
+        self.radial_connectors.append(radial_connector)
+        self.torsion_connectors.append(torsion_connector)
+
+        def radial_state():
+            return seat_deflection(*connector_state(mbs, radial_connector))
+
+        def torsion_state():
+            rotation, rate = connector_state(mbs, torsion_connector)
+            return -float(rotation), -float(rate)
+
+        self.coupling.add(radial, radial_state)
+        self.coupling.add(torsion, torsion_state)
+
+    # --- static state and run -----------------------------------------------------------
+
+    def solve_static(self):
+        """The host's static equilibrium with the relaxed bushes; becomes the initial state."""
+        settings = exu.SimulationSettings()
+        settings.staticSolver.verboseMode = 0
+        settings.solution.file.write = False
+        settings.solution.sensors.active = False
+        if not self.mbs.SolveStatic(settings, updateInitialValues=True):
+            raise RuntimeError("exudyn's static solver failed")
+
+    def _record(self, t):
+        mbs = self.mbs
+        heights = [mbs.GetNodeOutput(n, exu.OutputVariableType.Position)[1]
+                   for n in self.link_nodes]
+        accelerations = [mbs.GetNodeOutput(n, exu.OutputVariableType.Acceleration)[1]
+                         for n in self.link_nodes]
+        self.records.append((t, [c.load for c in self.torsion],
+                             [c.deflection for c in self.torsion],
+                             [c.load for c in self.radial], heights, accelerations))
+
+    def run(self, end_time, step):
+        self.solve_static()
+        solve_fixed_step(self.mbs, self.coupling, end_time, step)
+        t, torques, angles, forces, heights, accelerations = zip(*self.records)
+        return {"time": np.array(t), "joint_torque": np.array(torques),
+                "joint_angle": np.array(angles), "radial_force": np.array(forces),
+                "link_height": np.array(heights), "link_acceleration": np.array(accelerations),
+                "lift": np.array([self.lift_at(ti) for ti in t])}
+
+
+def seat_deflection(displacement, velocity):
+    """Radial deflection of a round bush (distance between the pin seats) and its rate."""
+    distance = math.hypot(displacement[0], displacement[1])
+    if distance == 0.0:
+        return 0.0, 0.0
+    return distance, (displacement[0] * velocity[0] + displacement[1] * velocity[1]) / distance
+
+
+# --- plots --------------------------------------------------------------------------------
+
+def plot_span(path, result, span):
+    from plotting import plt, save_figure
+
+    t = result["time"]
+    figure, axes = plt.subplots(4, 1, figsize=(9, 12), sharex=True)
+    joints = result["joint_torque"].shape[1]
+    colours = plt.cm.viridis(np.linspace(0, 1, joints))
+    for j in range(joints):
+        axes[0].plot(t, result["joint_torque"][:, j], color=colours[j], lw=0.8,
+                     label=f"joint {j}" if j in (0, joints // 2, joints - 1) else None)
+        axes[1].plot(t, np.degrees(result["joint_angle"][:, j]), color=colours[j], lw=0.8)
+        axes[2].plot(t, result["radial_force"][:, j] / 1e3, color=colours[j], lw=0.8)
+    axes[0].set_ylabel("joint torque,\nTrackBushTorsion (N.m)")
+    axes[0].legend(fontsize=8, loc="upper left")
+    axes[1].set_ylabel("joint angle (deg)\n(live angle 10 deg)")
+    axes[2].set_ylabel("pin radial force,\nTrackBushRadial (kN)")
+    heights = (result["link_height"] - result["link_height"][0]) * 1e3
+    for i in range(heights.shape[1]):
+        axes[3].plot(t, heights[:, i], color=colours[i], lw=0.8,
+                     label=f"link {i}" if i in (0, heights.shape[1] // 2) else None)
+    axes[3].plot(t, result["lift"] * 1e3, "k--", lw=1.0, label="end lift")
+    axes[3].set_ylabel("link height from\nstatic (mm)")
+    axes[3].legend(fontsize=8, loc="upper left")
+    axes[-1].set_xlabel("time (s)")
+    for axis in axes:
+        axis.grid(alpha=0.3)
+    axes[0].set_title(f"Track span: {span.links} links, {TENSION / 1e3:g} kN, end lifted "
+                      f"{span.lift * 1e3:g} mm at {span.frequency:g} Hz (colour: joint/link "
+                      f"from sprocket to wheel)")
+    save_figure(figure, path)
+
+
+def plot_shapes(path, result, span):
+    """Vertical position of every link centre along the span at a few instants."""
+    from plotting import plt, save_figure
+
+    figure, axis = plt.subplots(figsize=(9, 4))
+    # The held joint at the sprocket, the link centres, the lifted joint at the wheel.
+    x = np.concatenate(([0.0], (np.arange(span.links) + 0.5) * PITCH, [span.links * PITCH]))
+    t = result["time"]
+    for instant in np.linspace(0.0, t[-1], 9):
+        i = min(int(np.searchsorted(t, instant)), len(t) - 1)
+        heights = np.concatenate(([0.0], result["link_height"][i], [result["lift"][i]]))
+        axis.plot(x, heights * 1e3, "o-", ms=3, lw=1.0, label=f"t = {t[i]:.3f} s")
+    axis.set_xlabel("position along the span (m)")
+    axis.set_ylabel("height (mm): end joints\nand link centres")
+    axis.set_title("Span shape (static sag at t = 0)")
+    axis.grid(alpha=0.3)
+    axis.legend(fontsize=7, ncol=3)
+    save_figure(figure, path)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--links", type=int, default=10)
+    parser.add_argument("--lift", type=float, default=0.01, help="end lift, m")
+    parser.add_argument("--frequency", type=float, default=6.0, help="end lift, Hz")
+    parser.add_argument("--end-time", type=float, default=1.0, help="s")
+    parser.add_argument("--step", type=float, default=DEFAULT_STEP, help="host step, s")
+    parser.add_argument("--fmu-dir", type=Path, help="default: fmus/")
+    parser.add_argument("--out", type=Path, default=Path("reports") / "track_span")
+    args = parser.parse_args(argv)
+    args.out.mkdir(parents=True, exist_ok=True)
+    started = time.perf_counter()
+    span = TrackSpan(args.links, args.lift, args.frequency, args.fmu_dir)
+    result = span.run(args.end_time, args.step)
+    wall = time.perf_counter() - started
+    torque, force = result["joint_torque"], result["radial_force"]
+    print(f"{args.links} links, {2 * (args.links + 1)} FMU instances, "
+          f"{len(result['time']) - 1} host steps of {args.step * 1e3:g} ms")
+    print(f"static: pin forces {force[0].min() / 1e3:.2f} to {force[0].max() / 1e3:.2f} kN, "
+          f"joint torques {torque[0].min():.1f} to {torque[0].max():.1f} N.m, mid-span sag "
+          f"{-result['link_height'][0][args.links // 2] * 1e3:.2f} mm")
+    print(f"run: joint torques {torque.min():.1f} to {torque.max():.1f} N.m, pin forces "
+          f"{force.min() / 1e3:.2f} to {force.max() / 1e3:.2f} kN, link heights "
+          f"{result['link_height'].min() * 1e3:.1f} to {result['link_height'].max() * 1e3:.1f} mm")
+    plot_span(args.out / "track_span.png", result, span)
+    plot_shapes(args.out / "track_span_shapes.png", result, span)
+    print(f"wrote plots to {args.out}/; wall time {wall:.1f} s")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,201 @@
+"""The multibody-host examples (examples/): the coupling helper against the independent
+solve, and short runs of both exudyn examples checked for physical sanity. The exudyn
+runs need the `examples` extra (pip install -e ".[examples]"); without it they are
+skipped with that reason."""
+
+import math
+import sys
+
+import numpy as np
+import pytest
+
+from fmu_components import reference
+from fmu_components.signals import secant_rates, sine, time_grid
+
+from conftest import ROOT, peak_to_peak
+
+sys.path.insert(0, str(ROOT / "examples"))
+import fmu_coupling  # noqa: E402  (plain module beside the example scripts)
+
+try:
+    import exudyn  # noqa: F401
+    HAVE_EXUDYN = True
+except ImportError:
+    HAVE_EXUDYN = False
+needs_exudyn = pytest.mark.skipif(
+    not HAVE_EXUDYN, reason='exudyn is not installed: pip install -e ".[examples]"')
+
+
+# --- the coupling helper, without a host ---------------------------------------------------
+
+def test_advance_along_the_secant_is_the_held_rate_cosimulation(built_fmus):
+    """advance(t, x) feeds x(t_prev) and the secant rate: after each step the FMU's output
+    is the independent solve's under that input convention."""
+    t = time_grid(0.25, 1e-3)
+    x = sine(t, 3.5e-3, 1e-3, 20.0)
+    expected = reference.solve_held_rate("RoadWheelTyre", t, x, secant_rates(t, x))["force"]
+    tyre = fmu_coupling.FmuComponent(built_fmus["RoadWheelTyre"], "tyre")
+    try:
+        tyre.start(t[0], x[0])
+        forces = [tyre.load]
+        for ti, xi in zip(t[1:], x[1:]):
+            tyre.advance(ti, xi)
+            forces.append(tyre.load)
+    finally:
+        tyre.free()
+    error = np.max(np.abs(np.array(forces) - expected)) / peak_to_peak(expected)
+    assert error < 0.5e-2
+
+
+def test_host_load_relaxed_before_start_then_lagged_with_tangent(built_fmus):
+    tyre = fmu_coupling.FmuComponent(built_fmus["RoadWheelTyre"], "tyre", unilateral=True)
+    try:
+        x0 = 3.24e-3
+        relaxed = reference.solve_held_rate("RoadWheelTyre", [0.0, 1e-3], [x0, x0],
+                                            [0.0, 0.0])["force"][0]
+        assert tyre.host_load(x0) == pytest.approx(relaxed, rel=1e-12)
+        assert 10.5e3 < relaxed < 11.5e3  # the thesis: about 11 kN at 3.24 mm, section 5.1.1
+        tyre.start(0.0, x0)
+        tyre.advance(1e-3, x0 + 1e-5)
+        load, stiffness = tyre.load, tyre.stiffness
+        assert stiffness > 0.0
+        assert tyre.host_load(x0 + 2e-5) == pytest.approx(load + stiffness * 1e-5, rel=1e-12)
+        # A contact: nothing at or below zero compression, never a pull.
+        assert tyre.host_load(0.0) == 0.0
+        assert tyre.host_load(-1e-3) == 0.0
+        assert tyre.host_load(1e-9) >= 0.0
+    finally:
+        tyre.free()
+
+
+def test_kelvin_coefficients_recover_a_kelvin_element():
+    """Eqs. 10.1-2 and 10.1-3 over whole cycles return a linear element's own k and c."""
+    t = np.arange(2000) * 1e-3  # two cycles at 1 Hz
+    x = 3e-3 + 1e-3 * np.sin(2 * np.pi * t)
+    xdot = 2 * np.pi * 1e-3 * np.cos(2 * np.pi * t)
+    k, c = fmu_coupling.kelvin_coefficients(x, xdot, 500.0 + 2e6 * x + 3e4 * xdot)
+    assert k == pytest.approx(2e6, rel=1e-9)
+    assert c == pytest.approx(3e4, rel=1e-9)
+
+
+def test_harmonic_equivalents_of_the_fmus_are_physical(built_fmus):
+    """Tyre: k_eq between its elastic slope and the loop's steepest tangent, c_eq > 0.
+    Damper: dissipative (c_eq > 0), and softer than its gas spring at small deflection."""
+    k, c, mean_load = fmu_coupling.harmonic_kelvin_equivalent(
+        built_fmus["RoadWheelTyre"], 3.24e-3, 1e-3, 10.0)
+    elastic_slope = 2.17e6 - 2 * 2.14e8 * 3.24e-3 + 3 * 1.82e11 * 3.24e-3 ** 2  # Eq. 5.3.1-3
+    assert elastic_slope < k < 3 * elastic_slope
+    assert c > 0.0
+    assert 9e3 < mean_load < 13e3
+    k, c, _ = fmu_coupling.harmonic_kelvin_equivalent(built_fmus["RotaryDamper"], 0.0, 0.1, 2.0)
+    assert c > 0.0
+    assert 0.0 < k < 2 * 800.0 / 0.03  # gas-spring stiffness 2 C1 / C2 at zero deflection
+
+
+# --- road-wheel station in exudyn -----------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def station_runs(built_fmus):
+    if not HAVE_EXUDYN:
+        pytest.skip('exudyn is not installed: pip install -e ".[examples]"')
+    import road_wheel_station as station
+
+    fmu_dir = built_fmus["RoadWheelTyre"].parent
+    profile = station.RoadProfile()
+    speed = 8.0  # the bump lies between 0.125 and 0.25 s
+    tyre = fmu_coupling.FmuComponent(built_fmus["RoadWheelTyre"], "tyre_static")
+    linear = station.Linearisation(fmu_dir, station.static_tyre_compression(tyre))
+    tyre.free()
+    runs = {"FMUs": station.simulate(speed, profile, 2.5e-4, fmu_dir, end_time=0.3),
+            "linear": station.simulate(speed, profile, 2.5e-4, fmu_dir, linear, end_time=0.3)}
+    return station, runs
+
+
+@needs_exudyn
+@pytest.mark.parametrize("model", ["FMUs", "linear"])
+def test_station_starts_in_static_equilibrium(station_runs, model):
+    station, runs = station_runs
+    result = runs[model]
+    g = station.GRAVITY
+    assert abs(result["hull_acceleration"][0]) < 1e-6 * g
+    assert result["hull_force"][0] == pytest.approx(station.HULL_MASS * g, rel=1e-9)
+    assert result["tyre_force"][0] == pytest.approx(station.STATION_MASS * g, rel=1e-9)
+    assert result["damper_torque"][0] == 0.0
+    assert result["arm_angle"][0] == 0.0
+
+
+@needs_exudyn
+@pytest.mark.parametrize("model", ["FMUs", "linear"])
+def test_station_outputs_are_finite_and_the_tyre_never_pulls(station_runs, model):
+    _, runs = station_runs
+    result = runs[model]
+    for key in ("hull_acceleration", "hull_force", "arm_angle", "damper_torque",
+                "tyre_compression", "tyre_force"):
+        assert np.all(np.isfinite(result[key])), key
+    assert np.all(result["tyre_force"] >= 0.0)
+    # The bump was driven over: the arm went into bump and the tyre was loaded above static.
+    assert result["arm_angle"].max() > math.radians(2.0)
+    assert result["tyre_force"].max() > 1.5 * result["tyre_force"][0]
+
+
+@needs_exudyn
+def test_station_force_into_hull_is_what_moves_it(station_runs):
+    """The pivot's reaction on the hull (exudyn's joint force) equals M (a + g): the
+    hull's only vertical loads are its weight and the pivot."""
+    station, runs = station_runs
+    result = runs["FMUs"]
+    expected = station.HULL_MASS * (result["hull_acceleration"] + station.GRAVITY)
+    assert np.max(np.abs(result["hull_force"] - expected)) < 1e-6 * np.max(np.abs(expected))
+
+
+@needs_exudyn
+def test_station_damper_dissipates_energy(station_runs):
+    """The FMU's dashpot dissipates (its power T_d(w_r) w_r is never negative), and the work
+    done on the damper by the arm is positive and covers that dissipation, the rest being
+    stored in its gas spring and rotor."""
+    _, runs = station_runs
+    result = runs["FMUs"]
+    dissipation = result["dashpot_dissipation"]
+    assert np.all(np.diff(dissipation) >= 0.0)
+    assert dissipation[-1] > 100.0  # J: the bump passes through the damper
+    assert np.all(result["damper_work"] >= -1e-3)  # J: a passive part, relaxed at the start
+    work = result["damper_work"][-1]
+    assert work > 0.0
+    assert work >= 0.98 * dissipation[-1]
+
+
+# --- track span in exudyn ------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def span_run(built_fmus):
+    if not HAVE_EXUDYN:
+        pytest.skip('exudyn is not installed: pip install -e ".[examples]"')
+    import track_span
+
+    span = track_span.TrackSpan(links=10, fmu_dir=built_fmus["TrackBushRadial"].parent)
+    return track_span, span, span.run(0.15, 1e-3)
+
+
+@needs_exudyn
+def test_span_starts_in_static_equilibrium_under_the_tension(span_run):
+    track_span, span, result = span_run
+    assert result["joint_torque"].shape == (len(result["time"]), span.links + 1)
+    assert np.max(np.abs(result["link_acceleration"][0])) < 1e-6 * track_span.GRAVITY
+    # Gravity sags the span, so the pins carry a little more than the horizontal tension.
+    forces = result["radial_force"][0]
+    assert np.all(forces >= track_span.TENSION) and np.all(forces < 1.01 * track_span.TENSION)
+    assert result["link_height"][0][span.links // 2] < -5e-3
+    # Both end links are held level: the joint angles add up to nothing.
+    assert abs(np.sum(result["joint_angle"][0])) < 1e-9
+    # Near the straight line the bushes hold the -130 N.m of their 10 deg live angle.
+    assert np.all(np.abs(result["joint_torque"][0] + 130.4) < 40.0)
+
+
+@needs_exudyn
+def test_span_outputs_are_finite_and_the_lift_travels(span_run):
+    _, span, result = span_run
+    for key in ("joint_torque", "joint_angle", "radial_force", "link_height"):
+        assert np.all(np.isfinite(result[key])), key
+    rise = result["link_height"][:, -1] - result["link_height"][0, -1]  # link next to the wheel
+    assert rise.max() > 0.5 * span.lift
+    assert peak_to_peak(result["joint_torque"][:, -1]) > 5.0  # N.m at the lifted joint
