@@ -168,7 +168,9 @@ class FmuComponent:
         self._read()
 
     def free(self):
-        self._fmu.terminate()
+        # FMI 2.0 allows fmi2Terminate only once initialization is complete.
+        if self.started:
+            self._fmu.terminate()
         self._fmu.freeInstance()
 
 
