@@ -17,7 +17,7 @@ from fmpy.util import read_csv
 
 from fmu_components import cases, reference, validate
 from fmu_components.runtime.catalog import COMPONENTS
-from fmu_components.signals import write_csv
+from fmu_components.signals import piecewise_linear_rate, write_csv
 
 from conftest import FMU_NAMES
 
@@ -126,6 +126,18 @@ def test_sweep_holds_every_table_rate_of_either_sign():
     assert np.max(np.abs(inputs["angle"])) <= math.pi / 4  # the damper's travel, section 9.1
 
 
+def test_piecewise_linear_rate_integrates_its_rate_exactly():
+    knot_times, knot_rates = [0.0, 0.1, 0.3, 0.35, 0.6], [0.0, 2.0, 2.0, -1.0, -1.0]
+    t = np.linspace(0.0, 0.6, 6001)
+    x = piecewise_linear_rate(t, knot_times, knot_rates, start=0.5)
+    midpoints = (t[1:] + t[:-1]) / 2
+    # a quadratic between knots: the secant rate is the rate at the midpoint
+    assert np.allclose(np.diff(x) / np.diff(t), np.interp(midpoints, knot_times, knot_rates),
+                       rtol=0, atol=1e-9)
+    expected_end = 0.5 + 0.1 + 0.4 + 0.025 - 0.25  # areas under the rate
+    assert x[0] == 0.5 and x[-1] == pytest.approx(expected_end, abs=1e-12)
+
+
 # --- the committed files -----------------------------------------------------------------
 
 @pytest.mark.parametrize("case", cases.CASES, ids=lambda c: c.key)
@@ -213,6 +225,14 @@ def test_cross_check_counts_samples_outside_the_band():
     result["force"][:200] += 0.5  # a quarter of the range, for a fifth of the record
     _, outliers, _ = validate.compare(result, expected, expected["time"][-1])
     assert outliers == pytest.approx(0.2, abs=0.01) and outliers > validate.CROSS_CHECK_LIMIT
+
+
+def test_a_non_finite_output_fails():
+    expected = _tables(np.sin(np.linspace(0, 6, 1001)))
+    result = expected.copy()
+    result["force"][10] = np.nan
+    errors, _, _ = validate.compare(result, expected, expected["time"][-1])
+    assert errors["force"] == math.inf
 
 
 def test_a_result_of_the_wrong_length_is_not_compared():

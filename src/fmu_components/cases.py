@@ -218,17 +218,18 @@ def _damper_cases():
                                           (None, 3.0, 1e-3, 3), (None, 8.0, 5e-4, 4)):
         name = f"{test}_{frequency:g}Hz" if test else f"high_frequency_{frequency:g}Hz"
         cases.append(Case("RotaryDamper", name, "A-D" if test else "high frequency",
-                          f"{test + ': ' if test else ''}{frequency:g} Hz", step, cycles / frequency,
+                          f"{test + ': ' if test else ''}{frequency:g} Hz", step,
+                          cycles / frequency,
                           # from rest at -0.21 rad, as a rig starts: no start-up transient
                           lambda t, f=frequency: sine(t, 0.0, 0.21, f, phase=-math.pi / 2),
                           (cycles - 1) / frequency))
-    # Every positive rate of Table A6-1; the zigzag gives the negative ones. 0.3 s settles the
-    # laminar region (gas spring and dashpot: c/k ~ 1000/53000 s, 16 time constants); the
-    # angle stays inside the +-45 deg the damper turns (section 9.1); 500 rad/s2 is about the
-    # peak acceleration of the 8 Hz test.
+    # Every positive rate of Table A6-1; the zigzag gives the negative ones. 0.6 s settles the
+    # slowest plateau (0.4 rad/s: dashpot slope over gas-spring stiffness, c/k ~ 2600/76000 s,
+    # 17 time constants); the angle stays inside the +-45 deg the damper turns (section 9.1);
+    # 500 rad/s2 is about the peak acceleration of the 8 Hz test.
     rates = [float(r) for r in reference.damper_spec().rates if r > 0]
     path, plateaus, stop = velocity_plateaus(rates, 2e-3, 0.6, 0.7, 500.0)
-    # Where Table A6-1 is flat (rebound beyond -11 rad/s, compression 13-14 rad/s) the dashpot
+    # Where Table A6-1 is flat (rebound beyond -11, compression 11-12 and 13-14 rad/s) the dashpot
     # has zero slope, so nothing damps the rotor on the stiff gas spring (~800 Hz at
     # -8050 N.m): the exact solution keeps ringing after each change of rate. At the default
     # tolerance 1e-4 the FMU's integrator damps that ringing numerically (1.3 % of the torque
@@ -369,7 +370,8 @@ def steady_torques(case, times, torque):
     steady value where Table A6-1 is flat, see _damper_cases)."""
     times, torque = np.asarray(times), np.asarray(torque)
     rates = np.array([rate for rate, _, _ in case.plateaus])
-    steady = [torque[(times >= (start + end) / 2 - case.step / 2) & (times <= end + case.step / 2)].mean()
+    half = case.step / 2
+    steady = [torque[(times >= (start + end) / 2 - half) & (times <= end + half)].mean()
               for _, start, end in case.plateaus]
     return rates, np.array(steady)
 

@@ -38,7 +38,6 @@ class Axes:
     """Names and display scaling of one FMU's signals."""
 
     def __init__(self, fmu):
-        self.fmu = fmu
         self.deflection, self.rate = (v.name for v in COMPONENTS[fmu].inputs)
         self.load = COMPONENTS[fmu].outputs[0].name
         (self.x_factor, self.x_unit), (self.f_factor, self.f_unit), (self.v_factor, self.v_unit) = \
@@ -58,10 +57,6 @@ class Axes:
         return f"{self.deflection.replace('_', ' ')} ({self.x_unit})"
 
     @property
-    def v_label(self):
-        return f"{self.rate.replace('_', ' ')} ({self.v_unit})"
-
-    @property
     def f_label(self):
         return f"{self.load} ({self.f_unit})"
 
@@ -74,7 +69,7 @@ def _overlay(ax, outcome, x_of, y_of, color, label):
     """Reference (black) and FMU (dashed, colour) of one case over its shown window."""
     k = _shown(outcome)
     ax.plot(x_of(outcome.inputs)[k], y_of(outcome.reference)[k], **REFERENCE_STYLE)
-    if outcome.result is not None and len(outcome.result) == len(outcome.reference):
+    if outcome.errors:  # the FMU ran the whole case
         ax.plot(x_of(outcome.inputs)[k], y_of(outcome.result)[k], color=color, label=label,
                 **FMU_STYLE)
 
@@ -119,7 +114,7 @@ def plot_relaxation(fig, outcomes):
             t = t - hold if log else t
             ax.plot(t[k], axes.f(outcome.reference, f"{axes.load}_elastic")[k], **ELASTIC_STYLE)
             ax.plot(t[k], axes.f(outcome.reference)[k], **REFERENCE_STYLE)
-            if outcome.result is not None and len(outcome.result) == len(t):
+            if outcome.errors:
                 ax.plot(t[k], axes.f(outcome.result)[k], color=color,
                         label=f"FMU, {outcome.case.label}", **FMU_STYLE)
         ax.set_xlabel("time since the hold began (s), log scale" if log else "time (s)")
@@ -133,8 +128,8 @@ def plot_damper(fig, outcomes):
     """Work diagram and characteristic (Figs. 13.1-1, 13.1-2, 13.2-1, 13.2-2)."""
     axes = Axes("RotaryDamper")
     work, characteristic = fig.subplots(1, 2)
-    for ax, x_of, label in ((work, axes.x, axes.x_label), (characteristic, axes.v, "angular velocity "
-                                                                                  f"({axes.v_unit})")):
+    for ax, x_of, label in ((work, axes.x, axes.x_label),
+                            (characteristic, axes.v, f"angular velocity ({axes.v_unit})")):
         for outcome, color in zip(outcomes, _colors(len(outcomes))):
             _overlay(ax, outcome, x_of, axes.f, color, f"FMU, {outcome.case.label}")
         ax.set_xlabel(label)
@@ -162,8 +157,9 @@ def plot_sweep(fig, outcomes):
                                                    outcome.reference["torque"])
     table.plot(sweep_rates, steady, "o", markerfacecolor="none", color="black",
                label="reference, steady torque")
-    if outcome.result is not None and len(outcome.result) == len(outcome.reference):
-        _, fmu_steady = programme.steady_torques(case, outcome.result["time"], outcome.result["torque"])
+    if outcome.errors:
+        _, fmu_steady = programme.steady_torques(case, outcome.result["time"],
+                                                 outcome.result["torque"])
         table.plot(sweep_rates, fmu_steady, "+", color="tab:blue", markersize=9,
                    label="FMU, steady torque")
     table.set_xlabel("angular velocity (rad/s)")
@@ -172,7 +168,7 @@ def plot_sweep(fig, outcomes):
     table.grid(True, alpha=0.3)
     t = outcome.reference["time"]
     time_history.plot(t, outcome.reference["torque"], **REFERENCE_STYLE)
-    if outcome.result is not None and len(outcome.result) == len(t):
+    if outcome.errors:
         time_history.plot(t, outcome.result["torque"], color="tab:blue", label="FMU", **FMU_STYLE)
     time_history.set_xlabel("time (s)")
     time_history.set_ylabel("torque (N.m)")
@@ -192,11 +188,8 @@ def plot_test(outcomes, path):
         plot_sweep(fig, outcomes)
     else:
         plot_loops(fig.subplots(), outcomes)
-    fig.suptitle(f"{case.fmu}: {programme.TESTS[case.test].title}\nthesis {case.figure}; FMU "
-                 f"dashed over the reference", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    _save(fig, f"{case.fmu}: {programme.TESTS[case.test].title}\nthesis {case.figure}; FMU "
+               f"dashed over the reference", path, dpi=100)
 
 
 def plot_case(outcome, path):
@@ -206,8 +199,7 @@ def plot_case(outcome, path):
     t = outcome.reference["time"]
     axes = Axes(outcome.case.fmu)
     panels[0].plot(t, axes.f(outcome.reference), **REFERENCE_STYLE, label="reference")
-    comparable = outcome.result is not None and len(outcome.result) == len(t)
-    if comparable:
+    if outcome.errors:
         panels[0].plot(t, axes.f(outcome.result), color="tab:blue", label="FMU", **FMU_STYLE)
         for name in names:
             error = 100 * (outcome.result[name] - outcome.reference[name]) / \
@@ -219,10 +211,14 @@ def plot_case(outcome, path):
     for panel in panels:
         panel.legend(fontsize=8)
         panel.grid(True, alpha=0.3)
-    fig.suptitle(f"{outcome.case.key}: strict error {outcome.strict_error:.4f} % "
-                 f"({'pass' if outcome.passed else 'FAIL'})", fontsize=10)
+    _save(fig, f"{outcome.case.key}: strict error {outcome.strict_error:.4f} % "
+               f"({'pass' if outcome.passed else 'FAIL'})", path, dpi=80)
+
+
+def _save(fig, title, path, dpi):
+    fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
+    fig.savefig(path, dpi=dpi)
     plt.close(fig)
 
 

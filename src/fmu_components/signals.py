@@ -55,7 +55,8 @@ def piecewise_linear_rate(times, knot_times, knot_rates, start=0.0):
     knot_times = np.asarray(knot_times, dtype=float)
     knot_rates = np.asarray(knot_rates, dtype=float)
     spans = np.diff(knot_times)
-    at_knots = start + np.concatenate([[0.0], np.cumsum(spans * (knot_rates[:-1] + knot_rates[1:]) / 2)])
+    mean_rates = (knot_rates[:-1] + knot_rates[1:]) / 2
+    at_knots = start + np.concatenate([[0.0], np.cumsum(spans * mean_rates)])
     t = np.asarray(times, dtype=float)
     i = np.clip(np.searchsorted(knot_times, t, side="right") - 1, 0, len(spans) - 1)
     s = t - knot_times[i]

@@ -20,6 +20,7 @@ the report folder (default reports/validation), and exits non-zero if any case f
 """
 
 import argparse
+import math
 import sys
 import time
 from dataclasses import dataclass, field
@@ -76,6 +77,7 @@ def compare(result, reference, stop_time):
                          f"has {len(reference)} to {reference['time'][-1]:g} s")
     errors = {n: 100 * float(np.max(np.abs(result[n] - reference[n])))
               / programme.column_scale(reference[n]) for n in names}
+    errors = {n: e if np.isfinite(e) else math.inf for n, e in errors.items()}  # NaN fails
     # validate_result nudges duplicate reference times in place: give it copies.
     outliers = float(validate_result(result[["time", *names]].copy(), reference.copy(),
                                      stop_time=stop_time))
