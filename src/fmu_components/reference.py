@@ -37,7 +37,8 @@ LOAD_NAMES = {"RoadWheelTyre": "force", "TrackBushRadial": "force",
               "TrackBushTorsion": "torque"}
 
 
-def _rows(name):
+def thesis_rows(name):
+    """The rows of one of the thesis's tables in reference_data/thesis, as dicts."""
     with open(THESIS_DATA / name, newline="") as f:
         return list(csv.DictReader(f))
 
@@ -59,13 +60,13 @@ class RubberSpec:
 def rubber_spec(fmu_name):
     key = RUBBER_KEYS[fmu_name]
     elements = []
-    for row in _rows("appendix_4b.csv"):
+    for row in thesis_rows("appendix_4b.csv"):
         if row["component"] == key:
             elements.append((float(row["k"]) * _TO_SI[row["k_unit"]],
                              float(row["c"]) * _TO_SI[row["c_unit"]],
                              float(row["xi"]) * _TO_SI[row["xi_unit"]]))
-    (elastic,) = [r for r in _rows("elastic_functions.csv") if r["component"] == key]
-    (geometric,) = [r for r in _rows("geometric_multipliers.csv") if r["component"] == key]
+    (elastic,) = [r for r in thesis_rows("elastic_functions.csv") if r["component"] == key]
+    (geometric,) = [r for r in thesis_rows("geometric_multipliers.csv") if r["component"] == key]
     a = [float(elastic[f"a{p}"]) for p in range(4)]
     h, x_ref = float(geometric["h"]), float(geometric["x_ref"])
     if elastic["deflection_unit"] == "deg":  # polynomial in degrees -> in radians
@@ -85,9 +86,9 @@ class DamperSpec:
 
 
 def damper_spec():
-    constants = {r["name"]: r for r in _rows("damper_constants.csv")}
+    constants = {r["name"]: r for r in thesis_rows("damper_constants.csv")}
     c1 = float(constants["C1"]["value"]) * (1e-3 if constants["C1"]["unit"] == "N.mm" else 1.0)
-    table = _rows("table_A6-1.csv")
+    table = thesis_rows("table_A6-1.csv")
     return DamperSpec(c1, float(constants["C2"]["value"]), float(constants["I"]["value"]),
                       np.array([float(r["rate_rad_per_s"]) for r in table]),
                       np.array([float(r["smoothed_N_m"]) for r in table]))

@@ -49,6 +49,21 @@ def ramp_and_hold(times, start, end, ramp_time, ramp_start=0.0):
     return start + (end - start) * fraction
 
 
+def piecewise_linear_rate(times, knot_times, knot_rates, start=0.0):
+    """The deflection whose rate runs straight between the knots [(t, rate)]: plateaus
+    joined by constant-acceleration ramps, integrated exactly (a quadratic between knots)."""
+    knot_times = np.asarray(knot_times, dtype=float)
+    knot_rates = np.asarray(knot_rates, dtype=float)
+    spans = np.diff(knot_times)
+    mean_rates = (knot_rates[:-1] + knot_rates[1:]) / 2
+    at_knots = start + np.concatenate([[0.0], np.cumsum(spans * mean_rates)])
+    t = np.asarray(times, dtype=float)
+    i = np.clip(np.searchsorted(knot_times, t, side="right") - 1, 0, len(spans) - 1)
+    s = t - knot_times[i]
+    acceleration = np.diff(knot_rates)[i] / spans[i]
+    return at_knots[i] + knot_rates[i] * s + 0.5 * acceleration * s ** 2
+
+
 def input_table(fmu_name, times, deflection, rate=None):
     """Structured array (time, deflection input, rate input) named as the FMU's inputs."""
     deflection_name, rate_name = (v.name for v in COMPONENTS[fmu_name].inputs)

@@ -1,0 +1,163 @@
+"""Validate the built FMUs against the thesis test programme.
+
+Every case of ``fmu_components.cases`` is simulated with ``fmpy.simulate_fmu`` at its step
+size and tolerance (``<case>_ref.opt``), fed its ``<case>_in.csv``, and compared with its
+``<case>_ref.csv`` (the independent solve) in two ways:
+
+* the FMI cross-check rule: ``fmpy.util.validate_result`` resamples the reference at 1000
+  points, draws a band around it (+-10 % of its range, +-10 resampled points in time) and
+  gives the share of samples outside it for the worst output; the case fails with more than
+  10 % outside, as FMPy's cross-check does (``fmpy.cross_check.validate_result``). The band
+  is coarse where a record is long and has fast features (the first tenth of a second of a
+  200 s relaxation), so a few samples may fall outside while the strict norm is tiny;
+* the strict norm: the largest |FMU - reference| of every output, in % of that output's
+  peak-to-peak range in the reference; it must be <= 0.5 %.
+
+    python -m fmu_components.validate [--fmu NAME] [--case GLOB] [--report DIR]
+
+prints a table, writes PNG plots in the style of the thesis figures and a summary page to
+the report folder (default reports/validation), and exits non-zero if any case fails.
+"""
+
+import argparse
+import math
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from fmpy import simulate_fmu
+from fmpy.util import validate_result
+from tqdm import tqdm
+
+from . import cases as programme
+from .runtime.catalog import COMPONENTS
+
+ROOT = Path(__file__).resolve().parents[2]
+STRICT_LIMIT = 0.5  # % of the reference's peak-to-peak range
+CROSS_CHECK_LIMIT = 0.1  # share of samples outside the band
+
+
+@dataclass
+class Outcome:
+    case: programme.Case
+    errors: dict = field(default_factory=dict)  # output -> strict error, %
+    outliers: float = 1.0  # fraction of samples outside the cross-check band (worst output)
+    wall_time: float = 0.0
+    result: np.ndarray = None
+    reference: np.ndarray = None
+    inputs: np.ndarray = None
+    problem: str = ""  # why the case could not be compared at all
+
+    @property
+    def strict_error(self):
+        return max(self.errors.values()) if self.errors else float("inf")
+
+    @property
+    def worst_output(self):
+        return max(self.errors, key=self.errors.get) if self.errors else ""
+
+    @property
+    def passed(self):
+        return (not self.problem and self.strict_error <= STRICT_LIMIT
+                and self.outliers <= CROSS_CHECK_LIMIT)
+
+
+def compare(result, reference, stop_time):
+    """(strict errors in % per output, cross-check outlier fraction, problem) of a result
+    (structured array: time and outputs) against its reference table."""
+    names = reference.dtype.names[1:]
+    missing = [n for n in names if n not in result.dtype.names]
+    if missing:
+        return {}, 1.0, f"outputs missing: {', '.join(missing)}"
+    if len(result) != len(reference) or not np.allclose(result["time"], reference["time"],
+                                                        rtol=0, atol=1e-9):
+        return {}, 1.0, (f"{len(result)} samples to t = {result['time'][-1]:g} s, the reference "
+                         f"has {len(reference)} to {reference['time'][-1]:g} s")
+    errors = {n: 100 * float(np.max(np.abs(result[n] - reference[n])))
+              / programme.column_scale(reference[n]) for n in names}
+    errors = {n: e if np.isfinite(e) else math.inf for n, e in errors.items()}  # NaN fails
+    # validate_result nudges duplicate reference times in place: give it copies.
+    outliers = float(validate_result(result[["time", *names]].copy(), reference.copy(),
+                                     stop_time=stop_time))
+    return errors, outliers, ""
+
+
+def run_case(case, fmu_path, reference_data=programme.REFERENCE_DATA):
+    inputs, reference, options = programme.read(case, reference_data)
+    outputs = list(reference.dtype.names[1:])
+    started = time.perf_counter()
+    result = simulate_fmu(str(fmu_path), start_time=options["StartTime"],
+                          stop_time=options["StopTime"], output_interval=options["StepSize"],
+                          relative_tolerance=options["RelTol"], input=inputs, output=outputs)
+    wall = time.perf_counter() - started
+    errors, outliers, problem = compare(result, reference, options["StopTime"])
+    return Outcome(case, errors, outliers, wall, result, reference, inputs, problem)
+
+
+def rows(outcomes):
+    """The result table: a header and one row of strings per case."""
+    table = [("FMU", "case", "strict error %", "worst output", "cross-check inside band",
+              "result", "wall s")]
+    for o in outcomes:
+        table.append((o.case.fmu, o.case.name, f"{o.strict_error:.4f}" if o.errors else "-",
+                      o.worst_output, f"{100 * (1 - o.outliers):.2f} %",
+                      "pass" if o.passed else f"FAIL{': ' + o.problem if o.problem else ''}",
+                      f"{o.wall_time:.2f}"))
+    return table
+
+
+def table(outcomes):
+    lines = rows(outcomes)
+    widths = [max(len(row[i]) for row in lines) for i in range(len(lines[0]))]
+    return "\n".join("  ".join(cell.rjust(w) if i in (2, 4, 6) else cell.ljust(w)
+                               for i, (cell, w) in enumerate(zip(row, widths))).rstrip()
+                     for row in lines)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(
+        description="Run the thesis test programme through the built FMUs with fmpy and "
+                    "compare with the independent reference; non-zero exit on any failure.")
+    parser.add_argument("--fmu", action="append", choices=sorted(COMPONENTS),
+                        help="only this FMU (repeatable)")
+    parser.add_argument("--case", action="append", metavar="GLOB",
+                        help="only cases whose name or FMU/name matches (repeatable)")
+    parser.add_argument("--report", type=Path, default=ROOT / "reports" / "validation",
+                        help="folder for the plots and summary.md (default reports/validation)")
+    parser.add_argument("--fmus", type=Path, default=ROOT / "fmus",
+                        help="folder holding the built <FMU>.fmu files (default fmus/)")
+    parser.add_argument("--reference-data", type=Path, default=programme.REFERENCE_DATA)
+    args = parser.parse_args(argv)
+
+    selected = programme.select(args.fmu, args.case)
+    if not selected:
+        parser.error("no case matches")
+    missing = sorted({str(args.fmus / f"{c.fmu}.fmu") for c in selected
+                      if not (args.fmus / f"{c.fmu}.fmu").exists()})
+    if missing:
+        parser.error(f"not built: {', '.join(missing)} (run build_fmus.py)")
+
+    outcomes = []
+    progress = tqdm(selected, desc="validating", unit="case", file=sys.stderr)
+    for case in progress:
+        progress.set_postfix_str(case.key)
+        try:
+            outcomes.append(run_case(case, args.fmus / f"{case.fmu}.fmu", args.reference_data))
+        except Exception as exc:  # a case that cannot run is a failed case, not a crash
+            outcomes.append(Outcome(case, problem=f"{type(exc).__name__}: {exc}"))
+    progress.close()
+
+    from .report import write_report  # matplotlib only once there is something to plot
+    summary = write_report(outcomes, args.report)
+    print(table(outcomes))
+    failed = [o for o in outcomes if not o.passed]
+    print(f"\n{len(outcomes) - len(failed)} of {len(outcomes)} cases pass (strict error <= "
+          f"{STRICT_LIMIT:g} %, cross-check <= {100 * CROSS_CHECK_LIMIT:g} % outside the band); "
+          f"report: {summary}")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
