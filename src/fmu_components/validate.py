@@ -140,7 +140,8 @@ def main(argv=None):
         parser.error(f"not built: {', '.join(missing)} (run build_fmus.py)")
 
     outcomes = []
-    progress = tqdm(selected, desc="validating", unit="case", file=sys.stderr)
+    # The bar draws on a terminal; in a CI log (no terminal) it stays out of the way.
+    progress = tqdm(selected, desc="validating", unit="case", file=sys.stderr, disable=None)
     for case in progress:
         progress.set_postfix_str(case.key)
         try:
