@@ -64,7 +64,10 @@ STEP_COMPLETE = "StepComplete"
 STEP_FAILED = "StepFailed"
 TERMINATED = "Terminated"
 ANY_STATE = frozenset({INSTANTIATED, INITIALIZATION, STEP_COMPLETE, STEP_FAILED, TERMINATED})
-READABLE = frozenset({INITIALIZATION, STEP_COMPLETE, STEP_FAILED, TERMINATED})
+# Reading in Instantiated is allowed too: pythonfmu reads start values that way when it
+# writes the modelDescription.
+READABLE_OR_INSTANTIATED = frozenset({INSTANTIATED, INITIALIZATION, STEP_COMPLETE, STEP_FAILED,
+                                      TERMINATED})
 SETTABLE = frozenset({INSTANTIATED, INITIALIZATION, STEP_COMPLETE})
 
 
@@ -113,6 +116,9 @@ class _RealWithUnit(Real):
         return node
 
 
+# The catalog lists a component's variables inputs first: deflection, then its rate.
+DEFLECTION_VR, RATE_VR = 0, 1
+
 _CAUSALITY = {"input": (Fmi2Causality.input, Fmi2Variability.continuous),
               "output": (Fmi2Causality.output, Fmi2Variability.continuous),
               "parameter": (Fmi2Causality.parameter, Fmi2Variability.fixed)}
@@ -144,7 +150,6 @@ class ComponentSlave(Fmi2Slave):
                 variable.name, variable.unit, variable.display_unit,
                 causality=causality, variability=variability, description=variable.description,
                 getter=lambda vr=vr: self._values[vr], setter=lambda value: None))
-        self._deflection_vr, self._rate_vr = 0, 1
         self._output_vrs = range(2, 2 + len(definition.outputs))
         self._parameter_vrs = range(2 + len(definition.outputs), len(variables))
         self._mode = INSTANTIATED
@@ -153,6 +158,7 @@ class ComponentSlave(Fmi2Slave):
         self._cosim = None
         self._outputs_stale = True
         self._warned = set()
+        self._arm_range_checks()
 
     # --- logging ----------------------------------------------------------------------
 
@@ -196,7 +202,7 @@ class ComponentSlave(Fmi2Slave):
             self._error(f"fmi2ExitInitializationMode: {problem}; still in initialization mode")
             return
         model = self.definition.build_model(values)
-        deflection, rate = self._values[self._deflection_vr], self._values[self._rate_vr]
+        deflection, rate = self._values[DEFLECTION_VR], self._values[RATE_VR]
         self._cosim = CoSimulation(model, self._tolerance, self._start_time, deflection, rate)
         self._mode = STEP_COMPLETE
         self._outputs_stale = True
@@ -214,7 +220,7 @@ class ComponentSlave(Fmi2Slave):
             cosim = self._cosim
             outcome = cosim.do_step(current_time, step_size)
             if outcome is None:
-                self._values[self._deflection_vr] = cosim.deflection
+                self._values[DEFLECTION_VR] = cosim.deflection
                 self._outputs_stale = True
                 return True
             kind, problem = outcome
@@ -245,7 +251,7 @@ class ComponentSlave(Fmi2Slave):
                 outputs = [math.nan] * len(self._output_vrs)
             else:
                 model = self.definition.build_model(values)
-                x, v = self._values[self._deflection_vr], self._values[self._rate_vr]
+                x, v = self._values[DEFLECTION_VR], self._values[RATE_VR]
                 outputs = model.outputs(model.initial_state(x, v), x, v)
         else:
             outputs = cosim.outputs()
@@ -253,40 +259,48 @@ class ComponentSlave(Fmi2Slave):
             self._values[vr] = value
         self._outputs_stale = False
 
-    def _unknown(self, vrs):
-        return [vr for vr in vrs if not 0 <= vr < len(self._variables)]
-
-    @fmi_call("fmi2GetReal", READABLE | {INSTANTIATED}, on_failure=_nan_values)
     def get_real(self, vrs):
-        unknown = self._unknown(vrs)
-        if unknown:
-            self._error(f"fmi2GetReal: no variable has value reference {unknown[0]}")
+        # A hot call (every output, every step): fmi_call's checks written inline.
+        if self._mode not in READABLE_OR_INSTANTIATED:
+            self._refuse_out_of_sequence("fmi2GetReal", READABLE_OR_INSTANTIATED)
             return _nan_values(self, vrs)
-        if self._outputs_stale:
-            self._refresh_outputs()
-        values = self._values
-        return [values[vr] for vr in vrs]
+        try:
+            if vrs and min(vrs) < 0:
+                raise IndexError
+            if self._outputs_stale:
+                self._refresh_outputs()
+            values = self._values
+            return [values[vr] for vr in vrs]
+        except IndexError:
+            unknown = [vr for vr in vrs if not 0 <= vr < len(self._variables)]
+            self._error(f"fmi2GetReal: no variable has value reference {unknown[0]}")
+        except Exception as exc:
+            self._internal_error("fmi2GetReal", exc)
+        return _nan_values(self, vrs)
 
-    @fmi_call("fmi2SetReal", SETTABLE)
     def set_real(self, vrs, values):
-        accepted = []
-        for vr, value in zip(vrs, values):
-            problem = self._check_settable(vr, value)
-            if problem:
-                self._error(f"fmi2SetReal: {problem}; value ignored")
-            else:
-                accepted.append((vr, float(value)))
-        inputs = [self._values[self._deflection_vr], self._values[self._rate_vr]]
-        touches_inputs = False
-        for vr, value in accepted:
-            if vr <= self._rate_vr:
-                inputs[vr] = value
-                touches_inputs = True
-            else:
-                self._values[vr] = value
-        if touches_inputs:
-            self._apply_inputs(*inputs)
-        self._outputs_stale = True
+        # A hot call (the inputs, every step): fmi_call's checks written inline.
+        if self._mode not in SETTABLE:
+            self._refuse_out_of_sequence("fmi2SetReal", SETTABLE)
+            return
+        try:
+            inputs = self._values[:2]  # deflection, rate
+            inputs_set = False
+            for vr, value in zip(vrs, values):
+                if (vr == DEFLECTION_VR or vr == RATE_VR) and math.isfinite(value):
+                    inputs[vr] = float(value)
+                    inputs_set = True
+                    continue
+                problem = self._check_settable(vr, value)
+                if problem:
+                    self._error(f"fmi2SetReal: {problem}; value ignored")
+                else:
+                    self._values[vr] = float(value)
+            if inputs_set:
+                self._apply_inputs(*inputs)
+            self._outputs_stale = True
+        except Exception as exc:
+            self._internal_error("fmi2SetReal", exc)
 
     def _check_settable(self, vr, value):
         if not 0 <= vr < len(self._variables):
@@ -307,18 +321,26 @@ class ComponentSlave(Fmi2Slave):
             if problem:
                 self._error(f"fmi2SetReal: {problem}; values ignored")
                 return
-        for vr, value in ((self._deflection_vr, deflection), (self._rate_vr, rate)):
-            self._warn_if_unmeasured(vr, value)
-            self._values[vr] = value
+        self._values[DEFLECTION_VR], self._values[RATE_VR] = deflection, rate
+        if self._range_checks:
+            for vr, value in ((DEFLECTION_VR, deflection), (RATE_VR, rate)):
+                if vr in self._range_checks:
+                    self._warn_if_unmeasured(vr, value)
+
+    def _arm_range_checks(self):
+        """The inputs with a measured range that have not been warned about yet."""
+        self._range_checks = {
+            vr: self.definition.measured_ranges[self._variables[vr].name]
+            for vr in (DEFLECTION_VR, RATE_VR)
+            if self._variables[vr].name in self.definition.measured_ranges
+            and self._variables[vr].name not in self._warned}
 
     def _warn_if_unmeasured(self, vr, value):
-        variable = self._variables[vr]
-        limits = self.definition.measured_ranges.get(variable.name)
-        if limits is None or variable.name in self._warned:
-            return
-        low, high, measured = limits
+        low, high, measured = self._range_checks[vr]
         if not low <= value <= high:
+            variable = self._variables[vr]
             self._warned.add(variable.name)
+            del self._range_checks[vr]
             self.log(f"{variable.name} = {value:.6g} {variable.unit} is outside the range the "
                      f"thesis measured ({measured}); the model extrapolates. Warned once per "
                      f"instance.", Fmi2Status.warning)
@@ -380,6 +402,7 @@ class ComponentSlave(Fmi2Slave):
         self._start_time = state["start_time"]
         self._tolerance = state["tolerance"]
         self._warned = set(state["warned"])
+        self._arm_range_checks()
         self._cosim = cosim
         self._outputs_stale = True
 
@@ -425,7 +448,7 @@ class ComponentSlave(Fmi2Slave):
         unknowns (depending on all knowns, so no dependency list is given)."""
         node = Element("ModelStructure")
         outputs = SubElement(node, "Outputs")
-        deflection_index = str(self._deflection_vr + 1)
+        deflection_index = str(DEFLECTION_VR + 1)
         for vr in self._output_vrs:
             direct = self._variables[vr].name in self.definition.direct_outputs
             SubElement(outputs, "Unknown", index=str(vr + 1),
