@@ -413,7 +413,10 @@ def coupling_study(speed, profile, linear, fmu_dir=None, steps=STUDY_STEPS,
             for step in steps:
                 try:
                     table[name, step] = errors(run(step))
-                except RuntimeError as failure:  # a coupling that goes unstable
+                except (RuntimeError, exu.ExudynError) as failure:
+                    # A coupling that goes unstable: the motion it asks of a component
+                    # grows until the FMU refuses a step (exudyn passes the refusal on
+                    # as its own error).
                     table[name, step] = str(failure).splitlines()[0]
 
     table = {}
