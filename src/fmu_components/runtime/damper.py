@@ -29,6 +29,7 @@ by rejecting and shrinking steps.
 import math
 
 from .hermite import MonotoneCubic
+from .integrator import RhsSource
 
 Z_LIMIT = 18.0  # tanh(18) = 1 - 4.6e-16: beyond it xd is C2 to the last bit
 
@@ -77,12 +78,15 @@ class RotaryDamper:
     def inside(self, y):
         return abs(y[0]) < Z_LIMIT
 
-    def rhs(self, y, omega):
-        z, rotor_rate = y
-        cosh_z = math.cosh(z)
-        dashpot_torque = self.dashpot.value_and_slope(rotor_rate)[0]
-        return ((omega - rotor_rate) * cosh_z * cosh_z / self.gas_limit,
-                (self.gas_force * math.sinh(2.0 * z) - dashpot_torque) / self.rotor_inertia)
+    def rhs_source(self):
+        """dz/dt and d(omega_r)/dt (module docstring) for the integrator to compile: state
+        Y = [z, omega_r], held arm rate u."""
+        return RhsSource(
+            stage=["cosh_z = cosh(Y0)",
+                   f"f0 = (u - Y1) * cosh_z * cosh_z / {self.gas_limit!r}",
+                   f"f1 = ({self.gas_force!r} * sinh(2.0 * Y0) - dashpot(Y1)) / {self.rotor_inertia!r}"],
+            region=f"-{Z_LIMIT!r} < Y0 < {Z_LIMIT!r}",
+            namespace={"cosh": math.cosh, "sinh": math.sinh, "dashpot": self.dashpot.value})
 
     def jacobian(self, y, omega):
         z, rotor_rate = y
@@ -115,4 +119,4 @@ class RotaryDamper:
         stiffness = 2.0 * self.gas_force * math.cosh(2.0 * z) * cosh_z * cosh_z / self.gas_limit
         rotor_rate = state[1]
         return (self.torque(z), self.gas_limit * math.tanh(z), rotor_rate,
-                self.dashpot(rotor_rate), stiffness)
+                self.dashpot.value(rotor_rate), stiffness)

@@ -70,18 +70,41 @@ class MonotoneCubic:
                          (d[i] + d[i + 1] - 2.0 * m[i]) / (h[i] * h[i])) for i in range(n - 1)]
         self._interval = 0  # where the last lookup landed: the next is usually the same
 
-    def value_and_slope(self, x):
+    def _interval_of(self, x):
+        """Index of the interval holding x, or -1 / len(xs) - 1 beyond either end."""
+        xs = self.xs
+        i = self._interval
+        if xs[i] <= x < xs[i + 1]:
+            return i
+        if x <= xs[0]:
+            return -1
+        if x >= xs[-1]:
+            return len(xs) - 1
+        i = self._interval = bisect.bisect_right(xs, x) - 1
+        return i
+
+    def value(self, x):
+        # Called in every integrator stage of the damper: the interval test written inline.
         xs = self.xs
         i = self._interval
         if not xs[i] <= x < xs[i + 1]:
-            if x <= xs[0]:
-                return self.ys[0] + self.slopes[0] * (x - xs[0]), self.slopes[0]
-            if x >= xs[-1]:
-                return self.ys[-1] + self.slopes[-1] * (x - xs[-1]), self.slopes[-1]
-            i = self._interval = bisect.bisect_right(xs, x) - 1
+            i = self._interval_of(x)
+            if i < 0:
+                return self.ys[0] + self.slopes[0] * (x - xs[0])
+            if i == len(xs) - 1:
+                return self.ys[-1] + self.slopes[-1] * (x - xs[-1])
         y0, d0, c2, c3 = self._cubics[i]
         t = x - xs[i]
+        return y0 + t * (d0 + t * (c2 + t * c3))
+
+    def value_and_slope(self, x):
+        i = self._interval_of(x)
+        if i < 0:
+            return self.ys[0] + self.slopes[0] * (x - self.xs[0]), self.slopes[0]
+        if i == len(self.xs) - 1:
+            return self.ys[-1] + self.slopes[-1] * (x - self.xs[-1]), self.slopes[-1]
+        y0, d0, c2, c3 = self._cubics[i]
+        t = x - self.xs[i]
         return y0 + t * (d0 + t * (c2 + t * c3)), d0 + t * (2.0 * c2 + 3.0 * t * c3)
 
-    def __call__(self, x):
-        return self.value_and_slope(x)[0]
+    __call__ = value

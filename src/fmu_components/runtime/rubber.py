@@ -29,6 +29,8 @@ while x > 0, so a step that crosses x = 0 is split at the crossing.
 
 import math
 
+from .integrator import RhsSource
+
 
 class MaxwellElement:
     """Spring k in series with a dashpot of viscosity c/(|u| + xi); time constant
@@ -110,13 +112,15 @@ class RubberModel:
         has succeeded."""
         n = self.integrated_size
         integrated, plain = state[:n], state[n:]
-        for duration, rate in self.rate_segments(x, v, h):
+        segments = self.rate_segments(x, v, h) if self.unilateral else ((h, v),)
+        for duration, rate in segments:
             if duration > 0.0:
                 if n:
                     problem = integrator.integrate(self, integrated, rate, duration)
                     if problem:
                         return problem
-                self._advance_plain(plain, rate, duration)
+                if plain:
+                    self._advance_plain(plain, rate, duration)
         state[:] = integrated + plain
         return None
 
@@ -130,16 +134,17 @@ class RubberModel:
 
     # --- integrator system: the nested branches ---------------------------------------
 
-    def rhs(self, y, v):
-        speed = abs(v)
-        dydt = []
-        i = 0
-        for k1, c1, xi1, k2, g, xi2 in self._nested:
-            w = y[i + 1]
-            sdot = v - (k1 * y[i] + k2 * w) * (speed + xi1) / c1
-            dydt += (sdot, sdot - g * w * (abs(sdot) + xi2))
-            i += 2
-        return dydt
+    def rhs_source(self):
+        """ds/dt and dw/dt of each nested branch (module docstring; Eq. 4.2.7-1 and 6.1-2)
+        for the integrator to compile: state Y = [s, w, ...], held rate u."""
+        held = ["speed = abs(u)"]
+        stage = []
+        for i, (k1, c1, xi1, k2, g, xi2) in enumerate(self._nested):
+            s, w, ds, dw = f"Y{2 * i}", f"Y{2 * i + 1}", f"f{2 * i}", f"f{2 * i + 1}"
+            held.append(f"fluidity{i} = (speed + {xi1!r}) / {c1!r}")  # 1/eta of the outer dashpot
+            stage += [f"{ds} = u - ({k1!r} * {s} + {k2!r} * {w}) * fluidity{i}",
+                      f"{dw} = {ds} - {g!r} * {w} * (abs({ds}) + {xi2!r})"]
+        return RhsSource(stage, held)
 
     def jacobian(self, y, v):
         n = self.integrated_size
