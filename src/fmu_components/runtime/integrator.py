@@ -336,7 +336,10 @@ class Rosenbrock:
         """
         if duration <= 0.0 or not y:
             return None
-        factor, step, _ = self.compiled(system, len(y))
+        last_system, last_n, compiled = self._last_compiled
+        if last_system is not system or last_n != len(y):
+            compiled = self.compiled(system, len(y))
+        factor, step, _ = compiled
         rtol = self.rtol
         exponent = self._exponent
         h = self.h_next
