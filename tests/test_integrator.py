@@ -257,3 +257,20 @@ def test_inlined_rhs_integrates_exactly_as_the_called_rhs(name):
         results.append((y, integrator.accepted_steps, integrator.rejected_steps))
     assert results[0] == results[1]
     assert results[0][1] > 4
+
+
+def test_step_sizes_differing_in_the_last_bits_take_the_same_steps():
+    """A host that counts time in integer nanoseconds, or adds up step sizes, hands over
+    communication steps a few ulps apart: the integrator must not make different
+    decisions (a fresh W every step) from those of a host with exact steps."""
+    model = _model("RotaryDamper")
+    exact, jittered = Rosenbrock(1e-4), Rosenbrock(1e-4)
+    y_exact, y_jittered = [0.0, 0.0], [0.0, 0.0]
+    for k in range(200):
+        u = 0.21 * 2 * math.pi * 0.75 * math.cos(2 * math.pi * 0.75 * k * 1e-3)
+        assert exact.integrate(model, y_exact, u, 1e-3) is None
+        h = (k + 1) * 1e-3 - k * 1e-3  # what a host computing t_k = k*h hands over
+        assert jittered.integrate(model, y_jittered, u, h) is None
+    assert (exact.accepted_steps, exact.rejected_steps) == (
+        jittered.accepted_steps, jittered.rejected_steps)
+    assert y_jittered == pytest.approx(y_exact, rel=1e-12, abs=1e-15)

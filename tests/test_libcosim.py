@@ -66,5 +66,8 @@ def test_libcosim_agrees_with_fmpy(built_fmus, name):
         rows = away_from_kink if output.name == "stiffness" else slice(None)
         scale = peak_to_peak(fmpy_result[:, column]) or 1.0
         difference = np.max(np.abs(cosim[rows, column] - fmpy_result[rows, column])) / scale
-        assert difference <= 1e-3, (output.name, difference)
+        # The requirement is 0.1 %; the same arithmetic on the same input agrees to
+        # round-off, and a difference at the tolerance level means a host's step sizes
+        # (integer nanoseconds) changed the integrator's decisions.
+        assert difference <= 1e-9, (output.name, difference)
     assert away_from_kink.sum() >= len(away_from_kink) - 4

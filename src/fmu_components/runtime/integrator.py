@@ -38,6 +38,12 @@ STEP_GROWTH_LIMIT = 5.0
 STEP_SHRINK_LIMIT = 0.2
 SAFETY = 0.9
 REGION_SHRINK = 0.25
+# W^-1 made for step size h' is reused for steps within this relative distance of h'. Hosts
+# whose clocks count integer nanoseconds, or add up step sizes, hand over communication
+# steps that differ in the last bits; without the margin such a host would rebuild W every
+# step, and its results would differ at the tolerance level from a host's with exact steps.
+# A W-method keeps its order for any W, so the W of a step a few ulps longer is as good.
+SAME_STEP_SIZE = 1e-9
 
 
 class RosenbrockTableau:
@@ -344,7 +350,8 @@ class Rosenbrock:
         exponent = self._exponent
         h = self.h_next
         cached = self.w
-        if (h is not None and h >= duration and cached is not None and cached[0] == duration
+        if (h is not None and h >= duration and cached is not None
+                and abs(cached[0] - duration) <= SAME_STEP_SIZE * duration
                 and cached[2] < self.MAX_W_REUSE):
             # The common case in co-simulation: one step spans the interval, and the last
             # W^-1 was made for a step of this size. Taken without the loop's bookkeeping;
@@ -376,7 +383,8 @@ class Rosenbrock:
                 return (f"integrator needed more than {MAX_STEPS_PER_CALL} steps for a "
                         f"{duration:.6g} s interval at tolerance {rtol:.3g}")
             cached = self.w
-            if cached is not None and cached[0] == h_try and cached[2] < max_reuse:
+            if (cached is not None and abs(cached[0] - h_try) <= SAME_STEP_SIZE * h_try
+                    and cached[2] < max_reuse):
                 w = cached[1]
                 self.w = (h_try, w, cached[2] + 1)
             else:
