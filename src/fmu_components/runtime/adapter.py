@@ -63,11 +63,9 @@ INITIALIZATION = "InitializationMode"
 STEP_COMPLETE = "StepComplete"
 STEP_FAILED = "StepFailed"
 TERMINATED = "Terminated"
+# fmi2GetReal is allowed in every state, Instantiated included: pythonfmu reads start
+# values that way when it writes the modelDescription.
 ANY_STATE = frozenset({INSTANTIATED, INITIALIZATION, STEP_COMPLETE, STEP_FAILED, TERMINATED})
-# Reading in Instantiated is allowed too: pythonfmu reads start values that way when it
-# writes the modelDescription.
-READABLE_OR_INSTANTIATED = frozenset({INSTANTIATED, INITIALIZATION, STEP_COMPLETE, STEP_FAILED,
-                                      TERMINATED})
 SETTABLE = frozenset({INSTANTIATED, INITIALIZATION, STEP_COMPLETE})
 
 
@@ -261,8 +259,8 @@ class ComponentSlave(Fmi2Slave):
 
     def get_real(self, vrs):
         # A hot call (every output, every step): fmi_call's checks written inline.
-        if self._mode not in READABLE_OR_INSTANTIATED:
-            self._refuse_out_of_sequence("fmi2GetReal", READABLE_OR_INSTANTIATED)
+        if self._mode not in ANY_STATE:
+            self._refuse_out_of_sequence("fmi2GetReal", ANY_STATE)
             return _nan_values(self, vrs)
         try:
             if vrs and min(vrs) < 0:

@@ -101,9 +101,9 @@ def _rubber_component(name, description, *, deflection, deflection_meaning, load
     outputs = (
         Variable(load, "output", load_unit, f"{load.capitalize()} F applied to the component "
                  f"to produce the deflection: Fe(x) + f(x)*(FA + FB) (Eq. 6.1-1)"),
-        Variable(f"{load}_elastic", "output", load_unit, f"Elastic part Fe(x) (section 5.3.1)"),
+        Variable(f"{load}_elastic", "output", load_unit, "Elastic part Fe(x) (section 5.3.1)"),
         Variable(f"{load}_viscoelastic", "output", load_unit,
-                 f"Viscoelastic part f(x)*(FA + FB) of the three Maxwell elements (section 6.4)"),
+                 "Viscoelastic part f(x)*(FA + FB) of the three Maxwell elements (section 6.4)"),
         Variable("stiffness", "output", stiffness, f"Instantaneous tangent stiffness dF/dx "
                  f"in the direction of motion (mean of loading and unloading at zero rate)",
                  display_unit=f"{load_unit}/{display}"),
@@ -134,6 +134,7 @@ def _rubber_component(name, description, *, deflection, deflection_meaning, load
         Variable("geometric.x_ref", "parameter", length, f"Reference deflection x_ref of the "
                  f"geometric multiplier ({geometric_thesis})", x_ref, display),
     ]
+
     def build(values):
         def element(i):
             return MaxwellElement(values[f"k{i}"], values[f"c{i}"], values[f"xi{i}"])

@@ -85,7 +85,7 @@ class RotaryDamper:
             stage=["cosh_z = cosh(Y0)",
                    f"f0 = (u - Y1) * cosh_z * cosh_z / {self.gas_limit!r}",
                    f"f1 = ({self.gas_force!r} * sinh(2.0 * Y0) - dashpot(Y1)) / {self.rotor_inertia!r}"],
-            region=f"-{Z_LIMIT!r} < Y0 < {Z_LIMIT!r}",
+            region=f"abs(Y0) < {Z_LIMIT!r}",  # inside()
             namespace={"cosh": math.cosh, "sinh": math.sinh, "dashpot": self.dashpot.value})
 
     def jacobian(self, y, omega):

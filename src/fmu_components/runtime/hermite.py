@@ -64,47 +64,33 @@ class MonotoneCubic:
                 d[k] = (w1 + w2) / (w1 / m[k - 1] + w2 / m[k])
         d[0] = _end_slope(h[0], h[1], m[0], m[1])
         d[-1] = _end_slope(h[-1], h[-2], m[-1], m[-2])
-        self.slopes = d
-        # Each interval's cubic in powers of (x - x_i): y_i + d_i t + c2 t^2 + c3 t^3.
-        self._cubics = [(self.ys[i], d[i], (3.0 * m[i] - 2.0 * d[i] - d[i + 1]) / h[i],
+        # Each piece is a cubic in powers of t = x - x_i: y_i + d_i t + c2 t^2 + c3 t^3, as
+        # (x_i, y_i, d_i, c2, c3); beyond either end the piece is the straight extension.
+        self._pieces = [(self.xs[i], self.ys[i], d[i], (3.0 * m[i] - 2.0 * d[i] - d[i + 1]) / h[i],
                          (d[i] + d[i + 1] - 2.0 * m[i]) / (h[i] * h[i])) for i in range(n - 1)]
+        self._below = (self.xs[0], self.ys[0], d[0], 0.0, 0.0)
+        self._above = (self.xs[-1], self.ys[-1], d[-1], 0.0, 0.0)
         self._interval = 0  # where the last lookup landed: the next is usually the same
 
-    def _interval_of(self, x):
-        """Index of the interval holding x, or -1 / len(xs) - 1 beyond either end."""
-        xs = self.xs
-        i = self._interval
-        if xs[i] <= x < xs[i + 1]:
-            return i
-        if x <= xs[0]:
-            return -1
-        if x >= xs[-1]:
-            return len(xs) - 1
-        i = self._interval = bisect.bisect_right(xs, x) - 1
-        return i
-
-    def value(self, x):
-        # Called in every integrator stage of the damper: the interval test written inline.
+    def _piece(self, x):
         xs = self.xs
         i = self._interval
         if not xs[i] <= x < xs[i + 1]:
-            i = self._interval_of(x)
-            if i < 0:
-                return self.ys[0] + self.slopes[0] * (x - xs[0])
-            if i == len(xs) - 1:
-                return self.ys[-1] + self.slopes[-1] * (x - xs[-1])
-        y0, d0, c2, c3 = self._cubics[i]
-        t = x - xs[i]
+            if x < xs[0]:
+                return self._below
+            if x >= xs[-1]:
+                return self._above
+            i = self._interval = bisect.bisect_right(xs, x) - 1
+        return self._pieces[i]
+
+    def value(self, x):
+        x0, y0, d0, c2, c3 = self._piece(x)
+        t = x - x0
         return y0 + t * (d0 + t * (c2 + t * c3))
 
     def value_and_slope(self, x):
-        i = self._interval_of(x)
-        if i < 0:
-            return self.ys[0] + self.slopes[0] * (x - self.xs[0]), self.slopes[0]
-        if i == len(self.xs) - 1:
-            return self.ys[-1] + self.slopes[-1] * (x - self.xs[-1]), self.slopes[-1]
-        y0, d0, c2, c3 = self._cubics[i]
-        t = x - self.xs[i]
+        x0, y0, d0, c2, c3 = self._piece(x)
+        t = x - x0
         return y0 + t * (d0 + t * (c2 + t * c3)), d0 + t * (2.0 * c2 + 3.0 * t * c3)
 
     __call__ = value

@@ -266,24 +266,16 @@ def compile_step(tableau, n, source, state_scale):
     return namespace["factor"], namespace["step"], text
 
 
-def _next_step_size(h, h_tried, err, exponent):
-    """The controller after an accepted step: h is the step size it wanted, h_tried the
-    step taken (shorter when cut to land on the end of the interval), err <= 1 its error
-    norm. It scales its own h by what the error allows, within the growth limits."""
-    allowed = h_tried * SAFETY * err ** exponent if err > 0.0 else math.inf
-    grown = STEP_GROWTH_LIMIT * h
-    return grown if allowed > grown else max(STEP_SHRINK_LIMIT * h, allowed)
-
-
 class Rosenbrock:
     """Adaptive integration of an autonomous system over a given duration.
 
     Between calls it keeps ``h_next``, the step size its controller would take next, so
     that consecutive communication steps do not restart from a guess, and ``w``, the last
     W^-1 with the step size it was made for. ROS34PW2 is a W-method: its order, and its
-    error estimate's, hold for any W, so W^-1 is reused while the step size stays the same,
-    and rebuilt from a fresh Jacobian after MAX_W_REUSE steps or a rejected step. Both are
-    part of the state a host saves with fmi2GetFMUstate: the continuation depends on them.
+    error estimate's, hold for any W, so W^-1 is reused while the step size stays the same
+    (to within SAME_STEP_SIZE), and rebuilt from a fresh Jacobian after MAX_W_REUSE steps
+    or a rejected step. Both are part of the state a host saves with fmi2GetFMUstate: the
+    continuation depends on them.
     """
 
     MAX_W_REUSE = 8
@@ -342,28 +334,9 @@ class Rosenbrock:
         """
         if duration <= 0.0 or not y:
             return None
-        last_system, last_n, compiled = self._last_compiled
-        if last_system is not system or last_n != len(y):
-            compiled = self.compiled(system, len(y))
-        factor, step, _ = compiled
+        factor, step, _ = self.compiled(system, len(y))
         rtol = self.rtol
         exponent = self._exponent
-        h = self.h_next
-        cached = self.w
-        if (h is not None and h >= duration and cached is not None
-                and abs(cached[0] - duration) <= SAME_STEP_SIZE * duration
-                and cached[2] < self.MAX_W_REUSE):
-            # The common case in co-simulation: one step spans the interval, and the last
-            # W^-1 was made for a step of this size. Taken without the loop's bookkeeping;
-            # a step this fails falls through to the loop, which retries it as usual.
-            result = step(y, u, duration, rtol, cached[1])
-            if result is not None and result[1] <= 1.0:
-                new, err = result
-                self.w = (duration, cached[1], cached[2] + 1)
-                self.accepted_steps += 1
-                self.h_next = _next_step_size(h, duration, err, exponent)
-                y[:] = new
-                return None
         max_reuse = self.MAX_W_REUSE
         current = tuple(y)
         # h is the step size the controller wants; the step actually tried may be cut
@@ -398,11 +371,13 @@ class Rosenbrock:
                 just_rejected = True
             else:
                 new, err = result
+                allowed = h_try * SAFETY * err ** exponent if err > 0.0 else math.inf
                 if err <= 1.0:
                     self.accepted_steps += 1
                     current = new
                     t += h_try
-                    h = _next_step_size(h, h_try, err, exponent)
+                    grown = STEP_GROWTH_LIMIT * h
+                    h = grown if allowed > grown else max(STEP_SHRINK_LIMIT * h, allowed)
                     if just_rejected:
                         h = min(h, h_try)
                         just_rejected = False
@@ -413,7 +388,7 @@ class Rosenbrock:
                     continue
                 self.rejected_steps += 1
                 self.w = None
-                h = max(STEP_SHRINK_LIMIT * h_try, h_try * SAFETY * err ** exponent)
+                h = max(STEP_SHRINK_LIMIT * h_try, allowed)
                 if just_rejected:
                     # A second failure in a row means the estimate is not yet in its
                     # asymptotic regime (a stiff boundary layer): cut hard.

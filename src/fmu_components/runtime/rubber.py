@@ -112,15 +112,13 @@ class RubberModel:
         has succeeded."""
         n = self.integrated_size
         integrated, plain = state[:n], state[n:]
-        segments = self.rate_segments(x, v, h) if self.unilateral else ((h, v),)
-        for duration, rate in segments:
+        for duration, rate in self.rate_segments(x, v, h):
             if duration > 0.0:
                 if n:
                     problem = integrator.integrate(self, integrated, rate, duration)
                     if problem:
                         return problem
-                if plain:
-                    self._advance_plain(plain, rate, duration)
+                self._advance_plain(plain, rate, duration)
         state[:] = integrated + plain
         return None
 
