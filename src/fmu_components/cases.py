@@ -43,7 +43,7 @@ from .signals import (dual_sine, input_table, piecewise_linear_rate, ramp_and_ho
 REFERENCE_DATA = Path(__file__).resolve().parents[2] / "reference_data"
 REPRODUCE_TOLERANCE = 1e-9  # of each column's peak-to-peak range
 MM = 1e-3
-DEG = math.pi / 180.0
+RAD_PER_DEG = math.pi / 180.0
 
 
 @dataclass(frozen=True)
@@ -245,10 +245,10 @@ CASES = (
     + _rubber_cases("TrackBushRadial", 0.0, "mm", MM, [0.05, 0.15, 0.25, 0.35, 0.45], 0.02, 0.3,
                     [0.05, 0.1, 0.2, 0.3], 0.3, 0.1, [0.1, 1.0, 10.0, 20.0], 0.3)
     # Torsion starts relaxed at the 10 deg live angle, where the elastic torque is ~0.
-    + _rubber_cases("TrackBushTorsion", 10.0, "deg", DEG, [-10, 0, 10, 20, 30], 1.0, 10.0,
+    + _rubber_cases("TrackBushTorsion", 10.0, "deg", RAD_PER_DEG, [-10, 0, 10, 20, 30], 1.0, 10.0,
                     [2.5, 5, 10, 15, 20], 10.0, 5.0, [0.1, 1.0, 5.0], 25.0)
     + [Case("TrackBushTorsion", "dual_sine", "dual sine", "dual sine", 5e-3, 20.0,
-            lambda t: dual_sine(t, 10 * DEG, [(7.5 * DEG, 0.1), (0.75 * DEG, 1.5)]), 10.0)]
+            lambda t: dual_sine(t, 10 * RAD_PER_DEG, [(7.5 * RAD_PER_DEG, 0.1), (0.75 * RAD_PER_DEG, 1.5)]), 10.0)]
     + _damper_cases()
 )
 
@@ -340,22 +340,25 @@ def differences(expected, actual, tolerance):
         return [f"columns {actual.dtype.names} instead of {expected.dtype.names}"]
     if len(expected) != len(actual):
         return [f"{len(actual)} rows instead of {len(expected)}"]
-    problems = []
-    for name in expected.dtype.names:
-        error = np.max(np.abs(actual[name] - expected[name])) / column_scale(expected[name])
-        if not error <= tolerance:
-            problems.append(f"{name} differs by {error:.3g} of its range")
-    return problems
+    return [f"{name} differs by {error:.3g} of its range"
+            for name, error in column_errors(expected, actual, expected.dtype.names).items()
+            if not error <= tolerance]
+
+
+def column_errors(expected, actual, names):
+    """Max |actual - expected| of each named column, in its column_scale."""
+    return {name: float(np.max(np.abs(actual[name] - expected[name])))
+            / column_scale(expected[name]) for name in names}
 
 
 def check(case, root=REFERENCE_DATA):
     """Regenerate a case and compare with its committed files; a list of problems."""
-    inputs, outputs, options = generate(case)
     paths = case_paths(case, root)
     missing = [str(p) for p in paths.values() if not p.exists()]
     if missing:
         return [f"missing {', '.join(missing)}"]
-    committed_in, committed_ref, _ = read(case, root)
+    inputs, outputs, options = generate(case)
+    committed_in, committed_ref = read_csv(paths["in.csv"]), read_csv(paths["ref.csv"])
     problems = [f"{kind}: {p}" for kind, (expected, actual) in
                 (("in.csv", (inputs, committed_in)), ("ref.csv", (outputs, committed_ref)))
                 for p in differences(expected, actual, REPRODUCE_TOLERANCE)]

@@ -5,7 +5,6 @@ One figure per test of each component (spec section 5), plus one plot per case o
 output against time with the FMU's error.
 """
 
-import math
 from pathlib import Path
 
 import matplotlib
@@ -18,9 +17,9 @@ from scipy.interpolate import PchipInterpolator  # noqa: E402
 from . import cases as programme  # noqa: E402
 from . import reference  # noqa: E402
 from .runtime.catalog import COMPONENTS  # noqa: E402
+from .runtime.units import DEG  # noqa: E402  (display degrees per radian)
 from .validate import STRICT_LIMIT, rows  # noqa: E402
 
-DEG = 180.0 / math.pi
 # Display units engineers read: (factor from SI, unit) of the deflection, load and rate.
 DISPLAY = {
     "RoadWheelTyre": ((1e3, "mm"), (1e-3, "kN"), (1e3, "mm/s")),
@@ -144,10 +143,9 @@ def plot_sweep(fig, outcomes):
     (outcome,) = outcomes
     case = outcome.case
     table, time_history = fig.subplots(1, 2)
-    rows = reference.thesis_rows("table_A6-1.csv")
-    rates = np.array([float(r["rate_rad_per_s"]) for r in rows])
-    smoothed = np.array([float(r["smoothed_N_m"]) for r in rows])
-    measured = np.array([float(r["measured_N_m"]) for r in rows])
+    spec = reference.damper_spec()
+    rates, smoothed = spec.rates, spec.torques
+    measured = np.array([float(r["measured_N_m"]) for r in reference.thesis_rows("table_A6-1.csv")])
     fine = np.linspace(rates[0], rates[-1], 1401)
     table.plot(fine, PchipInterpolator(rates, smoothed)(fine), color="0.6", linewidth=2.0,
                label="Table A6-1 smoothed, monotone spline (the model)")
@@ -178,18 +176,19 @@ def plot_sweep(fig, outcomes):
 def plot_test(outcomes, path):
     """The figure of one test of one component."""
     case = outcomes[0].case
-    fig = plt.figure(figsize=(13, 5.5) if case.test in ("IV", "A-D", "high frequency", "sweep")
-                     else (8, 6))
-    if case.test == "IV":
-        plot_relaxation(fig, outcomes)
-    elif case.fmu == "RotaryDamper" and case.test != "sweep":
-        plot_damper(fig, outcomes)
-    elif case.test == "sweep":
-        plot_sweep(fig, outcomes)
+    wide_plot = WIDE_PLOTS.get(case.test)
+    fig = plt.figure(figsize=(13, 5.5) if wide_plot else (8, 6))
+    if wide_plot:
+        wide_plot(fig, outcomes)
     else:
         plot_loops(fig.subplots(), outcomes)
     _save(fig, f"{case.fmu}: {programme.TESTS[case.test].title}\nthesis {case.figure}; FMU "
                f"dashed over the reference", path, dpi=100)
+
+
+# Tests drawn on a wide figure of two panels; every other test is a set of loops.
+WIDE_PLOTS = {"IV": plot_relaxation, "A-D": plot_damper, "high frequency": plot_damper,
+              "sweep": plot_sweep}
 
 
 def plot_case(outcome, path):
@@ -243,10 +242,11 @@ def write_report(outcomes, folder):
         plot_test(members, folder / name)
         lines += [f"### {fmu}: {programme.TESTS[test].title}", "",
                   f"Thesis {members[0].case.figure}.", "", f"![{fmu} {test}]({name})", ""]
+    header, *table = rows(outcomes)
     lines += ["## Cases", "",
-              "| " + " | ".join(rows(outcomes)[0]) + " | plot |",
-              "|---" * (len(rows(outcomes)[0]) + 1) + "|"]
-    for outcome, row in zip(outcomes, rows(outcomes)[1:]):
+              "| " + " | ".join(header) + " | plot |",
+              "|---" * (len(header) + 1) + "|"]
+    for outcome, row in zip(outcomes, table):
         name = f"case_{outcome.case.fmu}_{outcome.case.name}.png"
         if outcome.reference is not None:
             plot_case(outcome, folder / name)

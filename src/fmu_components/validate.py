@@ -75,9 +75,8 @@ def compare(result, reference, stop_time):
                                                         rtol=0, atol=1e-9):
         return {}, 1.0, (f"{len(result)} samples to t = {result['time'][-1]:g} s, the reference "
                          f"has {len(reference)} to {reference['time'][-1]:g} s")
-    errors = {n: 100 * float(np.max(np.abs(result[n] - reference[n])))
-              / programme.column_scale(reference[n]) for n in names}
-    errors = {n: e if np.isfinite(e) else math.inf for n, e in errors.items()}  # NaN fails
+    errors = {n: 100 * e if np.isfinite(e) else math.inf  # NaN fails
+              for n, e in programme.column_errors(reference, result, names).items()}
     # validate_result nudges duplicate reference times in place: give it copies.
     outliers = float(validate_result(result[["time", *names]].copy(), reference.copy(),
                                      stop_time=stop_time))
