@@ -211,13 +211,18 @@ static fmi2Status settle(Guard *guard, fmi2Status status) {
     return guard->worst;
 }
 
+/* The opening of every call passed to pythonfmu: declares `guard`, returns for a missing
+   instance or one that failed fatally, and starts the call's worst status at fmi2OK. */
+#define GUARDED(c)                                                                          \
+    Guard *guard = (Guard *)(c);                                                            \
+    if (guard == NULL) return fmi2Error;                                                    \
+    if (guard->fatal) return refuse(guard, __func__);                                       \
+    guard->worst = fmi2OK
+
 /* Forward one call to pythonfmu and report the worst status seen during it. */
 #define FORWARD(c, call)                                                                    \
     do {                                                                                    \
-        Guard *guard = (Guard *)(c);                                                        \
-        if (guard == NULL) return fmi2Error;                                                \
-        if (guard->fatal) return refuse(guard, __func__);                                   \
-        guard->worst = fmi2OK;                                                              \
+        GUARDED(c);                                                                         \
         return settle(guard, engine.call);                                                  \
     } while (0)
 
@@ -287,9 +292,14 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                fmi2Real startTime, fmi2Boolean stopTimeDefined,
                                fmi2Real stopTime) {
-    if (c) ((Guard *)c)->last_successful_time = startTime;
-    FORWARD(c, setupExperiment(guard->engine, toleranceDefined, tolerance, startTime,
-                               stopTimeDefined, stopTime));
+    GUARDED(c);
+    fmi2Status status = settle(guard, engine.setupExperiment(guard->engine, toleranceDefined,
+                                                             tolerance, startTime,
+                                                             stopTimeDefined, stopTime));
+    /* Only an accepted call sets the time: a refused one (out of sequence: fmi2Error) did
+       nothing, so the last successful time stays, as in fmi2DoStep. */
+    if (status <= fmi2Warning) guard->last_successful_time = startTime;
+    return status;
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
@@ -391,10 +401,7 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                       fmi2Real communicationStepSize, fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
-    Guard *guard = (Guard *)c;
-    if (guard == NULL) return fmi2Error;
-    if (guard->fatal) return refuse(guard, __func__);
-    guard->worst = fmi2OK;
+    GUARDED(c);
     fmi2Status status = settle(guard, engine.doStep(guard->engine, currentCommunicationPoint,
                                                     communicationStepSize,
                                                     noSetFMUStatePriorToCurrentPoint));
