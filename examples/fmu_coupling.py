@@ -80,10 +80,8 @@ class FmuComponent:
         self.name = instance_name
         self.unilateral = unilateral  # a contact: no load at x <= 0, never a pulling load
         self.use_stiffness = use_stiffness
-        variables = {v.name: v for v in description.modelVariables}
-        self._vr = {name: v.valueReference for name, v in variables.items()}
+        self._vr = {v.name: v.valueReference for v in description.modelVariables}
         inputs = [v.name for v in description.modelVariables if v.causality == "input"]
-        self.deflection_name, self.rate_name = inputs
         self.output_names = [v.name for v in description.modelVariables
                              if v.causality == "output"]
         self.load_name = self.output_names[0]  # force or torque
@@ -188,8 +186,6 @@ class KelvinElement:
         self.x0 = static_deflection
         self.load0 = static_load
         self.unilateral = unilateral
-        self.started = False
-        self.time = None
         self.deflection = static_deflection
         self.outputs = {}
 
@@ -199,15 +195,11 @@ class KelvinElement:
         load = self.load0 + self.k * (deflection - self.x0) + self.c * rate
         return max(load, 0.0) if self.unilateral else load
 
-    def start(self, time, deflection, rate=0.0):
-        self.started = True
-        self.time = time
-        self.advance(time, deflection, rate)
-
     def advance(self, time, deflection, rate=0.0):
-        self.time = time
         self.deflection = deflection
         self.outputs = {self.load_name: self.host_load(deflection, rate), "stiffness": self.k}
+
+    start = advance  # no state of its own: starting is one evaluation
 
     @property
     def load(self):
@@ -271,7 +263,6 @@ class HostCoupling:
 
     def add(self, component, read_state):
         self.entries.append((component, read_state))
-        return component
 
     def start(self, time):
         for component, read_state in self.entries:

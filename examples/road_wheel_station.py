@@ -25,12 +25,13 @@ The model (x forward, y up, angles counter-clockwise):
 """
 
 import argparse
+import functools
 import math
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
+from scipy.integrate import cumulative_trapezoid
 from scipy.optimize import brentq
 
 import exudyn as exu
@@ -113,6 +114,22 @@ def static_tyre_compression(tyre):
                   xtol=1e-12)
 
 
+def static_tyre_point(fmu_dir=None):
+    """(compression, load) of one half-wheel's relaxed tyre at the static point, from an
+    instance of its own; computed once per FMU file and process."""
+    return _static_tyre_point(fmu_path("RoadWheelTyre", fmu_dir).resolve())
+
+
+@functools.lru_cache(maxsize=None)
+def _static_tyre_point(path):
+    tyre = FmuComponent(path, "tyre_static")
+    try:
+        compression = static_tyre_compression(tyre)
+        return compression, tyre.relaxed_outputs(compression)[tyre.load_name]
+    finally:
+        tyre.free()
+
+
 def torsion_bar_preload(tyre_load_per_wheel):
     """Bar torque at the static point: moment balance of arm and wheel about the pivot."""
     lever = ARM_LENGTH * math.cos(ARM_STATIC_ANGLE)
@@ -143,32 +160,27 @@ class Linearisation:
 class Station:
     """The station in exudyn with its two components; `run` drives it at one speed."""
 
-    def __init__(self, speed, profile, fmu_dir=None, linear=None, linearised=("tyre", "damper"),
-                 stiffness_coupled=STIFFNESS_COUPLED, tolerance=None):
-        """linear: a Linearisation, whose Kelvin elements replace the `linearised`
-        components; without it both components are the FMUs."""
+    def __init__(self, speed, profile, fmu_dir=None, linear=None,
+                 stiffness_coupled=STIFFNESS_COUPLED):
+        """linear: a Linearisation, whose Kelvin elements replace both components; without
+        it both components are the FMUs."""
         self.speed = speed
         self.profile = profile
         SC = exu.SystemContainer()
         mbs = SC.AddSystem()
         self.SC, self.mbs = SC, mbs
 
-        tyre = FmuComponent(fmu_path("RoadWheelTyre", fmu_dir), "tyre", tolerance=tolerance,
-                            unilateral=True, use_stiffness="tyre" in stiffness_coupled)
-        self.static_compression = static_tyre_compression(tyre)
-        static_tyre_load = tyre.relaxed_outputs(self.static_compression)[tyre.load_name]
-        linearised = linearised if linear else ()
-        if "tyre" in linearised:
-            tyre.free()
+        self.static_compression, static_tyre_load = static_tyre_point(fmu_dir)
+        if linear:
             stiffness, damping, _ = linear.tyre
             tyre = KelvinElement("tyre", "force", stiffness, damping, self.static_compression,
                                  static_tyre_load, unilateral=True)
-        if "damper" in linearised:
             stiffness, damping, _ = linear.damper
             damper = KelvinElement("damper", "torque", stiffness, damping, 0.0, 0.0)
         else:
+            tyre = FmuComponent(fmu_path("RoadWheelTyre", fmu_dir), "tyre", unilateral=True,
+                                use_stiffness="tyre" in stiffness_coupled)
             damper = FmuComponent(fmu_path("RotaryDamper", fmu_dir), "damper",
-                                  tolerance=tolerance,
                                   use_stiffness="damper" in stiffness_coupled)
         self.tyre, self.damper = tyre, damper
         self.bar_preload = torsion_bar_preload(TYRES_PER_WHEEL * static_tyre_load)
@@ -237,7 +249,7 @@ class Station:
                            mbs.AddMarker(MarkerBodyPosition(bodyNumber=wheel))],
             springForceUserFunction=self._tyre_force))
 
-        self.hull_node, self.arm_node, self.wheel_node = hull_node, arm_node, wheel_node
+        self.hull_node = hull_node
         self.coupling = HostCoupling(record=self._record)
         self.coupling.add(tyre, self._tyre_state)
         self.coupling.add(damper, self._damper_state)
@@ -288,22 +300,18 @@ class Station:
 SETTLE_TIME = 1.0  # s after the bump: the body's bounce dies out
 
 
-def simulate(speed, profile, step, fmu_dir=None, linear=None, linearised=("tyre", "damper"),
+def simulate(speed, profile, step, fmu_dir=None, linear=None,
              stiffness_coupled=STIFFNESS_COUPLED, end_time=None):
     """One drive at `speed` (m/s); histories plus the damper's energy balance."""
     if end_time is None:
         end_time = profile.end / speed + SETTLE_TIME
-    result = Station(speed, profile, fmu_dir, linear, linearised,
-                     stiffness_coupled).run(end_time, step)
+    result = Station(speed, profile, fmu_dir, linear, stiffness_coupled).run(end_time, step)
     # Work done on the damper, and what its dashpot dissipated (FMU only): J.
-    result["damper_work"] = cumulative_trapezoid(result["damper_torque"], result["arm_angle"])
+    result["damper_work"] = cumulative_trapezoid(result["damper_torque"], result["arm_angle"],
+                                                 initial=0)
     result["dashpot_dissipation"] = cumulative_trapezoid(
-        result["dashpot_torque"] * result["rotor_rate"], result["time"])
+        result["dashpot_torque"] * result["rotor_rate"], result["time"], initial=0)
     return result
-
-
-def cumulative_trapezoid(y, x):
-    return np.concatenate(([0.0], np.cumsum(0.5 * (y[1:] + y[:-1]) * np.diff(x))))
 
 
 def peaks(result, ripple_from=None):
@@ -401,14 +409,16 @@ def coupling_study(speed, profile, linear, fmu_dir=None, steps=STUDY_STEPS,
         reference_peaks = peaks(reference)
 
         def errors(result):
+            result_peaks = peaks(result)
             found = {key: 100 * np.max(np.abs(np.interp(grid, result["time"], result[key])
                                               - np.interp(grid, reference["time"],
                                                           reference[key])))
                      / np.ptp(reference[key]) for key in STUDY_KEYS}
-            found.update({key: 100 * abs(peaks(result)[key] / reference_peaks[key] - 1)
+            found.update({key: 100 * abs(result_peaks[key] / reference_peaks[key] - 1)
                           for key in STUDY_PEAKS})
             return found
 
+        table = {}
         for name, run in variants.items():
             for step in steps:
                 try:
@@ -418,15 +428,16 @@ def coupling_study(speed, profile, linear, fmu_dir=None, steps=STUDY_STEPS,
                     # grows until the FMU refuses a step (exudyn passes the refusal on
                     # as its own error).
                     table[name, step] = str(failure).splitlines()[0]
+        return table
 
-    table = {}
-    study({name: lambda step, coupled=coupled: simulate(
+    table = study({name: lambda step, coupled=coupled: simulate(
         speed, profile, step, fmu_dir, stiffness_coupled=coupled, end_time=end_time)
         for name, coupled in STUDY_VARIANTS.items()},
         simulate(speed, profile, reference_step, fmu_dir, end_time=end_time))
-    study({LINEAR_VARIANT: lambda step: simulate(speed, profile, step, fmu_dir, linear,
-                                                 end_time=end_time)},
-          simulate(speed, profile, reference_step, fmu_dir, linear, end_time=end_time))
+    table.update(study({LINEAR_VARIANT: lambda step: simulate(speed, profile, step, fmu_dir,
+                                                              linear, end_time=end_time)},
+                       simulate(speed, profile, reference_step, fmu_dir, linear,
+                                end_time=end_time)))
     return table
 
 
@@ -490,10 +501,8 @@ def main(argv=None):
     args.out.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
 
-    tyre = FmuComponent(fmu_path("RoadWheelTyre", args.fmu_dir), "tyre_static")
-    linear = Linearisation(args.fmu_dir, static_tyre_compression(tyre), args.tyre_sine,
+    linear = Linearisation(args.fmu_dir, static_tyre_point(args.fmu_dir)[0], args.tyre_sine,
                            args.damper_sine)
-    tyre.free()
     if args.coupling_study:
         table = coupling_study(args.speeds[0], profile, linear, args.fmu_dir,
                                end_time=args.end_time)

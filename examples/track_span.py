@@ -51,17 +51,17 @@ DEFAULT_STEP = 5e-4  # s
 
 
 class TrackSpan:
-    def __init__(self, links=10, lift=0.01, frequency=6.0, fmu_dir=None, tolerance=None):
+    def __init__(self, links=10, lift=0.01, frequency=6.0, fmu_dir=None):
         self.links, self.lift, self.frequency = links, lift, frequency
         SC = exu.SystemContainer()
         mbs = SC.AddSystem()
         self.SC, self.mbs = SC, mbs
         joints = links + 1
         self.coupling = HostCoupling(record=self._record)
-        self.radial = [FmuComponent(fmu_path("TrackBushRadial", fmu_dir), f"radial_{j}",
-                                    tolerance=tolerance) for j in range(joints)]
-        self.torsion = [FmuComponent(fmu_path("TrackBushTorsion", fmu_dir), f"torsion_{j}",
-                                     tolerance=tolerance) for j in range(joints)]
+        self.radial = [FmuComponent(fmu_path("TrackBushRadial", fmu_dir), f"radial_{j}")
+                       for j in range(joints)]
+        self.torsion = [FmuComponent(fmu_path("TrackBushTorsion", fmu_dir), f"torsion_{j}")
+                        for j in range(joints)]
         # The straight span under tension, before gravity: each bush deflected to carry it.
         seat_gap = self._deflection_for(self.radial[0], TENSION)
 
@@ -78,7 +78,6 @@ class TrackSpan:
         # of each joint, and (left seat, rotation) of the body right of it.
         left = (seat(sprocket, 0.0), coordinate(ground, 2))
         self.link_nodes = []
-        self.radial_connectors, self.torsion_connectors = [], []
         for j in range(joints):
             if j < links:
                 x_centre = j * PITCH + (j + 1) * seat_gap + 0.5 * PITCH
@@ -118,7 +117,6 @@ class TrackSpan:
             offsetUserFunction=lambda mbs, t, item, offset: self.lift_at(t)))
         mbs.AddObject(CoordinateConstraint(markerNumbers=[coordinate(ground, 2),
                                                           coordinate(node, 2)]))
-        self.wheel_node = node
         return seat(body, 0.0), coordinate(node, 2)
 
     def lift_at(self, t):
@@ -146,8 +144,6 @@ class TrackSpan:
             markerNumbers=[left[0], right[0]], springForceUserFunction=radial_force))
         torsion_connector = mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
             markerNumbers=[left[1], right[1]], springForceUserFunction=torsion_torque))
-        self.radial_connectors.append(radial_connector)
-        self.torsion_connectors.append(torsion_connector)
 
         def radial_state():
             return seat_deflection(*connector_state(mbs, radial_connector))
