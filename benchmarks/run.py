@@ -33,16 +33,15 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path[:0] = [str(ROOT / "tests"), str(ROOT / "benchmarks"), str(ROOT / "src")]
+sys.path[:0] = [str(ROOT / "tests"), str(ROOT / "src")]
 
 from fmpy import simulate_fmu  # noqa: E402
 
 from fmu_components import reference  # noqa: E402
 from fmu_components.runtime.catalog import COMPONENTS  # noqa: E402
 from fmu_components.runtime.cosim import CoSimulation  # noqa: E402
-from fmu_components.signals import input_table, secant_rates, sine, time_grid  # noqa: E402
+from fmu_components.signals import THESIS_SINES, input_table, thesis_sine, time_grid  # noqa: E402
 from fmu_runner import FmuRunner  # noqa: E402
-from scale import SINES  # noqa: E402
 
 STEP = 1e-3
 FLOOR = "Floor"
@@ -76,13 +75,6 @@ def build_floor(directory):
     return Path(FmuBuilder.build_FMU(script, dest=directory))
 
 
-def standard_input(name, duration, step=STEP):
-    mean, amplitude, frequency = SINES.get(name, (0.0, 1e-3, 1.0))
-    t = time_grid(duration, step)
-    x = sine(t, mean, amplitude, frequency)
-    return t, x, secant_rates(t, x)
-
-
 def timer_overhead():
     """The cost of one perf_counter call: each timed doStep pays for one (the time between
     reading the clock before the call and after it includes one clock call's return and
@@ -100,9 +92,9 @@ def timer_overhead():
 class Timed:
     """One FMU instance on the standard input, stepped in blocks."""
 
-    def __init__(self, path, name, steps, unzip_dir=None):
-        self.runner = FmuRunner(path, unzip_dir, instance_name=f"bench-{name}")
-        self.t, self.x, self.v = standard_input(name, steps * STEP)
+    def __init__(self, path, name, steps):
+        self.runner = FmuRunner(path, instance_name=f"bench-{name}")
+        self.t, self.x, self.v = thesis_sine(name, steps * STEP, STEP)
         self.k = 0
         self.runner.initialize(self.x[0], self.v[0])
         self.xs, self.vs = self.x.tolist(), self.v.tolist()
@@ -151,8 +143,8 @@ def cost_table(fmus, floor, repeats, block_steps):
 def model_alone(name, repeats, block_steps):
     """Microseconds per set_inputs + do_step + outputs through the Python model."""
     definition = COMPONENTS[name]
-    model = definition.build_model({p.name: p.start for p in definition.parameters})
-    t, x, v = standard_input(name, (repeats * block_steps + 1) * STEP)
+    model = definition.build_model(definition.default_parameters())
+    t, x, v = thesis_sine(name, (repeats * block_steps + 1) * STEP, STEP)
     xs, vs = x.tolist(), v.tolist()
     cosim = CoSimulation(model, definition.default_experiment["tolerance"], 0.0, xs[0], vs[0])
     samples = []
@@ -171,7 +163,7 @@ def model_alone(name, repeats, block_steps):
 def accuracy_against_cost(fmus, steps, periods):
     rows = []
     for name, path in fmus.items():
-        mean, amplitude, frequency = SINES[name]
+        mean, amplitude, frequency = THESIS_SINES[name]
         omega = 2 * math.pi * frequency
         duration = periods / frequency
         fine = time_grid(duration, min(steps) / 4)
@@ -180,7 +172,7 @@ def accuracy_against_cost(fmus, steps, periods):
         output = COMPONENTS[name].outputs[0].name
         scale = float(np.ptp(smooth[output]))
         for h in steps:
-            t, x, v = standard_input(name, duration, h)
+            t, x, v = thesis_sine(name, duration, h)
             started = time.perf_counter()
             result = simulate_fmu(str(path), stop_time=t[-1], output_interval=h,
                                   input=input_table(name, t, x), output=[output])
@@ -195,13 +187,9 @@ def accuracy_against_cost(fmus, steps, periods):
 
 
 def vehicle_scale(fmus, counts, duration):
-    from fmpy import extract
-
     fleet = []
     for name, n in counts.items():
-        unzipped = extract(str(fmus[name]))
-        fleet += [Timed(fmus[name], name, int(round(duration / STEP)) + 2, unzipped)
-                  for _ in range(n)]
+        fleet += [Timed(fmus[name], name, int(round(duration / STEP)) + 2) for _ in range(n)]
     steps = int(round(duration / STEP))
     started = time.perf_counter()
     for k in range(steps):
@@ -232,14 +220,14 @@ def spread(samples):
     return f"{statistics.median(samples):.2f} ({min(samples):.2f}-{max(samples):.2f})"
 
 
-def report(costs, alone, accuracy, scale, profile_text, floor_name=FLOOR):
+def report(costs, alone, accuracy, scale, profile_text):
     lines = ["# Benchmark", "",
              "Medians over repetitions, range in brackets; ratios are taken within each "
              "repetition against the floor measured in it.", "",
              "## Cost at h = 1 ms, standard input", "",
              "| FMU | doStep (us) | doStep / floor | set + step + get (us) | cycle / floor | model alone (us) |",
              "|---|---|---|---|---|---|"]
-    floor = costs[floor_name]
+    floor = costs[FLOOR]
     for name, result in costs.items():
         ratio_step = [a / b for a, b in zip(result["do_step"], floor["do_step"])]
         ratio_cycle = [a / b for a, b in zip(result["cycle"], floor["cycle"])]

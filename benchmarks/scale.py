@@ -23,20 +23,12 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from fmpy import extract  # noqa: E402
-
-from fmu_components.signals import secant_rates, sine, time_grid  # noqa: E402
+from fmu_components.signals import THESIS_SINES, thesis_sine  # noqa: E402
 from fmu_runner import FmuRunner  # noqa: E402
 
 STEP = 1e-3
 VEHICLE_MIX = {"RoadWheelTyre": 24, "TrackBushRadial": 185, "TrackBushTorsion": 185,
                "RotaryDamper": 6}
-SINES = {  # mean, amplitude, frequency: inside the thesis ranges
-    "RoadWheelTyre": (3.5e-3, 1e-3, 1.0),
-    "TrackBushRadial": (0.3e-3, 0.1e-3, 1.0),
-    "TrackBushTorsion": (math.radians(10.0), math.radians(5.0), 1.0),
-    "RotaryDamper": (0.0, 0.21, 0.75),
-}
 VARIANTS = 4  # instances of one FMU get one of four phases
 
 
@@ -49,10 +41,8 @@ def rss_mib():
 
 
 def variant_input(name, variant, duration):
-    mean, amplitude, frequency = SINES[name]
-    t = time_grid(duration, STEP)
-    x = sine(t, mean, amplitude, frequency, phase=2 * math.pi * variant / VARIANTS)
-    return x, secant_rates(t, x)
+    _, x, v = thesis_sine(name, duration, STEP, phase=2 * math.pi * variant / VARIANTS)
+    return x, v
 
 
 def mix(count):
@@ -65,13 +55,12 @@ def mix(count):
 
 def instances(fmu_dir, count, duration):
     counts = mix(count)
-    unzipped = {name: extract(str(fmu_dir / f"{name}.fmu")) for name in counts}
     inputs = {(name, k): variant_input(name, k, duration) for name in counts for k in range(VARIANTS)}
 
     # One instance at a time: the results every instance of the mix must reproduce.
     single = {}
     for (name, k), (x, v) in inputs.items():
-        runner = FmuRunner(fmu_dir / f"{name}.fmu", unzipped[name], f"single-{name}-{k}")
+        runner = FmuRunner(fmu_dir / f"{name}.fmu", f"single-{name}-{k}")
         runner.initialize(x[0], v[0])
         single[(name, k)] = runner.run(x, v, STEP)
         runner.free()
@@ -81,7 +70,7 @@ def instances(fmu_dir, count, duration):
     fleet = []
     for name, n in counts.items():
         for i in range(n):
-            runner = FmuRunner(fmu_dir / f"{name}.fmu", unzipped[name], f"{name}-{i}")
+            runner = FmuRunner(fmu_dir / f"{name}.fmu", f"{name}-{i}")
             x, v = inputs[(name, i % VARIANTS)]
             runner.initialize(x[0], v[0])
             fleet.append((runner, name, i % VARIANTS))
@@ -113,7 +102,7 @@ def instances(fmu_dir, count, duration):
 
 def long_run(fmu_dir, steps):
     name = "TrackBushTorsion"
-    mean, amplitude, frequency = SINES[name]
+    mean, amplitude, frequency = THESIS_SINES[name]
     period = int(round(1.0 / frequency / STEP))
     runner = FmuRunner(fmu_dir / f"{name}.fmu", instance_name="long-run")
     omega = 2 * math.pi * frequency

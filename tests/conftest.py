@@ -1,5 +1,4 @@
 import importlib.util
-import math
 from pathlib import Path
 
 import numpy as np
@@ -9,14 +8,6 @@ from fmu_components.runtime.catalog import COMPONENTS
 
 ROOT = Path(__file__).resolve().parents[1]
 FMU_NAMES = sorted(COMPONENTS)
-
-# A sine inside the thesis range for each component: (mean, amplitude, frequency in Hz).
-THESIS_SINES = {
-    "RoadWheelTyre": (3.5e-3, 1e-3, 1.0),
-    "TrackBushRadial": (0.3e-3, 0.1e-3, 1.0),
-    "TrackBushTorsion": (math.radians(10.0), math.radians(5.0), 1.0),
-    "RotaryDamper": (0.0, 0.21, 0.75),
-}
 
 
 def _load_build_script():
@@ -35,7 +26,7 @@ def built_fmus(tmp_path_factory):
 
 
 def default_parameters(name):
-    return {p.name: p.start for p in COMPONENTS[name].parameters}
+    return COMPONENTS[name].default_parameters()
 
 
 def peak_to_peak(values):

@@ -1,6 +1,10 @@
 """Drive one FMU instance step by step through fmpy's FMU2Slave."""
 
+import atexit
+import shutil
+import tempfile
 from ctypes import c_double, c_uint
+from pathlib import Path
 
 import numpy as np
 from fmpy import calloc, extract, free, read_model_description
@@ -10,13 +14,26 @@ from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFr
 
 OK, WARNING, DISCARD, ERROR, FATAL = range(5)
 
+_EXTRACTED = {}  # (FMU path, modification time) -> its extraction, shared by the process
+
+
+def _extracted(path):
+    """The FMU extracted once per process (again if the file changes), removed at exit."""
+    path = Path(path).resolve()
+    key = (path, path.stat().st_mtime_ns)
+    if key not in _EXTRACTED:
+        directory = tempfile.mkdtemp(prefix=f"fmu_runner_{path.stem}_")
+        atexit.register(shutil.rmtree, directory, ignore_errors=True)
+        _EXTRACTED[key] = extract(str(path), directory)
+    return _EXTRACTED[key]
+
 
 class FmuRunner:
     """One instance; every message it logs lands in `messages` as (status, text)."""
 
-    def __init__(self, path, unzip_dir=None, instance_name="instance"):
+    def __init__(self, path, instance_name="instance"):
         self.description = read_model_description(str(path))
-        self.unzip_dir = unzip_dir or extract(str(path))
+        self.unzip_dir = _extracted(path)
         self.vr = {v.name: v.valueReference for v in self.description.modelVariables}
         self.outputs = [v.name for v in self.description.modelVariables if v.causality == "output"]
         self.inputs = [v.name for v in self.description.modelVariables if v.causality == "input"]
@@ -50,14 +67,12 @@ class FmuRunner:
         vrs = (c_uint * n)(*[self.vr[name] for name in names])
         return self.status(self.fmu.fmi2SetReal, self.fmu.component, vrs, n, (c_double * n)(*values))
 
-    def initialize(self, deflection, rate, start_time=0.0, tolerance=None, parameters=None):
-        self.fmu.setupExperiment(tolerance=tolerance, startTime=start_time)
+    def initialize(self, deflection, rate):
+        self.fmu.setupExperiment(startTime=0.0)
         self.fmu.enterInitializationMode()
-        if parameters:
-            self.fmu.setReal([self.vr[n] for n in parameters], list(parameters.values()))
         self.set_inputs(deflection, rate)
         self.fmu.exitInitializationMode()
-        self.time = start_time
+        self.time = 0.0
 
     def set_inputs(self, deflection, rate):
         self.fmu.setReal([self.vr[self.inputs[0]], self.vr[self.inputs[1]]], [deflection, rate])

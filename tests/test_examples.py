@@ -96,8 +96,6 @@ def test_harmonic_equivalents_of_the_fmus_are_physical(built_fmus):
 
 @pytest.fixture(scope="module")
 def station_runs(built_fmus):
-    if not HAVE_EXUDYN:
-        pytest.skip('exudyn is not installed: pip install -e ".[examples]"')
     import road_wheel_station as station
 
     fmu_dir = built_fmus["RoadWheelTyre"].parent
@@ -168,8 +166,6 @@ def test_station_damper_dissipates_energy(station_runs):
 
 @pytest.fixture(scope="module")
 def span_run(built_fmus):
-    if not HAVE_EXUDYN:
-        pytest.skip('exudyn is not installed: pip install -e ".[examples]"')
     import track_span
 
     span = track_span.TrackSpan(links=10, fmu_dir=built_fmus["TrackBushRadial"].parent)

@@ -12,9 +12,9 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
 from fmu_components.runtime.catalog import COMPONENTS
-from fmu_components.signals import input_table, secant_rates, sine, time_grid
+from fmu_components.signals import THESIS_SINES, input_table, thesis_sine, time_grid
 
-from conftest import FMU_NAMES, THESIS_SINES, peak_to_peak
+from conftest import FMU_NAMES, peak_to_peak
 from fmu_runner import FmuRunner
 
 
@@ -79,15 +79,9 @@ def test_fmu_resources_import_only_the_standard_library(built_fmus, name):
                     assert module.split(".")[0] in allowed, f"{source} imports {module}"
 
 
-def sine_case(name, stop_time, step, frequency=None):
-    mean, amplitude, default_frequency = THESIS_SINES[name]
-    t = time_grid(stop_time, step)
-    return t, sine(t, mean, amplitude, frequency or default_frequency)
-
-
 @pytest.mark.parametrize("name", FMU_NAMES)
 def test_sine_simulation_gives_finite_outputs(built_fmus, name):
-    t, x = sine_case(name, 2.0, 1e-3)
+    t, x, _ = thesis_sine(name, 2.0, 1e-3)
     result = simulate_fmu(str(built_fmus[name]), stop_time=t[-1], output_interval=1e-3,
                           input=input_table(name, t, x))
     for output in COMPONENTS[name].outputs:
@@ -101,8 +95,7 @@ def test_results_at_steps_1e_4_1e_3_1e_2_agree_at_common_times(built_fmus, name)
     the integrator's tolerance. The path is a sine sampled every 10 ms and straight between
     samples, so every step size sees the same deflection history."""
     coarse = 1e-2
-    t_coarse, x_coarse = sine_case(name, 2.0, coarse)
-    v_coarse = secant_rates(t_coarse, x_coarse)
+    t_coarse, x_coarse, v_coarse = thesis_sine(name, 2.0, coarse)
     results = {}
     for h in (1e-4, 1e-3, 1e-2):
         t = time_grid(2.0, h)
@@ -122,8 +115,7 @@ def test_results_at_steps_1e_4_1e_3_1e_2_agree_at_common_times(built_fmus, name)
 
 @pytest.mark.parametrize("name", FMU_NAMES)
 def test_state_save_and_restore_continue_identically(built_fmus, name):
-    t, x = sine_case(name, 1.0, 1e-3)
-    v = secant_rates(t, x)
+    t, x, v = thesis_sine(name, 1.0, 1e-3)
     first = FmuRunner(built_fmus[name], instance_name="first")
     first.initialize(x[0], v[0])
     first.run(x[:401], v[:401], 1e-3)
@@ -154,13 +146,13 @@ def test_state_save_and_restore_continue_identically(built_fmus, name):
 @pytest.mark.parametrize("name", FMU_NAMES)
 def test_each_closed_cycle_dissipates_energy(built_fmus, name):
     """Passivity: the work done on the component over every closed cycle is >= 0."""
-    mean, amplitude, frequency = THESIS_SINES[name]
+    frequency = THESIS_SINES[name][2]
     step = 1e-3
     cycles = 3
-    t, x = sine_case(name, cycles / frequency, step)
+    t, x, v = thesis_sine(name, cycles / frequency, step)
     runner = FmuRunner(built_fmus[name])
-    runner.initialize(x[0], secant_rates(t, x)[0])
-    force = np.concatenate([[runner.read()[0]], runner.run(x, secant_rates(t, x), step)[:, 0]])
+    runner.initialize(x[0], v[0])
+    force = np.concatenate([[runner.read()[0]], runner.run(x, v, step)[:, 0]])
     runner.free()
     per_cycle = int(round(1 / frequency / step))
     for c in range(cycles):
@@ -172,8 +164,7 @@ def test_each_closed_cycle_dissipates_energy(built_fmus, name):
 
 @pytest.mark.parametrize("name", FMU_NAMES)
 def test_reset_returns_to_the_initial_state(built_fmus, name):
-    t, x = sine_case(name, 0.2, 1e-3)
-    v = secant_rates(t, x)
+    t, x, v = thesis_sine(name, 0.2, 1e-3)
     runner = FmuRunner(built_fmus[name])
     runner.initialize(x[0], v[0])
     before = runner.run(x, v, 1e-3)

@@ -179,7 +179,7 @@ def test_failure_comes_back_as_a_message_with_the_state_untouched():
 @pytest.mark.parametrize("duration", [1e-6, 1e-3, 1.0])
 def test_damper_system_integrates_any_step_from_1e_6_to_1_s(duration):
     """The stiffest system here (rotor mode ~20 us) over one held-rate interval."""
-    damper = ROTARY_DAMPER.build_model({p.name: p.start for p in ROTARY_DAMPER.parameters})
+    damper = ROTARY_DAMPER.build_model(ROTARY_DAMPER.default_parameters())
     integrator = Rosenbrock(1e-4)
     y = [0.0, 0.0]  # gas-spring coordinate z, rotor rate; the arm turns at 1 rad/s
     assert integrator.integrate(damper, y, 1.0, duration) is None
@@ -193,7 +193,7 @@ def test_damper_system_integrates_any_step_from_1e_6_to_1_s(duration):
 
 def _model(name):
     definition = COMPONENTS[name]
-    return definition.build_model({p.name: p.start for p in definition.parameters})
+    return definition.build_model(definition.default_parameters())
 
 
 # States and held inputs on both sides of every |.| in the equations, for each system.

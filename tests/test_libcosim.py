@@ -7,13 +7,12 @@ import numpy as np
 import pytest
 
 from fmu_components.runtime.catalog import COMPONENTS
+from fmu_components.signals import thesis_sine
 
-from conftest import FMU_NAMES, THESIS_SINES, default_parameters, peak_to_peak
-from fmu_components.signals import secant_rates, sine, time_grid
+from conftest import FMU_NAMES, default_parameters, peak_to_peak
 from fmu_runner import FmuRunner
 
 libcosimpy = pytest.importorskip("libcosimpy")
-from libcosimpy.CosimEnums import CosimVariableType  # noqa: E402
 from libcosimpy.CosimExecution import CosimExecution  # noqa: E402
 from libcosimpy.CosimLogging import CosimLogLevel, log_output_level  # noqa: E402
 from libcosimpy.CosimManipulator import CosimManipulator  # noqa: E402
@@ -46,11 +45,8 @@ def run_in_libcosim(path, name, deflection, rate, step):
 
 @pytest.mark.parametrize("name", FMU_NAMES)
 def test_libcosim_agrees_with_fmpy(built_fmus, name):
-    mean, amplitude, frequency = THESIS_SINES[name]
     step = 1e-3
-    t = time_grid(2.0, step)
-    x = sine(t, mean, amplitude, frequency)
-    v = secant_rates(t, x)
+    t, x, v = thesis_sine(name, 2.0, step)
     cosim = run_in_libcosim(built_fmus[name], name, x, v, step)
     runner = FmuRunner(built_fmus[name])
     runner.initialize(x[0], v[0])

@@ -9,32 +9,26 @@ import pytest
 from fmpy.fmi2 import fmi2LastSuccessfulTime
 
 from fmu_components.runtime.catalog import COMPONENTS
-from fmu_components.signals import secant_rates, sine, time_grid
+from fmu_components.signals import THESIS_SINES, thesis_sine
 
-from conftest import FMU_NAMES, THESIS_SINES
+from conftest import FMU_NAMES
 from fmu_runner import DISCARD, ERROR, OK, WARNING, FmuRunner
 
 STEP = 1e-3
+STARTED = 200  # steps into the 0.4 s sine history where `started` hands over
 
 
-def sine_history(name, stop_time=0.4):
-    mean, amplitude, frequency = THESIS_SINES[name]
-    t = time_grid(stop_time, STEP)
-    x = sine(t, mean, amplitude, frequency)
-    return t, x, secant_rates(t, x)
-
-
-def started(path, name, steps=200):
-    """An instance run `steps` steps into a sine, and the rest of the history."""
-    t, x, v = sine_history(name)
+def started(path, name):
+    """An instance run STARTED steps into a sine, and the rest of the history."""
+    t, x, v = thesis_sine(name, 0.4, STEP)
     runner = FmuRunner(path)
     runner.initialize(x[0], v[0])
-    runner.run(x[:steps + 1], v[:steps + 1], STEP)
-    return runner, x[steps:], v[steps:]
+    runner.run(x[:STARTED + 1], v[:STARTED + 1], STEP)
+    return runner, x[STARTED:], v[STARTED:]
 
 
-def uninterrupted(path, name, steps=200):
-    runner, x, v = started(path, name, steps)
+def uninterrupted(path, name):
+    runner, x, v = started(path, name)
     result = runner.run(x, v, STEP)
     runner.free()
     return result
@@ -88,7 +82,7 @@ NONSENSE = {
 @pytest.mark.parametrize("name, parameter, value",
                          [(n, p, v) for n in FMU_NAMES for p, v in NONSENSE[n]])
 def test_nonsense_parameter_is_refused_when_set(built_fmus, name, parameter, value):
-    t, x, v = sine_history(name)
+    t, x, v = thesis_sine(name, 0.4, STEP)
     runner = FmuRunner(built_fmus[name])
     runner.fmu.setupExperiment(startTime=0.0)
     runner.fmu.enterInitializationMode()
@@ -134,7 +128,7 @@ def test_feeding_torque_into_the_dashpot_is_refused(built_fmus):
 def test_calls_out_of_sequence_are_refused(built_fmus, name):
     runner = FmuRunner(built_fmus[name])
     fmu, vr = runner.fmu, runner.vr
-    deflection, parameter, output = runner.inputs[0], COMPONENTS[name].parameters[0].name, runner.outputs[0]
+    parameter, output = COMPONENTS[name].parameters[0].name, runner.outputs[0]
     assert runner.status(fmu.doStep, 0.0, STEP) == ERROR
     assert "fmi2DoStep is not allowed in state Instantiated" in last_error(runner)
     assert runner.status(fmu.exitInitializationMode) == ERROR

@@ -8,7 +8,7 @@ import pytest
 from fmu_components import reference
 from fmu_components.runtime.catalog import COMPONENTS
 from fmu_components.runtime.cosim import CoSimulation
-from fmu_components.signals import secant_rates, sine, time_grid
+from fmu_components.signals import THESIS_SINES, secant_rates, sine, thesis_sine, time_grid
 
 from conftest import default_parameters, peak_to_peak
 
@@ -56,12 +56,9 @@ def test_torsion_torque_is_near_zero_at_the_live_angle():
 def test_tangent_stiffness_is_the_slope_under_fast_motion(name, direction):
     """From a state inside a hysteresis loop, a small fast move changes the force by
     stiffness * dx (the dashpots act rate-independently at |v| >> xi)."""
-    mean, amplitude = {"RoadWheelTyre": (3.5e-3, 1e-3), "TrackBushRadial": (0.3e-3, 0.1e-3),
-                       "TrackBushTorsion": (math.radians(10), math.radians(5))}[name]
+    amplitude = THESIS_SINES[name][1]
     model = COMPONENTS[name].build_model(default_parameters(name))
-    t = time_grid(1.3, 1e-3)
-    x = sine(t, mean, amplitude, 1.0)
-    v = secant_rates(t, x)
+    t, x, v = thesis_sine(name, 1.3, 1e-3)
     cosim = CoSimulation(model, 1e-10, 0.0, x[0], v[0])
     for k in range(len(t) - 1):
         cosim.set_inputs(x[k], v[k])

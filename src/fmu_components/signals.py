@@ -21,10 +21,19 @@ import numpy as np
 
 from .runtime.catalog import COMPONENTS
 
+# The standard test input of each component, a sine inside the range the thesis measured:
+# (mean, amplitude, frequency in Hz), SI units; the damper's is test A (Table 11.2-1).
+THESIS_SINES = {
+    "RoadWheelTyre": (3.5e-3, 1e-3, 1.0),
+    "TrackBushRadial": (0.3e-3, 0.1e-3, 1.0),
+    "TrackBushTorsion": (math.radians(10.0), math.radians(5.0), 1.0),
+    "RotaryDamper": (0.0, 0.21, 0.75),
+}
 
-def time_grid(stop_time, step, start_time=0.0):
-    n = int(round((stop_time - start_time) / step))
-    return start_time + np.arange(n + 1) * step
+
+def time_grid(stop_time, step):
+    n = int(round(stop_time / step))
+    return np.arange(n + 1) * step
 
 
 def secant_rates(times, deflection):
@@ -37,15 +46,23 @@ def sine(times, mean, amplitude, frequency, phase=0.0):
     return mean + amplitude * np.sin(2 * math.pi * frequency * np.asarray(times) + phase)
 
 
+def thesis_sine(name, stop_time, step, phase=0.0):
+    """The THESIS_SINES input of a component: times, deflection and secant rates."""
+    mean, amplitude, frequency = THESIS_SINES[name]
+    t = time_grid(stop_time, step)
+    x = sine(t, mean, amplitude, frequency, phase)
+    return t, x, secant_rates(t, x)
+
+
 def dual_sine(times, mean, components):
     """mean + sum of amplitude*sin(2*pi*f*t) over components [(amplitude, f)]."""
     t = np.asarray(times)
     return mean + sum(a * np.sin(2 * math.pi * f * t) for a, f in components)
 
 
-def ramp_and_hold(times, start, end, ramp_time, ramp_start=0.0):
-    """start until ramp_start, a straight ramp to end over ramp_time, then hold."""
-    fraction = np.clip((np.asarray(times) - ramp_start) / ramp_time, 0.0, 1.0)
+def ramp_and_hold(times, start, end, ramp_time):
+    """A straight ramp from start at time 0 to end over ramp_time, then hold."""
+    fraction = np.clip(np.asarray(times) / ramp_time, 0.0, 1.0)
     return start + (end - start) * fraction
 
 

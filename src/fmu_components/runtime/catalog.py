@@ -65,6 +65,10 @@ class ComponentDefinition:
     def variables(self):
         return list(self.inputs) + list(self.outputs) + list(self.parameters)
 
+    def default_parameters(self):
+        """The thesis value of every parameter, by name."""
+        return {p.name: p.start for p in self.parameters}
+
     def check_parameters(self, values):
         """A message naming the first parameter (or combination) that makes no physical
         sense, else None."""
@@ -104,8 +108,8 @@ def _rubber_component(name, description, *, deflection, deflection_meaning, load
         Variable(f"{load}_elastic", "output", load_unit, "Elastic part Fe(x) (section 5.3.1)"),
         Variable(f"{load}_viscoelastic", "output", load_unit,
                  "Viscoelastic part f(x)*(FA + FB) of the three Maxwell elements (section 6.4)"),
-        Variable("stiffness", "output", stiffness, f"Instantaneous tangent stiffness dF/dx "
-                 f"in the direction of motion (mean of loading and unloading at zero rate)",
+        Variable("stiffness", "output", stiffness, "Instantaneous tangent stiffness dF/dx "
+                 "in the direction of motion (mean of loading and unloading at zero rate)",
                  display_unit=f"{load_unit}/{display}"),
     )
     parameters = []
