@@ -29,7 +29,7 @@ by rejecting and shrinking steps.
 import math
 
 from .hermite import MonotoneCubic
-from .integrator import RhsSource
+from .integrator import RhsSource, compile_start
 
 Z_LIMIT = 18.0  # tanh(18) = 1 - 4.6e-16: beyond it xd is C2 to the last bit
 
@@ -49,6 +49,7 @@ class RotaryDamper:
         # Typical magnitudes for the absolute tolerance: z is dimensionless, and the rotor
         # rate is taken on the scale of 1 rad/s (the thesis rig's range, section 11.0).
         self.state_scale = [1.0, 1.0]
+        self._start = compile_start(self.rhs_source(), self.integrated_size)
 
     def initial_state(self, theta, omega):
         """Rotor node moving with the arm: zero gas deflection, tau(0) = 0 (spec 3)."""
@@ -65,10 +66,9 @@ class RotaryDamper:
         return None
 
     def _z_at(self, state, theta):
-        """z for arm angle theta: the state's own z unless a host moved the arm by a jump."""
-        if theta == state[2]:
-            return state[0]
-        return math.atanh(self._unchecked_deflection(state, theta) / self.gas_limit)
+        """z for arm angle theta: the state's own z unless the arm has moved away from
+        theta_z (see rhs_source)."""
+        return self._start(state, theta)[0]
 
     def torque(self, z):
         return self.gas_force * math.sinh(2.0 * z)  # Eq. A5-16 with xd = C2 tanh(z)
@@ -86,7 +86,16 @@ class RotaryDamper:
                    f"f0 = (u - Y1) * cosh_z * cosh_z / {self.gas_limit!r}",
                    f"f1 = ({self.gas_force!r} * sinh(2.0 * Y0) - dashpot(Y1)) / {self.rotor_inertia!r}"],
             region=f"abs(Y0) < {Z_LIMIT!r}",  # inside()
-            namespace={"cosh": math.cosh, "sinh": math.sinh, "dashpot": self.dashpot.value})
+            namespace={"cosh": math.cosh, "sinh": math.sinh, "dashpot": self.dashpot.value,
+                       "tanh": math.tanh, "atanh": math.atanh},
+            # z at the arm angle x: the state's own unless the arm has moved away from
+            # theta_z, as a host's angle and rate from its own integrator always do by
+            # round-off, or by a jump: then the gas spring takes up the difference,
+            # xd = C2 tanh(z) + (x - theta_z).
+            start=["y0 = state[0] if x == state[2] else atanh("
+                   f"({self.gas_limit!r} * tanh(state[0]) + (x - state[2])) / {self.gas_limit!r})",
+                   "y1 = state[1]"],
+            exact=["state[2] = x + u * h"])
 
     def jacobian(self, y, omega):
         z, rotor_rate = y

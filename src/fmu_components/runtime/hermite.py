@@ -64,32 +64,38 @@ class MonotoneCubic:
                 d[k] = (w1 + w2) / (w1 / m[k - 1] + w2 / m[k])
         d[0] = _end_slope(h[0], h[1], m[0], m[1])
         d[-1] = _end_slope(h[-1], h[-2], m[-1], m[-2])
-        # Each piece is a cubic in powers of t = x - x_i: y_i + d_i t + c2 t^2 + c3 t^3, as
-        # (x_i, y_i, d_i, c2, c3); beyond either end the piece is the straight extension.
-        self._pieces = [(self.xs[i], self.ys[i], d[i], (3.0 * m[i] - 2.0 * d[i] - d[i + 1]) / h[i],
+        # Each piece is a cubic in powers of t = x - x_i, y_i + d_i t + c2 t^2 + c3 t^3,
+        # valid for lower <= x < upper: (lower, upper, x_i, y_i, d_i, c2, c3). Beyond either
+        # end the piece is the straight extension.
+        self._pieces = [(self.xs[i], self.xs[i + 1], self.xs[i], self.ys[i], d[i],
+                         (3.0 * m[i] - 2.0 * d[i] - d[i + 1]) / h[i],
                          (d[i] + d[i + 1] - 2.0 * m[i]) / (h[i] * h[i])) for i in range(n - 1)]
-        self._below = (self.xs[0], self.ys[0], d[0], 0.0, 0.0)
-        self._above = (self.xs[-1], self.ys[-1], d[-1], 0.0, 0.0)
-        self._interval = 0  # where the last lookup landed: the next is usually the same
+        self._below = (-math.inf, self.xs[0], self.xs[0], self.ys[0], d[0], 0.0, 0.0)
+        self._above = (self.xs[-1], math.inf, self.xs[-1], self.ys[-1], d[-1], 0.0, 0.0)
+        self._last = self._pieces[0]  # where the last lookup landed: the next is usually there
 
     def _piece(self, x):
-        xs = self.xs
-        i = self._interval
-        if not xs[i] <= x < xs[i + 1]:
-            if x < xs[0]:
-                return self._below
-            if x >= xs[-1]:
-                return self._above
-            i = self._interval = bisect.bisect_right(xs, x) - 1
-        return self._pieces[i]
+        piece = self._last
+        if not piece[0] <= x < piece[1]:
+            if x < self.xs[0]:
+                piece = self._below
+            elif x >= self.xs[-1]:
+                piece = self._above
+            else:
+                piece = self._pieces[bisect.bisect_right(self.xs, x) - 1]
+            self._last = piece
+        return piece
 
     def value(self, x):
-        x0, y0, d0, c2, c3 = self._piece(x)
+        # The damper's hottest call (every integrator stage): _piece's test written inline.
+        lower, upper, x0, y0, d0, c2, c3 = self._last
+        if not lower <= x < upper:
+            lower, upper, x0, y0, d0, c2, c3 = self._piece(x)
         t = x - x0
         return y0 + t * (d0 + t * (c2 + t * c3))
 
     def value_and_slope(self, x):
-        x0, y0, d0, c2, c3 = self._piece(x)
+        _, _, x0, y0, d0, c2, c3 = self._piece(x)
         t = x - x0
         return y0 + t * (d0 + t * (c2 + t * c3)), d0 + t * (2.0 * c2 + 3.0 * t * c3)
 

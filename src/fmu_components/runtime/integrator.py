@@ -139,18 +139,38 @@ class RhsSource:
       region the model is defined in (the inline form of ``system.inside``), or None;
     * ``namespace``: the functions and objects the lines name.
 
+    A model whose whole state is not integrated also describes a communication step over
+    which its input is held, for the single-step path (``Rosenbrock.single_step``): the
+    model's state list is ``state``, its first n entries the integrated ones, ``x`` the
+    deflection at the start of the step, ``u`` its held rate and ``h`` the step size.
+
+    * ``start``: lines that set ``y0 .. y{n-1}``, the integrated states at the start of
+      the step, from ``state`` and ``x`` (default: the first n entries of ``state``);
+    * ``exact``: lines that advance the other entries of ``state`` over the step by their
+      closed-form solution (they may use the names set by ``held``);
+    * ``one_segment``: an expression, true when the step is a single interval over which
+      the integrated states see the held input ``u`` itself and ``exact`` applies (None:
+      always).
+
     Numbers are best written into the lines as literals (``repr``), which CPython loads
     fastest; systems with the same source and namespace share one compiled step.
     """
 
-    def __init__(self, stage, held=(), region=None, namespace=None):
+    def __init__(self, stage, held=(), region=None, namespace=None, start=(), exact=(),
+                 one_segment=None):
         self.stage = tuple(stage)
         self.held = tuple(held)
         self.region = region
         self.namespace = dict(namespace or {})
+        self.start = tuple(start)
+        self.exact = tuple(exact)
+        self.one_segment = one_segment
+
+    def start_lines(self, n):
+        return self.start or tuple(f"y{i} = state[{i}]" for i in range(n))
 
     def key(self):
-        return (self.stage, self.held, self.region,
+        return (self.stage, self.held, self.region, self.start, self.exact, self.one_segment,
                 tuple(sorted(self.namespace.items(), key=lambda item: item[0])))
 
 
@@ -181,15 +201,32 @@ def compile_rhs(system, n):
     return _compile("\n".join(lines) + "\n", source.namespace, "<rhs>")["rhs"]
 
 
+def compile_exact(source):
+    """The source's closed-form update as a function ``exact(state, u, h)``, for a model's
+    own step when it does not take the single-step path (see RhsSource)."""
+    lines = ["def exact(state, u, h):"] + [f"    {line}" for line in source.held + source.exact]
+    lines.append("    return None")
+    return _compile("\n".join(lines) + "\n", source.namespace, "<exact>")["exact"]
+
+
+def compile_start(source, n):
+    """The source's start of a step as a function ``start(state, x) -> (y0, ..)``."""
+    lines = ["def start(state, x):"] + [f"    {line}" for line in source.start_lines(n)]
+    lines.append(f"    return ({', '.join(f'y{i}' for i in range(n))},)")
+    return _compile("\n".join(lines) + "\n", source.namespace, "<start>")["start"]
+
+
 def compile_step(tableau, n, source, state_scale):
     """Straight-line Python for one step of `tableau` on an n-state system with right-hand
-    side `source` (an RhsSource): two generated functions,
+    side `source` (an RhsSource): three generated functions,
 
     * ``factor(system, y, u, h)``: W^-1 = (I/(gamma*h) - J(y, u))^-1 as a flat tuple, or
       None when W is singular;
     * ``step(y, u, h, rtol, w)``: one step with that W^-1, returning
       ``(y_new, error_norm)``, or None when a stage or the result leaves the valid region
-      or is not finite.
+      or is not finite;
+    * ``single_step_for(memory, system, max_reuse)``: the single-step path of a Rosenbrock
+      instance (``memory``), see ``Rosenbrock.single_step``.
 
     The error is filtered through (I - gamma*h*J)^-1 = W^-1/(gamma*h) before its norm is
     taken: the embedded solution is not L-stable (|Rhat(inf)| = 0.48), and a raw estimate
@@ -197,21 +234,8 @@ def compile_step(tableau, n, source, state_scale):
     RADAU5 estimate).
     """
     q = range(n)
-    stages = range(len(tableau.m))
-
-    def vector(name):
-        return ", ".join(f"{name}{i}" for i in q) + ("," if n == 1 else "")
-
-    def combination(terms):
-        """sum of coefficient * symbol, dropping zero coefficients."""
-        parts = [f"{coefficient!r} * {symbol}" for coefficient, symbol in terms if coefficient]
-        return " + ".join(parts) if parts else "0.0"
-
-    def region_check(indent="    "):
-        if source.region is None:
-            return []
-        return [f"{indent}if not ({source.region}):", f"{indent}    return None"]
-
+    states = ", ".join(f"Y{i}" for i in q) + ("," if n == 1 else "")
+    inverse = ", ".join(f"w{i}{j}" for i in q for j in q)
     d = f"(1.0 / ({tableau.gamma!r} * h))"
     if n == 2:  # written out for two states, the common case here
         factor = ["def factor(system, y, u, h, isfinite=math.isfinite):",
@@ -230,40 +254,116 @@ def compile_step(tableau, n, source, state_scale):
                   f"    inverse = invert([[(d if i == j else 0.0) - jac[i][j] for j in range({n})]"
                   f" for i in range({n})])",
                   "    return None if inverse is None else tuple(v for row in inverse for v in row)"]
-    lines = ["def step(y, u, h, rtol, w, isfinite=math.isfinite):",
-             f"    {vector('y')} = {vector('Y')} = y",
-             f"    ({', '.join(f'w{i}{j}' for i in q for j in q)},) = w",
-             f"    d = {d}",
-             "    ih = 1.0 / h"]
-    lines += [f"    {line}" for line in source.held]
+    step = ["def step(y, u, h, rtol, w, sqrt=math.sqrt):",
+            f"    {states.replace('Y', 'y')} = {states} = y",
+            f"    ({inverse},) = w"]
+    step += _step_lines(tableau, n, source, state_scale, "return None", "    ")
+    step.append(f"    return ({states}), error")
+    text = "\n".join(factor) + "\n\n\n" + "\n".join(step) + "\n\n\n" + "\n".join(
+        _single_step_lines(tableau, n, source, state_scale, inverse)) + "\n"
+    namespace = _compile(text, source.namespace, f"<{tableau.name} step, {n} states>")
+    return namespace["factor"], namespace["step"], namespace["single_step_for"], text
+
+
+def _step_lines(tableau, n, source, state_scale, fail, indent):
+    """The body of one step from y0.. with W^-1 in w00.., input u, size h and tolerance
+    rtol: it leaves the new state in Y0.. and the error norm in ``error``, or runs `fail`
+    when a stage or the result leaves the valid region or is not finite."""
+    q = range(n)
+    stages = range(len(tableau.m))
+
+    def combination(terms):
+        """sum of coefficient * symbol, dropping zero coefficients and unit factors."""
+        parts = [symbol if coefficient == 1.0 else f"{coefficient!r} * {symbol}"
+                 for coefficient, symbol in terms if coefficient]
+        return " + ".join(parts) if parts else "0.0"
+
+    region_check = [] if source.region is None else [f"if not ({source.region}):", f"    {fail}"]
+    lines = [f"d = (1.0 / ({tableau.gamma!r} * h))", "ih = 1.0 / h"]
+    lines += source.held
     for s in stages:
         if s > 0:
             for i in q:
                 terms = [(tableau.a[s][j], f"k{j}_{i}") for j in range(s)]
-                lines.append(f"    Y{i} = y{i} + {combination(terms)}")
-            lines += region_check()
-        lines += [f"    {line}" for line in source.stage]
+                lines.append(f"Y{i} = y{i} + {combination(terms)}")
+            lines += region_check
+        lines += source.stage
+        right = "f"  # the right-hand side of the stage's linear system, f + sum c_ij/h k_j
+        if any(tableau.c[s][j] for j in range(s)):
+            right = "r"
+            for i in q:
+                terms = [(tableau.c[s][j], f"k{j}_{i}") for j in range(s)]
+                lines.append(f"r{i} = f{i} + ih * ({combination(terms)})")
         for i in q:
-            terms = [(tableau.c[s][j], f"k{j}_{i}") for j in range(s)]
-            coupling = combination(terms)
-            lines.append(f"    r{i} = f{i}" + ("" if coupling == "0.0" else f" + ih * ({coupling})"))
-        for i in q:
-            lines.append(f"    k{s}_{i} = " + " + ".join(f"w{i}{j} * r{j}" for j in q))
+            lines.append(f"k{s}_{i} = " + " + ".join(f"w{i}{j} * {right}{j}" for j in q))
     for i in q:
-        lines.append(f"    Y{i} = y{i} + {combination([(tableau.m[s], f'k{s}_{i}') for s in stages])}")
-        lines.append(f"    e{i} = d * ({combination([(tableau.e[s], f'k{s}_{i}') for s in stages])})")
-    lines.append("    if not (" + " and ".join(f"isfinite(Y{i})" for i in q) + "):")
-    lines.append("        return None")
-    lines += region_check()
-    terms = []
+        lines.append(f"Y{i} = y{i} + {combination([(tableau.m[s], f'k{s}_{i}') for s in stages])}")
+        lines.append(f"e{i} = d * ({combination([(tableau.e[s], f'k{s}_{i}') for s in stages])})")
+    # A sum is finite only if every term is (or it overflows, which is no valid state
+    # either), and x - x is 0 for finite x, nan for inf and nan: the test without a call.
+    lines.append(f"total = {' + '.join(f'Y{i}' for i in q)}")
+    lines.append("if total - total != 0.0:")
+    lines.append(f"    {fail}")
+    lines += region_check
     for i in q:
+        # max(abs(y), abs(Y)) as conditional expressions, and squares as products: the
+        # same values without calls.
+        lines += [f"a{i} = y{i} if y{i} >= 0.0 else -y{i}",
+                  f"b{i} = Y{i} if Y{i} >= 0.0 else -Y{i}"]
         filtered = " + ".join(f"w{i}{j} * e{j}" for j in q)
-        weight = f"({float(state_scale[i])!r} + max(abs(y{i}), abs(Y{i})))"
-        terms.append(f"(({filtered}) / {weight}) ** 2")
-    lines.append(f"    return ({vector('Y')}), math.sqrt(({' + '.join(terms)}) / {n}) / rtol")
-    text = "\n".join(factor) + "\n\n\n" + "\n".join(lines) + "\n"
-    namespace = _compile(text, source.namespace, f"<{tableau.name} step, {n} states>")
-    return namespace["factor"], namespace["step"], text
+        weight = f"({float(state_scale[i])!r} + (b{i} if b{i} > a{i} else a{i}))"
+        lines.append(f"z{i} = ({filtered}) / {weight}")
+    lines.append(f"error = sqrt(({' + '.join(f'z{i} * z{i}' for i in q)}) / {n}) / rtol")
+    return [indent + line for line in lines]
+
+
+def _single_step_lines(tableau, n, source, state_scale, inverse):
+    """``single_step_for(memory, system, max_reuse)``: the one-step case of
+    ``Rosenbrock.integrate`` fused with the model's closed-form update (RhsSource.exact),
+    as one function. It decides, reuses or rebuilds W^-1 and controls the step size exactly
+    as ``integrate`` does, so a step it takes is bit for bit the one ``integrate`` would
+    take; whenever ``integrate`` would do anything else it returns False having changed
+    nothing."""
+    q = range(n)
+    exponent = -1.0 / (tableau.embedded_order + 1)
+    lines = ["def single_step_for(memory, system, max_reuse):",
+             "    def single_step(state, x, u, h, sqrt=math.sqrt, inf=math.inf):"]
+    body = []
+    if source.one_segment is not None:
+        body += [f"if not ({source.one_segment}):", "    return False"]
+    body += ["h_control = memory.h_next",
+             "if h_control is None:",
+             "    h_control = h",
+             "elif h_control < h:",
+             "    return False  # the controller wants more than one step"]
+    body += source.start_lines(n)
+    body += [f"Y{i} = y{i}" for i in q]
+    body += ["cached = memory.w",
+             f"same = {SAME_STEP_SIZE!r} * h",
+             "if cached is not None and -same <= cached[0] - h <= same and cached[2] < max_reuse:",
+             "    w = cached[1]",
+             "    uses = cached[2] + 1",
+             "else:",
+             f"    w = factor(system, ({', '.join(f'y{i}' for i in q)},), u, h)",
+             "    if w is None:",
+             "        return False",
+             "    uses = 1",
+             f"({inverse},) = w",
+             "rtol = memory.rtol"]
+    body += _step_lines(tableau, n, source, state_scale, "return False", "")
+    body += ["if not error <= 1.0:",
+             "    return False",
+             f"allowed = h * {SAFETY!r} * error ** ({exponent!r}) if error > 0.0 else inf",
+             f"grown = {STEP_GROWTH_LIMIT!r} * h_control",
+             f"memory.h_next = grown if allowed > grown else max({STEP_SHRINK_LIMIT!r} * h_control, allowed)",
+             "memory.w = (h, w, uses)",
+             "memory.accepted_steps += 1"]
+    body += source.exact
+    body += [f"state[{i}] = Y{i}" for i in q]
+    body.append("return True")
+    lines += ["        " + line for line in body]
+    lines.append("    return single_step")
+    return lines
 
 
 class Rosenbrock:
@@ -279,8 +379,8 @@ class Rosenbrock:
     """
 
     MAX_W_REUSE = 8
-    # (tableau, n, right-hand side, state scale) -> (factor, step, source text): systems
-    # with the same equations and parameters share one compiled step.
+    # (tableau, n, right-hand side, state scale) -> (factor, step, single_step_for, source
+    # text): systems with the same equations and parameters share one compiled step.
     _compiled = {}
     MAX_COMPILED = 64
 
@@ -297,7 +397,7 @@ class Rosenbrock:
         self._last_compiled = (None, None, None)  # (system, n, compiled)
 
     def compiled(self, system, n):
-        """(factor, step, source text) for an n-state system."""
+        """(factor, step, single_step_for, source text) for an n-state system."""
         last_system, last_n, compiled = self._last_compiled
         if last_system is not system or last_n != n:
             source = rhs_source(system, n)
@@ -313,9 +413,25 @@ class Rosenbrock:
 
     def step(self, system, y, u, h):
         """One step of size h with a fresh Jacobian: (y_new, error_norm), or None."""
-        factor, step, _ = self.compiled(system, len(y))
+        factor, step, _, _ = self.compiled(system, len(y))
         w = factor(system, y, u, h)
         return None if w is None else step(y, u, h, self.rtol, w)
+
+    def single_step(self, system, n):
+        """The single-step path for `system`, a model whose first n state entries this
+        integrator advances and whose RhsSource describes the rest (``exact``), or None if
+        it has none. ``single_step(state, x, u, h)`` advances the model's state list over
+        a communication step of size h with the rate u held, in one integrator step, and
+        returns True; it returns False, with nothing changed, when that is not what
+        ``integrate`` would do (the step is not one segment, the controller wants smaller
+        steps, the step is rejected). Then the model's own ``advance`` takes the step.
+
+        Why: a communication step of 1 ms is one integrator step almost always, and the
+        layers between the FMI call and the generated step (co-simulation, model,
+        integrator loop) cost more than the step itself (benchmarks/results.md)."""
+        if n == 0 or not hasattr(system, "rhs_source"):
+            return None
+        return self.compiled(system, n)[2](self, system, self.MAX_W_REUSE)
 
     def memory(self):
         return {"h_next": self.h_next, "w": list(self.w) if self.w else None}
@@ -334,7 +450,7 @@ class Rosenbrock:
         """
         if duration <= 0.0 or not y:
             return None
-        factor, step, _ = self.compiled(system, len(y))
+        factor, step, _, _ = self.compiled(system, len(y))
         rtol = self.rtol
         exponent = self._exponent
         max_reuse = self.MAX_W_REUSE

@@ -29,7 +29,7 @@ while x > 0, so a step that crosses x = 0 is split at the crossing.
 
 import math
 
-from .integrator import RhsSource
+from .integrator import RhsSource, compile_exact
 
 
 class MaxwellElement:
@@ -81,6 +81,7 @@ class RubberModel:
         self._nested = [(b.outer.k, b.outer.c, b.outer.xi, b.nested.k, b.nested.k / b.nested.c,
                          b.nested.xi) for b in self.nested_branches]
         self._plain = [(b.outer.k, b.outer.c, b.outer.xi) for b in self.plain_branches]
+        self._advance_plain = compile_exact(self.rhs_source())
 
     # --- initial state and step -------------------------------------------------------
 
@@ -111,38 +112,43 @@ class RubberModel:
         error message with the state untouched: it is written only once all of the step
         has succeeded."""
         n = self.integrated_size
-        integrated, plain = state[:n], state[n:]
+        work = state[:]
         for duration, rate in self.rate_segments(x, v, h):
             if duration > 0.0:
                 if n:
+                    integrated = work[:n]
                     problem = integrator.integrate(self, integrated, rate, duration)
                     if problem:
                         return problem
-                self._advance_plain(plain, rate, duration)
-        state[:] = integrated + plain
+                    work[:n] = integrated
+                self._advance_plain(work, rate, duration)
+        state[:] = work
         return None
-
-    def _advance_plain(self, plain, v, duration):
-        """Exact solution of dr/dt = v - a*r, a = k(|v| + xi)/c, for constant v."""
-        speed = abs(v)
-        for i, (k, c, xi) in enumerate(self._plain):
-            a = k * (speed + xi) / c
-            r_steady = v / a
-            plain[i] = r_steady + (plain[i] - r_steady) * math.exp(-a * duration)
 
     # --- integrator system: the nested branches ---------------------------------------
 
     def rhs_source(self):
         """ds/dt and dw/dt of each nested branch (module docstring; Eq. 4.2.7-1 and 6.1-2)
-        for the integrator to compile: state Y = [s, w, ...], held rate u."""
-        held = ["speed = abs(u)"]
+        for the integrator to compile: state Y = [s, w, ...], held rate u. The plain
+        branches' exact update is the ``exact`` part: with a = k(|v| + xi)/c,
+        dr/dt = v - a*r gives r(h) = v/a + (r(0) - v/a) exp(-a h) for constant v."""
+        held = ["speed = u if u >= 0.0 else -u"]  # |v|, as a conditional expression (no call)
         stage = []
         for i, (k1, c1, xi1, k2, g, xi2) in enumerate(self._nested):
             s, w, ds, dw = f"Y{2 * i}", f"Y{2 * i + 1}", f"f{2 * i}", f"f{2 * i + 1}"
             held.append(f"fluidity{i} = (speed + {xi1!r}) / {c1!r}")  # 1/eta of the outer dashpot
             stage += [f"{ds} = u - ({k1!r} * {s} + {k2!r} * {w}) * fluidity{i}",
-                      f"{dw} = {ds} - {g!r} * {w} * (abs({ds}) + {xi2!r})"]
-        return RhsSource(stage, held)
+                      # |ds/dt| as a conditional expression: the same value without a call
+                      f"{dw} = {ds} - {g!r} * {w} * (({ds} if {ds} >= 0.0 else -{ds}) + {xi2!r})"]
+        exact = []
+        for i, (k, c, xi) in enumerate(self._plain, start=self.integrated_size):
+            exact += [f"decay = {k!r} * (speed + {xi!r}) / {c!r}",
+                      "r_steady = u / decay",
+                      f"state[{i}] = r_steady + (state[{i}] - r_steady) * exp(-decay * h)"]
+        # The tyre's step is one segment while it stays in contact (rate_segments).
+        one_segment = "x > 0.0 and x + u * h > 0.0" if self.unilateral else None
+        return RhsSource(stage, held, exact=exact, one_segment=one_segment,
+                         namespace={"exp": math.exp})
 
     def jacobian(self, y, v):
         n = self.integrated_size
