@@ -29,7 +29,7 @@ by rejecting and shrinking steps.
 import math
 
 from .hermite import MonotoneCubic
-from .integrator import RhsSource, compile_start
+from .integrator import RhsSource, compile_jacobian, compile_start
 
 Z_LIMIT = 18.0  # tanh(18) = 1 - 4.6e-16: beyond it xd is C2 to the last bit
 
@@ -49,7 +49,9 @@ class RotaryDamper:
         # Typical magnitudes for the absolute tolerance: z is dimensionless, and the rotor
         # rate is taken on the scale of 1 rad/s (the thesis rig's range, section 11.0).
         self.state_scale = [1.0, 1.0]
-        self._start = compile_start(self.rhs_source(), self.integrated_size)
+        source = self.rhs_source()
+        self._start = compile_start(source, self.integrated_size)
+        self.jacobian = compile_jacobian(source, self.integrated_size)
 
     def initial_state(self, theta, omega):
         """Rotor node moving with the arm: zero gas deflection, tau(0) = 0 (spec 3)."""
@@ -86,8 +88,14 @@ class RotaryDamper:
                    f"f0 = (u - Y1) * cosh_z * cosh_z / {self.gas_limit!r}",
                    f"f1 = ({self.gas_force!r} * sinh(2.0 * Y0) - dashpot(Y1)) / {self.rotor_inertia!r}"],
             region=f"abs(Y0) < {Z_LIMIT!r}",  # inside()
+            jacobian=["cosh_z = cosh(Y0)",
+                      f"j0_0 = (u - Y1) * sinh(2.0 * Y0) / {self.gas_limit!r}",
+                      f"j0_1 = -cosh_z * cosh_z / {self.gas_limit!r}",
+                      f"j1_0 = 2.0 * {self.gas_force!r} * cosh(2.0 * Y0) / {self.rotor_inertia!r}",
+                      f"j1_1 = -dashpot_slope(Y1) / {self.rotor_inertia!r}"],
             namespace={"cosh": math.cosh, "sinh": math.sinh, "dashpot": self.dashpot.value,
-                       "tanh": math.tanh, "atanh": math.atanh},
+                       "dashpot_slope": self.dashpot.slope, "tanh": math.tanh,
+                       "atanh": math.atanh},
             # z at the arm angle x: the state's own unless the arm has moved away from
             # theta_z, as a host's angle and rate from its own integrator always do by
             # round-off, or by a jump: then the gas spring takes up the difference,
@@ -96,15 +104,6 @@ class RotaryDamper:
                    f"({self.gas_limit!r} * tanh(state[0]) + (x - state[2])) / {self.gas_limit!r})",
                    "y1 = state[1]"],
             exact=["state[2] = x + u * h"])
-
-    def jacobian(self, y, omega):
-        z, rotor_rate = y
-        cosh_z = math.cosh(z)
-        dashpot_slope = self.dashpot.value_and_slope(rotor_rate)[1]
-        inertia = self.rotor_inertia
-        return (((omega - rotor_rate) * math.sinh(2.0 * z) / self.gas_limit,
-                 -cosh_z * cosh_z / self.gas_limit),
-                (2.0 * self.gas_force * math.cosh(2.0 * z) / inertia, -dashpot_slope / inertia))
 
     def advance(self, state, theta, omega, h, integrator):
         y = [self._z_at(state, theta), state[1]]

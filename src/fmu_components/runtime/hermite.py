@@ -99,4 +99,7 @@ class MonotoneCubic:
         t = x - x0
         return y0 + t * (d0 + t * (c2 + t * c3)), d0 + t * (2.0 * c2 + 3.0 * t * c3)
 
+    def slope(self, x):
+        return self.value_and_slope(x)[1]
+
     __call__ = value

@@ -12,7 +12,8 @@ The integrator knows nothing of what it integrates. A *system* provides
 * ``rhs(y, u)``: dy/dt for the state sequence ``y`` and an input ``u`` held over the step,
   or instead ``rhs_source()``: the same as straight-line Python (an ``RhsSource``), which
   the integrator compiles into its stage code,
-* ``jacobian(y, u)``: d rhs / dy as a sequence of rows,
+* ``jacobian(y, u)``: d rhs / dy as a sequence of rows (or, in its RhsSource, as lines
+  the integrator compiles into the factorisation of W),
 * ``inside(y)``: False where the state leaves the region the model is defined in (or
   ``None`` when the model is defined everywhere),
 * ``state_scale``: a typical magnitude of each state, which sets the absolute tolerance
@@ -63,6 +64,11 @@ class RosenbrockTableau:
         self.c = c
         self.m = m
         self.e = e
+        # Stiffly accurate: the solution is the last stage's state plus the last k (m_j =
+        # a_last,j, m_last = 1), which the step uses to save the weighted sum.
+        last = len(m) - 1
+        self.stiffly_accurate = m[last] == 1.0 and all(
+            abs(m[j] - a[last][j]) <= 1e-14 * max(1.0, abs(m[j])) for j in range(last))
 
     @classmethod
     def from_standard_form(cls, name, order, embedded_order, alpha, gamma, b, bhat):
@@ -137,6 +143,9 @@ class RhsSource:
     * ``held``: lines that depend on ``u`` alone, run once per step rather than per stage;
     * ``region``: an expression in ``Y0 ..`` that is false where the state leaves the
       region the model is defined in (the inline form of ``system.inside``), or None;
+    * ``jacobian``: lines that set the entries ``j{row}_{column}`` of d rhs / dy at the
+      state ``Y0 ..`` (entries they leave unset are zero), or empty: then the integrator
+      calls ``system.jacobian``;
     * ``namespace``: the functions and objects the lines name.
 
     A model whose whole state is not integrated also describes a communication step over
@@ -156,11 +165,12 @@ class RhsSource:
     fastest; systems with the same source and namespace share one compiled step.
     """
 
-    def __init__(self, stage, held=(), region=None, namespace=None, start=(), exact=(),
-                 one_segment=None):
+    def __init__(self, stage, held=(), region=None, namespace=None, jacobian=(), start=(),
+                 exact=(), one_segment=None):
         self.stage = tuple(stage)
         self.held = tuple(held)
         self.region = region
+        self.jacobian = tuple(jacobian)
         self.namespace = dict(namespace or {})
         self.start = tuple(start)
         self.exact = tuple(exact)
@@ -170,7 +180,8 @@ class RhsSource:
         return self.start or tuple(f"y{i} = state[{i}]" for i in range(n))
 
     def key(self):
-        return (self.stage, self.held, self.region, self.start, self.exact, self.one_segment,
+        return (self.stage, self.held, self.region, self.jacobian, self.start, self.exact,
+                self.one_segment,
                 tuple(sorted(self.namespace.items(), key=lambda item: item[0])))
 
 
@@ -209,6 +220,27 @@ def compile_exact(source):
     return _compile("\n".join(lines) + "\n", source.namespace, "<exact>")["exact"]
 
 
+def _jacobian_lines(source, n):
+    """Lines that leave d rhs / dy in j0_0 .. from ``y``, ``u``: the source's own, or a
+    call of ``system.jacobian``."""
+    names = [[f"j{i}_{k}" for k in range(n)] for i in range(n)]
+    if not source.jacobian:
+        return [f"({', '.join('(' + ', '.join(row) + ',)' for row in names)},) = "
+                "system.jacobian(y, u)"]
+    states = ", ".join(f"Y{i}" for i in range(n)) + ("," if n == 1 else "")
+    return ([f"{states} = y", f"{' = '.join(name for row in names for name in row)} = 0.0"]
+            + list(source.held) + list(source.jacobian))
+
+
+def compile_jacobian(source, n):
+    """The source's Jacobian as a function ``jacobian(y, u) -> rows``: the one the
+    integrator factors, callable on its own (the model's ``jacobian``, tests)."""
+    rows = ", ".join("(" + ", ".join(f"j{i}_{k}" for k in range(n)) + ",)" for i in range(n))
+    lines = (["def jacobian(y, u):"] + [f"    {line}" for line in _jacobian_lines(source, n)]
+             + [f"    return ({rows},)"])
+    return _compile("\n".join(lines) + "\n", source.namespace, "<jacobian>")["jacobian"]
+
+
 def compile_start(source, n):
     """The source's start of a step as a function ``start(state, x) -> (y0, ..)``."""
     lines = ["def start(state, x):"] + [f"    {line}" for line in source.start_lines(n)]
@@ -223,8 +255,8 @@ def compile_step(tableau, n, source, state_scale):
     * ``factor(system, y, u, h)``: W^-1 = (I/(gamma*h) - J(y, u))^-1 as a flat tuple, or
       None when W is singular;
     * ``step(y, u, h, rtol, w)``: one step with that W^-1, returning
-      ``(y_new, error_norm)``, or None when a stage or the result leaves the valid region
-      or is not finite;
+      ``(y_new, error_norm ** 2)``, or None when a stage or the result leaves the valid
+      region or is not finite;
     * ``single_step_for(memory, system, max_reuse)``: the single-step path of a Rosenbrock
       instance (``memory``), see ``Rosenbrock.single_step``.
 
@@ -237,24 +269,24 @@ def compile_step(tableau, n, source, state_scale):
     states = ", ".join(f"Y{i}" for i in q) + ("," if n == 1 else "")
     inverse = ", ".join(f"w{i}{j}" for i in q for j in q)
     d = f"(1.0 / ({tableau.gamma!r} * h))"
+    jacobian = [f"    {line}" for line in _jacobian_lines(source, n)]
     if n == 2:  # written out for two states, the common case here
-        factor = ["def factor(system, y, u, h, isfinite=math.isfinite):",
-                  "    (j00, j01), (j10, j11) = system.jacobian(y, u)",
-                  f"    d = {d}",
-                  "    a = d - j00",
-                  "    b = d - j11",
-                  "    det = a * b - j01 * j10",
-                  "    if det == 0.0 or not isfinite(det):",
-                  "        return None",
-                  "    return (b / det, j01 / det, j10 / det, a / det)"]
+        factor = (["def factor(system, y, u, h, isfinite=math.isfinite):"] + jacobian +
+                  [f"    d = {d}",
+                   "    a = d - j0_0",
+                   "    b = d - j1_1",
+                   "    det = a * b - j0_1 * j1_0",
+                   "    if det == 0.0 or not isfinite(det):",
+                   "        return None",
+                   "    return (b / det, j0_1 / det, j1_0 / det, a / det)"])
     else:
-        factor = ["def factor(system, y, u, h):",
-                  "    jac = system.jacobian(y, u)",
-                  f"    d = {d}",
-                  f"    inverse = invert([[(d if i == j else 0.0) - jac[i][j] for j in range({n})]"
-                  f" for i in range({n})])",
-                  "    return None if inverse is None else tuple(v for row in inverse for v in row)"]
-    step = ["def step(y, u, h, rtol, w, sqrt=math.sqrt):",
+        factor = (["def factor(system, y, u, h):"] + jacobian +
+                  [f"    d = {d}",
+                   "    inverse = invert([" + ", ".join(
+                       "[" + ", ".join(f"{'d - ' if i == k else '-'}j{i}_{k}" for k in q) + "]"
+                       for i in q) + "])",
+                   "    return None if inverse is None else tuple(v for row in inverse for v in row)"])
+    step = ["def step(y, u, h, rtol, w):",
             f"    {states.replace('Y', 'y')} = {states} = y",
             f"    ({inverse},) = w"]
     step += _step_lines(tableau, n, source, state_scale, "return None", "    ")
@@ -267,7 +299,7 @@ def compile_step(tableau, n, source, state_scale):
 
 def _step_lines(tableau, n, source, state_scale, fail, indent):
     """The body of one step from y0.. with W^-1 in w00.., input u, size h and tolerance
-    rtol: it leaves the new state in Y0.. and the error norm in ``error``, or runs `fail`
+    rtol: it leaves the new state in Y0.. and the squared error norm in ``error``, or runs `fail`
     when a stage or the result leaves the valid region or is not finite."""
     q = range(n)
     stages = range(len(tableau.m))
@@ -296,8 +328,13 @@ def _step_lines(tableau, n, source, state_scale, fail, indent):
                 lines.append(f"r{i} = f{i} + ih * ({combination(terms)})")
         for i in q:
             lines.append(f"k{s}_{i} = " + " + ".join(f"w{i}{j} * {right}{j}" for j in q))
+    last = len(tableau.m) - 1
     for i in q:
-        lines.append(f"Y{i} = y{i} + {combination([(tableau.m[s], f'k{s}_{i}') for s in stages])}")
+        if tableau.stiffly_accurate:
+            # y1 = y + sum_j a_last,j k_j + k_last: the last stage's state plus its k.
+            lines.append(f"Y{i} = Y{i} + k{last}_{i}")
+        else:
+            lines.append(f"Y{i} = y{i} + {combination([(tableau.m[s], f'k{s}_{i}') for s in stages])}")
         lines.append(f"e{i} = d * ({combination([(tableau.e[s], f'k{s}_{i}') for s in stages])})")
     # A sum is finite only if every term is (or it overflows, which is no valid state
     # either), and x - x is 0 for finite x, nan for inf and nan: the test without a call.
@@ -313,7 +350,9 @@ def _step_lines(tableau, n, source, state_scale, fail, indent):
         filtered = " + ".join(f"w{i}{j} * e{j}" for j in q)
         weight = f"({float(state_scale[i])!r} + (b{i} if b{i} > a{i} else a{i}))"
         lines.append(f"z{i} = ({filtered}) / {weight}")
-    lines.append(f"error = sqrt(({' + '.join(f'z{i} * z{i}' for i in q)}) / {n}) / rtol")
+    # The squared norm: its tests against 1 and 0 are the norm's, and the controller
+    # takes its power with half the exponent, which saves the square root.
+    lines.append(f"error = ({' + '.join(f'z{i} * z{i}' for i in q)}) / ({n} * rtol * rtol)")
     return [indent + line for line in lines]
 
 
@@ -325,9 +364,9 @@ def _single_step_lines(tableau, n, source, state_scale, inverse):
     take; whenever ``integrate`` would do anything else it returns False having changed
     nothing."""
     q = range(n)
-    exponent = -1.0 / (tableau.embedded_order + 1)
+    exponent = -0.5 / (tableau.embedded_order + 1)  # of the squared error norm
     lines = ["def single_step_for(memory, system, max_reuse):",
-             "    def single_step(state, x, u, h, sqrt=math.sqrt, inf=math.inf):"]
+             "    def single_step(state, x, u, h, inf=math.inf):"]
     body = []
     if source.one_segment is not None:
         body += [f"if not ({source.one_segment}):", "    return False"]
@@ -393,7 +432,8 @@ class Rosenbrock:
         self.w = None  # (h, W^-1 as a flat tuple, uses so far)
         self.accepted_steps = 0
         self.rejected_steps = 0
-        self._exponent = -1.0 / (tableau.embedded_order + 1)
+        # The step-size controller's power of the squared error norm: h * err^(-1/(p+1)).
+        self._exponent = -0.5 / (tableau.embedded_order + 1)
         self._last_compiled = (None, None, None)  # (system, n, compiled)
 
     def compiled(self, system, n):
@@ -412,7 +452,7 @@ class Rosenbrock:
         return compiled
 
     def step(self, system, y, u, h):
-        """One step of size h with a fresh Jacobian: (y_new, error_norm), or None."""
+        """One step of size h with a fresh Jacobian: (y_new, error_norm ** 2), or None."""
         factor, step, _, _ = self.compiled(system, len(y))
         w = factor(system, y, u, h)
         return None if w is None else step(y, u, h, self.rtol, w)
@@ -486,7 +526,7 @@ class Rosenbrock:
                 h = h_try * REGION_SHRINK
                 just_rejected = True
             else:
-                new, err = result
+                new, err = result  # err: the squared error norm
                 allowed = h_try * SAFETY * err ** exponent if err > 0.0 else math.inf
                 if err <= 1.0:
                     self.accepted_steps += 1

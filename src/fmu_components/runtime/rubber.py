@@ -29,7 +29,7 @@ while x > 0, so a step that crosses x = 0 is split at the crossing.
 
 import math
 
-from .integrator import RhsSource, compile_exact
+from .integrator import RhsSource, compile_exact, compile_jacobian
 
 
 class MaxwellElement:
@@ -81,7 +81,9 @@ class RubberModel:
         self._nested = [(b.outer.k, b.outer.c, b.outer.xi, b.nested.k, b.nested.k / b.nested.c,
                          b.nested.xi) for b in self.nested_branches]
         self._plain = [(b.outer.k, b.outer.c, b.outer.xi) for b in self.plain_branches]
-        self._advance_plain = compile_exact(self.rhs_source())
+        source = self.rhs_source()
+        self._advance_plain = compile_exact(source)
+        self.jacobian = compile_jacobian(source, self.integrated_size)
 
     # --- initial state and step -------------------------------------------------------
 
@@ -134,12 +136,22 @@ class RubberModel:
         dr/dt = v - a*r gives r(h) = v/a + (r(0) - v/a) exp(-a h) for constant v."""
         held = ["speed = u if u >= 0.0 else -u"]  # |v|, as a conditional expression (no call)
         stage = []
+        jacobian = []
         for i, (k1, c1, xi1, k2, g, xi2) in enumerate(self._nested):
-            s, w, ds, dw = f"Y{2 * i}", f"Y{2 * i + 1}", f"f{2 * i}", f"f{2 * i + 1}"
+            p, q = 2 * i, 2 * i + 1
+            s, w, ds, dw = f"Y{p}", f"Y{q}", f"f{p}", f"f{q}"
             held.append(f"fluidity{i} = (speed + {xi1!r}) / {c1!r}")  # 1/eta of the outer dashpot
             stage += [f"{ds} = u - ({k1!r} * {s} + {k2!r} * {w}) * fluidity{i}",
                       # |ds/dt| as a conditional expression: the same value without a call
                       f"{dw} = {ds} - {g!r} * {w} * (({ds} if {ds} >= 0.0 else -{ds}) + {xi2!r})"]
+            # d|ds/dt|/dy = sign(ds/dt) d(ds/dt)/dy: the nested rate rides on the outer one.
+            jacobian += [f"sdot = u - ({k1!r} * {s} + {k2!r} * {w}) * fluidity{i}",
+                         f"nested_factor = 1.0 - {g!r} * {w} * copysign(1.0, sdot)",
+                         f"j{p}_{p} = -{k1!r} * fluidity{i}",
+                         f"j{p}_{q} = -{k2!r} * fluidity{i}",
+                         f"j{q}_{p} = -{k1!r} * fluidity{i} * nested_factor",
+                         f"j{q}_{q} = -{k2!r} * fluidity{i} * nested_factor"
+                         f" - {g!r} * (abs(sdot) + {xi2!r})"]
         exact = []
         for i, (k, c, xi) in enumerate(self._plain, start=self.integrated_size):
             exact += [f"decay = {k!r} * (speed + {xi!r}) / {c!r}",
@@ -147,27 +159,8 @@ class RubberModel:
                       f"state[{i}] = r_steady + (state[{i}] - r_steady) * exp(-decay * h)"]
         # The tyre's step is one segment while it stays in contact (rate_segments).
         one_segment = "x > 0.0 and x + u * h > 0.0" if self.unilateral else None
-        return RhsSource(stage, held, exact=exact, one_segment=one_segment,
-                         namespace={"exp": math.exp})
-
-    def jacobian(self, y, v):
-        n = self.integrated_size
-        speed = abs(v)
-        rows = []
-        i = 0
-        for k1, c1, xi1, k2, g, xi2 in self._nested:
-            w = y[i + 1]
-            b = (speed + xi1) / c1
-            sdot = v - (k1 * y[i] + k2 * w) * b
-            # d|sdot|/dy = sign(sdot) * d sdot/dy
-            nested_factor = 1.0 - g * w * math.copysign(1.0, sdot)
-            top, bottom = [0.0] * n, [0.0] * n
-            top[i], top[i + 1] = -k1 * b, -k2 * b
-            bottom[i] = -k1 * b * nested_factor
-            bottom[i + 1] = -k2 * b * nested_factor - g * (abs(sdot) + xi2)
-            rows += (top, bottom)
-            i += 2
-        return rows
+        return RhsSource(stage, held, jacobian=jacobian, exact=exact, one_segment=one_segment,
+                         namespace={"exp": math.exp, "copysign": math.copysign})
 
     # --- outputs ----------------------------------------------------------------------
 
