@@ -7,7 +7,10 @@ import pytest
 from scipy.linalg import expm
 
 from fmu_components.runtime.catalog import COMPONENTS, ROTARY_DAMPER
+from fmu_components.runtime.cosim import CoSimulation
 from fmu_components.runtime.integrator import ROS34PW2, Rosenbrock, compile_rhs
+from fmu_components.runtime.rubber import Branch, MaxwellElement, RubberModel
+from fmu_components.signals import thesis_sine
 
 
 class LinearSystem:
@@ -274,3 +277,92 @@ def test_step_sizes_differing_in_the_last_bits_take_the_same_steps():
     assert (exact.accepted_steps, exact.rejected_steps) == (
         jittered.accepted_steps, jittered.rejected_steps)
     assert y_jittered == pytest.approx(y_exact, rel=1e-12, abs=1e-15)
+
+
+# --- the single-step path: one generated function per communication step -------------
+
+def _run(model, inputs, single_step=True):
+    """Outputs and state after each step of a CoSimulation fed (x, v, h) per step."""
+    x0, v0, _ = inputs[0]
+    cosim = CoSimulation(model, 1e-4, 0.0, x0, v0)
+    if not single_step:
+        cosim._single_step = None  # every step through model.advance and integrate
+    rows = []
+    for x, v, h in inputs:
+        assert cosim.set_inputs(x, v) is None
+        assert cosim.do_step(cosim.time, h) is None
+        rows.append((tuple(cosim.outputs()), tuple(cosim.state), cosim.integrator.h_next,
+                     cosim.integrator.w))
+    return rows
+
+
+def _inputs(name, amplitude, frequency, jittered):
+    """A sine sampled at its step points (secant rates) or, jittered, with steps from
+    0.3 to 1.8 ms and the angle resampled off the path the rate predicts."""
+    rows, t = [], 0.0
+    for k in range(1500):
+        h = 1e-3 * (0.3 + 0.25 * (k % 7)) if jittered else 1e-3
+        x = amplitude * math.sin(2 * math.pi * frequency * t)
+        x_next = amplitude * math.sin(2 * math.pi * frequency * (t + h))
+        rows.append((x, (x_next - x) / h, h))
+        t += h
+    return rows
+
+
+# Amplitudes that take the tyre off the ground and the damper into blow-off.
+SINGLE_STEP_CASES = {"RoadWheelTyre": (4e-3, 3.0), "TrackBushRadial": (3e-4, 5.0),
+                     "TrackBushTorsion": (0.3, 2.0), "RotaryDamper": (0.2, 3.0)}
+
+
+@pytest.mark.parametrize("jittered", [False, True])
+@pytest.mark.parametrize("name", sorted(SINGLE_STEP_CASES))
+def test_single_step_path_is_bit_identical_to_the_general_path(name, jittered):
+    """The fused path only saves calls: every output, state entry and integrator memory
+    the same to the last bit as model.advance + integrate, including the steps it hands
+    back (tyre crossings, rejections, steps the controller splits)."""
+    inputs = _inputs(name, *SINGLE_STEP_CASES[name], jittered)
+    assert _run(_model(name), inputs) == _run(_model(name), inputs, single_step=False)
+
+
+@pytest.mark.parametrize("name", sorted(SINGLE_STEP_CASES))
+def test_single_step_path_takes_the_thesis_sine_at_1_ms(name):
+    """The benchmark's standard input: the fused path takes (almost) every step, so the
+    cost it measures is that path's."""
+    model = _model(name)
+    cosim = CoSimulation(model, 1e-4)
+    single_step = cosim._single_step
+    taken = []
+    cosim._single_step = lambda *args: taken.append(single_step(*args)) or taken[-1]
+    _, x, v = thesis_sine(name, 2.0, 1e-3)
+    for k in range(len(x) - 1):
+        cosim.set_inputs(x[k], v[k])
+        assert cosim.do_step(cosim.time, 1e-3) is None
+    assert sum(taken) >= 0.99 * len(taken)
+
+
+def test_rubber_with_two_nested_branches_takes_the_general_n_state_path():
+    """Four integrated states (the factorisation by inversion, a block Jacobian): the
+    compiled Jacobian matches finite differences and both step paths agree."""
+    definition = COMPONENTS["TrackBushRadial"]
+    values = definition.default_parameters()
+    base = definition.build_model(values)
+    (k1, c1, xi1, k2, g, xi2), = base._nested
+    branch = Branch(MaxwellElement(k1, c1, xi1), nested=MaxwellElement(k2, k2 / g, xi2))
+    slower = Branch(MaxwellElement(0.5 * k1, 4.0 * c1, xi1),
+                    nested=MaxwellElement(0.3 * k2, 0.3 * k2 / g, xi2))
+    plain = Branch(MaxwellElement(*base._plain[0]))
+    model = RubberModel([branch, slower, plain], base.elastic, base.geometric_slope,
+                        base.geometric_reference)
+    rhs = compile_rhs(model, 4)
+    y, u = [1e-4, 2e-5, -5e-5, 1e-5], 0.01
+    analytic = np.array(model.jacobian(y, u))
+    assert analytic[0, 2] == analytic[2, 0] == 0.0  # the branches do not interact
+    for j in range(4):
+        step = 1e-7 * max(abs(y[j]), model.state_scale[j] * 1e-3)
+        up, down = list(y), list(y)
+        up[j] += step
+        down[j] -= step
+        numeric = (np.array(rhs(up, u)) - np.array(rhs(down, u))) / (2 * step)
+        assert np.allclose(analytic[:, j], numeric, rtol=1e-6, atol=1e-9 * np.abs(analytic).max())
+    inputs = _inputs("TrackBushRadial", 3e-4, 5.0, jittered=True)[:400]
+    assert _run(model, inputs) == _run(model, inputs, single_step=False)

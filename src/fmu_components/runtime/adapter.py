@@ -218,7 +218,8 @@ class ComponentSlave(Fmi2Slave):
             cosim = self._cosim
             outcome = cosim.do_step(current_time, step_size)
             if outcome is None:
-                self._values[DEFLECTION_VR] = cosim.deflection
+                # The deflection has moved on with the step: its value is read from the
+                # co-simulation with the outputs (_refresh_outputs), not copied here.
                 self._outputs_stale = True
                 return True
             kind, problem = outcome
@@ -253,6 +254,7 @@ class ComponentSlave(Fmi2Slave):
                 outputs = model.outputs(model.initial_state(x, v), x, v)
         else:
             outputs = cosim.outputs()
+            self._values[DEFLECTION_VR] = cosim.deflection
         for vr, value in zip(self._output_vrs, outputs):
             self._values[vr] = value
         self._outputs_stale = False
@@ -282,7 +284,9 @@ class ComponentSlave(Fmi2Slave):
             self._refuse_out_of_sequence("fmi2SetReal", SETTABLE)
             return
         try:
-            inputs = self._values[:2]  # deflection, rate
+            cosim = self._cosim
+            # deflection, rate: the co-simulation's are current (see do_step)
+            inputs = [cosim.deflection, cosim.rate] if cosim is not None else self._values[:2]
             inputs_set = False
             for vr, value in zip(vrs, values):
                 if (vr == DEFLECTION_VR or vr == RATE_VR) and math.isfinite(value):
@@ -373,7 +377,10 @@ class ComponentSlave(Fmi2Slave):
 
     @fmi_call("fmi2GetFMUstate", ANY_STATE, on_failure=lambda self: {})
     def _get_fmu_state(self):
-        return {"model": self.definition.name, "values": self._values[:], "mode": self._mode,
+        values = self._values[:]
+        if self._cosim is not None:
+            values[DEFLECTION_VR] = self._cosim.deflection  # see do_step
+        return {"model": self.definition.name, "values": values, "mode": self._mode,
                 "start_time": self._start_time, "tolerance": self._tolerance,
                 "warned": sorted(self._warned),
                 "cosim": self._cosim.snapshot() if self._cosim is not None else None}

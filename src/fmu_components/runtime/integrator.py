@@ -26,7 +26,11 @@ a message, never as an exception in the middle of a step.
 Speed: a step is straight-line code generated from the tableau below and the system's
 right-hand side, once per system, so that a step of a two-state system costs about two
 microseconds in CPython rather than tens: no loops, no lists, and no function call per
-stage, which would cost more than the stage's arithmetic (see ``compile_step``).
+stage, which would cost more than the stage's arithmetic (see ``compile_step``). A
+communication step that is one integrator step, nearly every step at 1 ms, goes through a
+second generated function that also holds the step-size control and the model's
+closed-form part (``Rosenbrock.single_step``), bit for bit what ``integrate`` and the
+model's ``advance`` would do, without their loops and calls.
 """
 
 import math
@@ -224,6 +228,8 @@ def _jacobian_lines(source, n):
     """Lines that leave d rhs / dy in j0_0 .. from ``y``, ``u``: the source's own, or a
     call of ``system.jacobian``."""
     names = [[f"j{i}_{k}" for k in range(n)] for i in range(n)]
+    if n == 0:
+        return []
     if not source.jacobian:
         return [f"({', '.join('(' + ', '.join(row) + ',)' for row in names)},) = "
                 "system.jacobian(y, u)"]
@@ -237,7 +243,7 @@ def compile_jacobian(source, n):
     integrator factors, callable on its own (the model's ``jacobian``, tests)."""
     rows = ", ".join("(" + ", ".join(f"j{i}_{k}" for k in range(n)) + ",)" for i in range(n))
     lines = (["def jacobian(y, u):"] + [f"    {line}" for line in _jacobian_lines(source, n)]
-             + [f"    return ({rows},)"])
+             + [f"    return ({rows},)" if n else "    return ()"])
     return _compile("\n".join(lines) + "\n", source.namespace, "<jacobian>")["jacobian"]
 
 
@@ -376,7 +382,7 @@ def _single_step_lines(tableau, n, source, state_scale, inverse):
              "elif h_control < h:",
              "    return False  # the controller wants more than one step"]
     body += source.start_lines(n)
-    body += [f"Y{i} = y{i}" for i in q]
+    body.append(f"{', '.join(f'Y{i}' for i in q)}, = {', '.join(f'y{i}' for i in q)},")
     body += ["cached = memory.w",
              f"same = {SAME_STEP_SIZE!r} * h",
              "if cached is not None and -same <= cached[0] - h <= same and cached[2] < max_reuse:",
@@ -394,7 +400,9 @@ def _single_step_lines(tableau, n, source, state_scale, inverse):
              "    return False",
              f"allowed = h * {SAFETY!r} * error ** ({exponent!r}) if error > 0.0 else inf",
              f"grown = {STEP_GROWTH_LIMIT!r} * h_control",
-             f"memory.h_next = grown if allowed > grown else max({STEP_SHRINK_LIMIT!r} * h_control, allowed)",
+             f"shrunk = {STEP_SHRINK_LIMIT!r} * h_control",
+             # integrate's min(grown, max(shrunk, allowed)), without the call
+             "memory.h_next = grown if allowed > grown else allowed if allowed > shrunk else shrunk",
              "memory.w = (h, w, uses)",
              "memory.accepted_steps += 1"]
     body += source.exact
