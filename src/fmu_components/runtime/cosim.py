@@ -57,6 +57,8 @@ class CoSimulation:
         if not -slack <= current_time - time <= slack:
             return REFUSED, (f"current time {current_time!r} s does not follow from the last "
                              f"step, which ended at {time!r} s")
+        # Nearly every step is one integrator step: the generated fused path takes it, or
+        # hands it back untouched to the model's advance (Rosenbrock.single_step).
         single_step = self._single_step
         if single_step is not None and single_step(self.state, self.deflection, self.rate,
                                                    step_size):
