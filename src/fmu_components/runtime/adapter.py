@@ -218,8 +218,7 @@ class ComponentSlave(Fmi2Slave):
             cosim = self._cosim
             outcome = cosim.do_step(current_time, step_size)
             if outcome is None:
-                # The deflection has moved on with the step: its value is read from the
-                # co-simulation with the outputs (_refresh_outputs), not copied here.
+                # The deflection has moved on with the step (see _current_inputs).
                 self._outputs_stale = True
                 return True
             kind, problem = outcome
@@ -240,6 +239,12 @@ class ComponentSlave(Fmi2Slave):
     def _parameter_values(self):
         return {self._variables[vr].name: self._values[vr] for vr in self._parameter_vrs}
 
+    def _current_inputs(self):
+        """[deflection, rate] now. Once initialized the co-simulation holds them: the
+        deflection moves on with each step, and do_step does not copy it into _values."""
+        cosim = self._cosim
+        return [cosim.deflection, cosim.rate] if cosim is not None else self._values[:2]
+
     def _refresh_outputs(self):
         cosim = self._cosim
         if cosim is None:
@@ -254,7 +259,7 @@ class ComponentSlave(Fmi2Slave):
                 outputs = model.outputs(model.initial_state(x, v), x, v)
         else:
             outputs = cosim.outputs()
-            self._values[DEFLECTION_VR] = cosim.deflection
+            self._values[:2] = self._current_inputs()
         for vr, value in zip(self._output_vrs, outputs):
             self._values[vr] = value
         self._outputs_stale = False
@@ -284,9 +289,7 @@ class ComponentSlave(Fmi2Slave):
             self._refuse_out_of_sequence("fmi2SetReal", SETTABLE)
             return
         try:
-            cosim = self._cosim
-            # deflection, rate: the co-simulation's are current (see do_step)
-            inputs = [cosim.deflection, cosim.rate] if cosim is not None else self._values[:2]
+            inputs = self._current_inputs()
             inputs_set = False
             for vr, value in zip(vrs, values):
                 if (vr == DEFLECTION_VR or vr == RATE_VR) and math.isfinite(value):
@@ -378,8 +381,7 @@ class ComponentSlave(Fmi2Slave):
     @fmi_call("fmi2GetFMUstate", ANY_STATE, on_failure=lambda self: {})
     def _get_fmu_state(self):
         values = self._values[:]
-        if self._cosim is not None:
-            values[DEFLECTION_VR] = self._cosim.deflection  # see do_step
+        values[:2] = self._current_inputs()
         return {"model": self.definition.name, "values": values, "mode": self._mode,
                 "start_time": self._start_time, "tolerance": self._tolerance,
                 "warned": sorted(self._warned),

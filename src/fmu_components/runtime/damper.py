@@ -88,8 +88,7 @@ class RotaryDamper:
                    f"f0 = (u - Y1) * cosh_z * cosh_z / {self.gas_limit!r}",
                    f"f1 = ({self.gas_force!r} * sinh(2.0 * Y0) - dashpot(Y1)) / {self.rotor_inertia!r}"],
             region=f"abs(Y0) < {Z_LIMIT!r}",  # inside()
-            jacobian=["cosh_z = cosh(Y0)",
-                      f"j0_0 = (u - Y1) * sinh(2.0 * Y0) / {self.gas_limit!r}",
+            jacobian=[f"j0_0 = (u - Y1) * sinh(2.0 * Y0) / {self.gas_limit!r}",
                       f"j0_1 = -cosh_z * cosh_z / {self.gas_limit!r}",
                       f"j1_0 = 2.0 * {self.gas_force!r} * cosh(2.0 * Y0) / {self.rotor_inertia!r}",
                       f"j1_1 = -dashpot_slope(Y1) / {self.rotor_inertia!r}"],

@@ -68,6 +68,9 @@ class RosenbrockTableau:
         self.c = c
         self.m = m
         self.e = e
+        # The step-size controller's power of the squared error norm (the steps compute
+        # the square, which saves a root): h * err^(-1/(p+1)) for an order-p estimate.
+        self.squared_error_exponent = -0.5 / (embedded_order + 1)
         # Stiffly accurate: the solution is the last stage's state plus the last k (m_j =
         # a_last,j, m_last = 1), which the step uses to save the weighted sum.
         last = len(m) - 1
@@ -189,14 +192,18 @@ class RhsSource:
                 tuple(sorted(self.namespace.items(), key=lambda item: item[0])))
 
 
+def _names(prefix, n):
+    """'p0, p1, ..,' as a tuple display's contents (a trailing comma for one)."""
+    return ", ".join(f"{prefix}{i}" for i in range(n)) + ","
+
+
 def rhs_source(system, n):
     """The system's RhsSource, or one that calls its ``rhs`` method."""
     if hasattr(system, "rhs_source"):
         return system.rhs_source()
-    states = ", ".join(f"Y{i}" for i in range(n))
-    derivatives = ", ".join(f"f{i}" for i in range(n))
-    region = None if system.inside is None else f"inside(({states},))"
-    return RhsSource([f"{derivatives}, = rhs(({states},), u)"], region=region,
+    states = _names("Y", n)
+    region = None if system.inside is None else f"inside(({states}))"
+    return RhsSource([f"{_names('f', n)} = rhs(({states}), u)"], region=region,
                      namespace={"rhs": system.rhs, "inside": system.inside})
 
 
@@ -206,52 +213,54 @@ def _compile(source_text, namespace, label):
     return namespace
 
 
+def _compile_function(signature, body, result, source):
+    """One generated function: ``def signature:`` running `body` (lines) then returning
+    `result`, with the source's namespace."""
+    lines = [f"def {signature}:"] + [f"    {line}" for line in body] + [f"    return {result}"]
+    name = signature.split("(")[0]
+    return _compile("\n".join(lines) + "\n", source.namespace, f"<{name}>")[name]
+
+
 def compile_rhs(system, n):
     """The system's right-hand side as a function ``rhs(y, u) -> tuple``, compiled from its
     source: what the integrator's stages compute, callable on its own (tests, tools)."""
     source = rhs_source(system, n)
-    lines = ["def rhs(y, u):", f"    {', '.join(f'Y{i}' for i in range(n))}, = y"]
-    lines += [f"    {line}" for line in source.held + source.stage]
-    lines.append(f"    return ({', '.join(f'f{i}' for i in range(n))},)")
-    return _compile("\n".join(lines) + "\n", source.namespace, "<rhs>")["rhs"]
+    return _compile_function("rhs(y, u)", [f"{_names('Y', n)} = y", *source.held, *source.stage],
+                             f"({_names('f', n)})", source)
 
 
 def compile_exact(source):
     """The source's closed-form update as a function ``exact(state, u, h)``, for a model's
     own step when it does not take the single-step path (see RhsSource)."""
-    lines = ["def exact(state, u, h):"] + [f"    {line}" for line in source.held + source.exact]
-    lines.append("    return None")
-    return _compile("\n".join(lines) + "\n", source.namespace, "<exact>")["exact"]
+    return _compile_function("exact(state, u, h)", [*source.held, *source.exact], "None",
+                             source)
 
 
 def _jacobian_lines(source, n):
-    """Lines that leave d rhs / dy in j0_0 .. from ``y``, ``u``: the source's own, or a
-    call of ``system.jacobian``."""
-    names = [[f"j{i}_{k}" for k in range(n)] for i in range(n)]
+    """Lines that leave d rhs / dy in j0_0 .. from ``y``, ``u``: the source's own, after the
+    stage lines (its lines may use f0 ..), or a call of ``system.jacobian``."""
     if n == 0:
         return []
+    names = [[f"j{i}_{k}" for k in range(n)] for i in range(n)]
     if not source.jacobian:
         return [f"({', '.join('(' + ', '.join(row) + ',)' for row in names)},) = "
                 "system.jacobian(y, u)"]
-    states = ", ".join(f"Y{i}" for i in range(n)) + ("," if n == 1 else "")
-    return ([f"{states} = y", f"{' = '.join(name for row in names for name in row)} = 0.0"]
-            + list(source.held) + list(source.jacobian))
+    return ([f"{_names('Y', n)} = y", f"{' = '.join(name for row in names for name in row)} = 0.0",
+             *source.held, *source.stage, *source.jacobian])
 
 
 def compile_jacobian(source, n):
     """The source's Jacobian as a function ``jacobian(y, u) -> rows``: the one the
     integrator factors, callable on its own (the model's ``jacobian``, tests)."""
-    rows = ", ".join("(" + ", ".join(f"j{i}_{k}" for k in range(n)) + ",)" for i in range(n))
-    lines = (["def jacobian(y, u):"] + [f"    {line}" for line in _jacobian_lines(source, n)]
-             + [f"    return ({rows},)" if n else "    return ()"])
-    return _compile("\n".join(lines) + "\n", source.namespace, "<jacobian>")["jacobian"]
+    rows = " ".join("(" + ", ".join(f"j{i}_{k}" for k in range(n)) + ",)," for i in range(n))
+    return _compile_function("jacobian(y, u)", _jacobian_lines(source, n), f"({rows})",
+                             source)
 
 
 def compile_start(source, n):
     """The source's start of a step as a function ``start(state, x) -> (y0, ..)``."""
-    lines = ["def start(state, x):"] + [f"    {line}" for line in source.start_lines(n)]
-    lines.append(f"    return ({', '.join(f'y{i}' for i in range(n))},)")
-    return _compile("\n".join(lines) + "\n", source.namespace, "<start>")["start"]
+    return _compile_function("start(state, x)", source.start_lines(n), f"({_names('y', n)})",
+                             source)
 
 
 def compile_step(tableau, n, source, state_scale):
@@ -272,7 +281,7 @@ def compile_step(tableau, n, source, state_scale):
     RADAU5 estimate).
     """
     q = range(n)
-    states = ", ".join(f"Y{i}" for i in q) + ("," if n == 1 else "")
+    states = _names("Y", n)
     inverse = ", ".join(f"w{i}{j}" for i in q for j in q)
     d = f"(1.0 / ({tableau.gamma!r} * h))"
     jacobian = [f"    {line}" for line in _jacobian_lines(source, n)]
@@ -293,7 +302,7 @@ def compile_step(tableau, n, source, state_scale):
                        for i in q) + "])",
                    "    return None if inverse is None else tuple(v for row in inverse for v in row)"])
     step = ["def step(y, u, h, rtol, w):",
-            f"    {states.replace('Y', 'y')} = {states} = y",
+            f"    {_names('y', n)} = {states} = y",
             f"    ({inverse},) = w"]
     step += _step_lines(tableau, n, source, state_scale, "return None", "    ")
     step.append(f"    return ({states}), error")
@@ -370,7 +379,6 @@ def _single_step_lines(tableau, n, source, state_scale, inverse):
     take; whenever ``integrate`` would do anything else it returns False having changed
     nothing."""
     q = range(n)
-    exponent = -0.5 / (tableau.embedded_order + 1)  # of the squared error norm
     lines = ["def single_step_for(memory, system, max_reuse):",
              "    def single_step(state, x, u, h, inf=math.inf):"]
     body = []
@@ -382,14 +390,14 @@ def _single_step_lines(tableau, n, source, state_scale, inverse):
              "elif h_control < h:",
              "    return False  # the controller wants more than one step"]
     body += source.start_lines(n)
-    body.append(f"{', '.join(f'Y{i}' for i in q)}, = {', '.join(f'y{i}' for i in q)},")
+    body.append(f"{_names('Y', n)} = {_names('y', n)}")
     body += ["cached = memory.w",
              f"same = {SAME_STEP_SIZE!r} * h",
              "if cached is not None and -same <= cached[0] - h <= same and cached[2] < max_reuse:",
              "    w = cached[1]",
              "    uses = cached[2] + 1",
              "else:",
-             f"    w = factor(system, ({', '.join(f'y{i}' for i in q)},), u, h)",
+             f"    w = factor(system, ({_names('y', n)}), u, h)",
              "    if w is None:",
              "        return False",
              "    uses = 1",
@@ -398,7 +406,8 @@ def _single_step_lines(tableau, n, source, state_scale, inverse):
     body += _step_lines(tableau, n, source, state_scale, "return False", "")
     body += ["if not error <= 1.0:",
              "    return False",
-             f"allowed = h * {SAFETY!r} * error ** ({exponent!r}) if error > 0.0 else inf",
+             f"allowed = h * {SAFETY!r} * error ** ({tableau.squared_error_exponent!r})"
+             " if error > 0.0 else inf",
              f"grown = {STEP_GROWTH_LIMIT!r} * h_control",
              f"shrunk = {STEP_SHRINK_LIMIT!r} * h_control",
              # integrate's min(grown, max(shrunk, allowed)), without the call
@@ -440,8 +449,6 @@ class Rosenbrock:
         self.w = None  # (h, W^-1 as a flat tuple, uses so far)
         self.accepted_steps = 0
         self.rejected_steps = 0
-        # The step-size controller's power of the squared error norm: h * err^(-1/(p+1)).
-        self._exponent = -0.5 / (tableau.embedded_order + 1)
         self._last_compiled = (None, None, None)  # (system, n, compiled)
 
     def compiled(self, system, n):
@@ -500,7 +507,7 @@ class Rosenbrock:
             return None
         factor, step, _, _ = self.compiled(system, len(y))
         rtol = self.rtol
-        exponent = self._exponent
+        exponent = self.tableau.squared_error_exponent
         max_reuse = self.MAX_W_REUSE
         current = tuple(y)
         # h is the step size the controller wants; the step actually tried may be cut

@@ -145,13 +145,12 @@ class RubberModel:
                       # |ds/dt| as a conditional expression: the same value without a call
                       f"{dw} = {ds} - {g!r} * {w} * (({ds} if {ds} >= 0.0 else -{ds}) + {xi2!r})"]
             # d|ds/dt|/dy = sign(ds/dt) d(ds/dt)/dy: the nested rate rides on the outer one.
-            jacobian += [f"sdot = u - ({k1!r} * {s} + {k2!r} * {w}) * fluidity{i}",
-                         f"nested_factor = 1.0 - {g!r} * {w} * copysign(1.0, sdot)",
+            jacobian += [f"nested_factor = 1.0 - {g!r} * {w} * copysign(1.0, {ds})",
                          f"j{p}_{p} = -{k1!r} * fluidity{i}",
                          f"j{p}_{q} = -{k2!r} * fluidity{i}",
                          f"j{q}_{p} = -{k1!r} * fluidity{i} * nested_factor",
                          f"j{q}_{q} = -{k2!r} * fluidity{i} * nested_factor"
-                         f" - {g!r} * (abs(sdot) + {xi2!r})"]
+                         f" - {g!r} * (abs({ds}) + {xi2!r})"]
         exact = []
         for i, (k, c, xi) in enumerate(self._plain, start=self.integrated_size):
             exact += [f"decay = {k!r} * (speed + {xi!r}) / {c!r}",
