@@ -18,7 +18,8 @@ import pytest
 from fmpy import simulate_fmu
 
 from fmu_components.runtime.cosim import CoSimulation
-from fmu_components.runtime.rubber import Branch, MaxwellElement, RubberModel
+from fmu_components.runtime.model import Model
+from fmu_components.runtime.rubber import Branch, MaxwellElement, rubber_equations
 from fmu_components.signals import input_table, ramp_and_hold
 
 K, C = 1.5e5, 500.0  # the tyre's branch B (Appendix 4b, SI)
@@ -30,8 +31,8 @@ def single_element_model(xi, integrated):
         branch = Branch(element, nested=MaxwellElement(K * 1e-12, C, xi))
     else:
         branch = Branch(element)
-    return RubberModel([branch], elastic=(0.0, 0.0, 0.0, 0.0), geometric_slope=0.0,
-                       geometric_reference=0.0)
+    return Model(rubber_equations([branch], elastic=(0.0, 0.0, 0.0, 0.0), geometric_slope=0.0,
+                                  geometric_reference=0.0))
 
 
 def drive(model, times, deflection, rtol=1e-9):

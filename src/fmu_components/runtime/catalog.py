@@ -8,10 +8,11 @@ time constant tau = c/(k*xi) = 100, 0.1 and 1.0 s of section 6.4 (spec section 1
 
 import math
 
-from .damper import RotaryDamper
-from .hermite import check_monotone_table
+from .damper import damper_equations
+from .expressions import Symbol
 from .integrator import DEFAULT_RTOL
-from .rubber import Branch, MaxwellElement, RubberModel
+from .model import Model
+from .rubber import Branch, MaxwellElement, rubber_equations
 
 PER_DEG = 180.0 / math.pi  # multiplies a per-degree value into per-radian
 MM = 1e-3
@@ -47,15 +48,14 @@ class Variable:
 class ComponentDefinition:
     """Everything the generic FMU adapter needs to know about one component."""
 
-    def __init__(self, name, description, inputs, outputs, parameters, build_model,
-                 direct_outputs, measured_ranges, check_together=None, stop_time=2.0):
+    def __init__(self, name, description, inputs, outputs, parameters, equations,
+                 direct_outputs, measured_ranges, stop_time=2.0):
         self.name = name
         self.description = description
         self.inputs = inputs  # (deflection, rate)
         self.outputs = outputs
         self.parameters = parameters
-        self.build_model = build_model  # dict name -> value  ->  model
-        self.check_together = check_together  # dict -> message or None, across parameters
+        self.equations = equations  # model.Equations over the parameters' names
         self.direct_outputs = direct_outputs  # outputs that depend directly on the deflection
         self.measured_ranges = measured_ranges  # input name -> (low, high, what the thesis measured)
         self.default_experiment = {"startTime": 0.0, "stopTime": stop_time,
@@ -65,18 +65,26 @@ class ComponentDefinition:
     def variables(self):
         return list(self.inputs) + list(self.outputs) + list(self.parameters)
 
+    def build_model(self, values):
+        """The Python model with these parameter values (name -> value)."""
+        return Model(self.equations, values)
+
     def default_parameters(self):
         """The thesis value of every parameter, by name."""
         return {p.name: p.start for p in self.parameters}
 
     def check_parameters(self, values):
-        """A message naming the first parameter (or combination) that makes no physical
-        sense, else None."""
+        """A message naming the first parameter (or table) that makes no physical sense,
+        else None."""
         for parameter in self.parameters:
             problem = parameter.check(values[parameter.name])
             if problem:
                 return f"parameter {problem}"
-        return self.check_together(values) if self.check_together else None
+        for table in self.equations.tables:
+            problem = table.check(values)
+            if problem:
+                return problem
+        return None
 
 
 # --- rubber components (spec section 2) ---------------------------------------------------
@@ -139,18 +147,17 @@ def _rubber_component(name, description, *, deflection, deflection_meaning, load
                  f"geometric multiplier ({geometric_thesis})", x_ref, display),
     ]
 
-    def build(values):
-        def element(i):
-            return MaxwellElement(values[f"k{i}"], values[f"c{i}"], values[f"xi{i}"])
-        return RubberModel(
-            branches=[Branch(element(1), nested=element(2)), Branch(element(3))],
-            elastic=[values[f"elastic.a{p}"] for p in range(4)],
-            geometric_slope=values["geometric.h"],
-            geometric_reference=values["geometric.x_ref"],
-            unilateral=unilateral)
+    def element(i):
+        return MaxwellElement(Symbol(f"k{i}"), Symbol(f"c{i}"), Symbol(f"xi{i}"))
+
+    equations = rubber_equations(
+        branches=[Branch(element(1), nested=element(2)), Branch(element(3))],
+        elastic=[Symbol(f"elastic.a{p}") for p in range(4)],
+        geometric_slope=Symbol("geometric.h"), geometric_reference=Symbol("geometric.x_ref"),
+        unilateral=unilateral)
 
     return ComponentDefinition(
-        name, description, inputs, outputs, parameters, build,
+        name, description, inputs, outputs, parameters, equations,
         direct_outputs=[o.name for o in outputs],
         measured_ranges={deflection: measured_range})
 
@@ -264,32 +271,16 @@ def _damper_component():
                                    f"{i + 1}: angular rate (Table A6-1)", rate, "deg/s"))
         parameters.append(Variable(_torque_name(i), "parameter", "N.m", f"Dashpot curve point "
                                    f"{i + 1}: torque, smoothed column (Table A6-1)", torque))
-    def table(values):
-        return ([values[_rate_name(i)] for i in range(TABLE_SIZE)],
-                [values[_torque_name(i)] for i in range(TABLE_SIZE)])
-
-    def check_table(values):
-        rates, torques = table(values)
-        problem = check_monotone_table(rates, torques)
-        if problem:
-            return f"dashpot table: {problem}"
-        for rate, torque in zip(rates, torques):
-            if rate * torque < 0.0 or (rate == 0.0 and torque != 0.0):
-                return (f"dashpot table: torque {torque:.6g} N.m at rate {rate:.6g} rad/s "
-                        f"would feed energy in; a dashpot's torque takes the sign of its rate")
-        return None
-
-    def build(values):
-        rates, torques = table(values)
-        return RotaryDamper(values["C1"], values["C2"], values["I"], rates, torques)
+    equations = damper_equations("C1", "C2", "I", [_rate_name(i) for i in range(TABLE_SIZE)],
+                                 [_torque_name(i) for i in range(TABLE_SIZE)])
 
     return ComponentDefinition(
         "RotaryDamper",
         "Warrior rotary suspension damper at the wheel-arm pivot: Table A6-1 dashpot "
         "(laminar, turbulent, blow-off) in series with an isothermal entrapped-gas spring, "
         "rotor inertia between them (thesis chapters 9-14, Appendices 5 and 6).",
-        inputs, outputs, parameters, build,
-        direct_outputs=["torque", "gas_deflection", "stiffness"], check_together=check_table,
+        inputs, outputs, parameters, equations,
+        direct_outputs=["torque", "gas_deflection", "stiffness"],
         measured_ranges={"angle": (-math.pi / 4, math.pi / 4, "rotation about +/-45 deg, section 9.1"),
                          "angle_rate": (-14.0, 14.0, "Table A6-1 spans +/-14 rad/s")})
 

@@ -28,7 +28,7 @@ class CoSimulation:
         self.rate = rate
         self.state = model.initial_state(deflection, rate)
         self._outputs = None
-        self._single_step = self.integrator.single_step(model, model.integrated_size)
+        self._single_step = self.integrator.single_step(model)
 
     def set_inputs(self, deflection, rate):
         """Returns an error message (and changes nothing) if the model cannot take them."""

@@ -11,7 +11,7 @@ rotor-node angle theta_r and rate omega_r:
     output torque = Tg
 
 Td is the smoothed torque-velocity curve of Table A6-1 (laminar, turbulent and blow-off
-regions), interpolated monotone and C1.
+regions), interpolated monotone and C1 (hermite.py).
 
 The gas spring is integrated in z, with xd = C2 tanh(z). Then Eq. A5-16 reads
 Tg = C1 sinh(2z): the pole at |xd| = C2 becomes an exponential, an error in z is a relative
@@ -24,106 +24,72 @@ enough. Within a step the arm rate is held, so (z, omega_r) obey an autonomous s
 
 The integrator keeps |z| < Z_LIMIT (where tanh still differs from 1 in double precision)
 by rejecting and shrinking steps.
+
+State layout: [z, omega_r, theta_z], z being the gas-spring coordinate for the arm angle
+theta_z; a host that moves the arm discontinuously shifts z accordingly. The equations are
+expression trees over the parameters as symbols (expressions.py).
 """
 
-import math
-
-from .hermite import MonotoneCubic
-from .integrator import RhsSource, compile_jacobian, compile_start
+from .expressions import (Assign, Element, Format, Lookup, Message, Symbol, atanh, cosh,
+                          equal, sinh, tanh, where)
+from .model import Equations, InputLimit, Table
 
 Z_LIMIT = 18.0  # tanh(18) = 1 - 4.6e-16: beyond it xd is C2 to the last bit
+DASHPOT = "dashpot"
 
 
-class RotaryDamper:
-    """State layout: [z, omega_r, theta_z], z being the gas-spring coordinate for the arm
-    angle theta_z; a host that moves the arm discontinuously shifts z accordingly."""
+def _gas_deflection(C2, state, x):
+    """xd at arm angle x: the state's own, plus whatever the arm moved away from theta_z."""
+    return C2 * tanh(state[0]) + (x - state[2])
 
-    state_size = 3
-    integrated_size = 2
 
-    def __init__(self, gas_force, gas_limit, rotor_inertia, table_rates, table_torques):
-        self.gas_force = gas_force  # C1
-        self.gas_limit = gas_limit  # C2
-        self.rotor_inertia = rotor_inertia  # I
-        self.dashpot = MonotoneCubic(table_rates, table_torques)
-        # Typical magnitudes for the absolute tolerance: z is dimensionless, and the rotor
-        # rate is taken on the scale of 1 rad/s (the thesis rig's range, section 11.0).
-        self.state_scale = [1.0, 1.0]
-        source = self.rhs_source()
-        self._start = compile_start(source, self.integrated_size)
-        self.jacobian = compile_jacobian(source, self.integrated_size)
+def _z_at(C2, state, x):
+    """z for arm angle x: the state's own unless the arm has moved away from theta_z, as a
+    host's angle and rate from its own integrator always do by round-off, or by a jump:
+    then the gas spring takes up the difference."""
+    return where(equal(x, state[2]), state[0], atanh(_gas_deflection(C2, state, x) / C2))
 
-    def initial_state(self, theta, omega):
-        """Rotor node moving with the arm: zero gas deflection, tau(0) = 0 (spec 3)."""
-        return [0.0, omega, theta]
 
-    def _unchecked_deflection(self, state, theta):
-        return self.gas_limit * math.tanh(state[0]) + (theta - state[2])
-
-    def check_input(self, state, theta):
-        deflection = self._unchecked_deflection(state, theta)
-        if abs(deflection) >= self.gas_limit:
-            return (f"angle {theta:.9g} rad puts the gas-spring deflection at {deflection:.6g} "
-                    f"rad, outside its limit |xd| < C2 = {self.gas_limit:.6g} rad")
-        return None
-
-    def _z_at(self, state, theta):
-        """z for arm angle theta: the state's own z unless the arm has moved away from
-        theta_z (see rhs_source)."""
-        return self._start(state, theta)[0]
-
-    def torque(self, z):
-        return self.gas_force * math.sinh(2.0 * z)  # Eq. A5-16 with xd = C2 tanh(z)
-
-    # --- integrator system over y = [z, omega_r], input u = arm rate --------------------
-
-    def inside(self, y):
-        return abs(y[0]) < Z_LIMIT
-
-    def rhs_source(self):
-        """dz/dt and d(omega_r)/dt (module docstring) for the integrator to compile: state
-        Y = [z, omega_r], held arm rate u."""
-        return RhsSource(
-            stage=["cosh_z = cosh(Y0)",
-                   f"f0 = (u - Y1) * cosh_z * cosh_z / {self.gas_limit!r}",
-                   f"f1 = ({self.gas_force!r} * sinh(2.0 * Y0) - dashpot(Y1)) / {self.rotor_inertia!r}"],
-            region=f"abs(Y0) < {Z_LIMIT!r}",  # inside()
-            jacobian=[f"j0_0 = (u - Y1) * sinh(2.0 * Y0) / {self.gas_limit!r}",
-                      f"j0_1 = -cosh_z * cosh_z / {self.gas_limit!r}",
-                      f"j1_0 = 2.0 * {self.gas_force!r} * cosh(2.0 * Y0) / {self.rotor_inertia!r}",
-                      f"j1_1 = -dashpot_slope(Y1) / {self.rotor_inertia!r}"],
-            namespace={"cosh": math.cosh, "sinh": math.sinh, "dashpot": self.dashpot.value,
-                       "dashpot_slope": self.dashpot.slope, "tanh": math.tanh,
-                       "atanh": math.atanh},
-            # z at the arm angle x: the state's own unless the arm has moved away from
-            # theta_z, as a host's angle and rate from its own integrator always do by
-            # round-off, or by a jump: then the gas spring takes up the difference,
-            # xd = C2 tanh(z) + (x - theta_z).
-            start=["y0 = state[0] if x == state[2] else atanh("
-                   f"({self.gas_limit!r} * tanh(state[0]) + (x - state[2])) / {self.gas_limit!r})",
-                   "y1 = state[1]"],
-            exact=["state[2] = x + u * h"])
-
-    def advance(self, state, theta, omega, h, integrator):
-        y = [self._z_at(state, theta), state[1]]
-        problem = integrator.integrate(self, y, omega, h)
-        if problem:
-            # Almost always an arm rate that jumped far from the rotor's: the gas spring can
-            # only stop that with a torque spike beyond any step size (e.g. 0 -> 100 rad/s
-            # in one step gives ~1e14 N.m in the model).
-            return (f"{problem}; the arm rate {omega:.6g} rad/s met the rotor at "
-                    f"{state[1]:.6g} rad/s, a jump the gas spring cannot absorb within the "
-                    f"step: ramp the rate over several steps")
-        state[0], state[1], state[2] = y[0], y[1], theta + omega * h
-        return None
-
-    def outputs(self, state, theta, omega):
-        """(torque, gas-spring deflection, rotor-node rate, dashpot torque, tangent
-        stiffness d torque/d theta). The rotor inertia keeps theta_r from responding
-        instantly, so the instantaneous tangent is the gas-spring stiffness."""
-        z = self._z_at(state, theta)
-        cosh_z = math.cosh(z)
-        stiffness = 2.0 * self.gas_force * math.cosh(2.0 * z) * cosh_z * cosh_z / self.gas_limit
-        rotor_rate = state[1]
-        return (self.torque(z), self.gas_limit * math.tanh(z), rotor_rate,
-                self.dashpot.value(rotor_rate), stiffness)
+def damper_equations(C1, C2, I, rates, torques):
+    """rates, torques: the parameter names of the Table A6-1 points."""
+    C1, C2, I = Symbol(C1), Symbol(C2), Symbol(I)
+    Y0, Y1, u, h, x, v = (Symbol(n) for n in ("Y0", "Y1", "u", "h", "x", "v"))
+    state = [Element("state", i) for i in range(3)]
+    cosh_z = Symbol("cosh_z")
+    z, deflection = Symbol("z"), Symbol("deflection")
+    return Equations(
+        integrated=2, state_size=3,
+        stage=[Assign(cosh_z, cosh(Y0)),
+               Assign(Symbol("f0"), (u - Y1) * cosh_z * cosh_z / C2),
+               # Eq. A5-16 with xd = C2 tanh(z): Tg = C1 sinh(2z)
+               Assign(Symbol("f1"), (C1 * sinh(2.0 * Y0) - Lookup(DASHPOT, Y1)) / I)],
+        jacobian=[Assign(Symbol("j0_0"), (u - Y1) * sinh(2.0 * Y0) / C2),
+                  Assign(Symbol("j0_1"), -cosh_z * cosh_z / C2),
+                  Assign(Symbol("j1_0"), 2.0 * C1 * cosh(2.0 * Y0) / I),
+                  Assign(Symbol("j1_1"), -Lookup(DASHPOT, Y1, slope=True) / I)],
+        region=abs(Y0) < Z_LIMIT,
+        start=[Assign(Symbol("y0"), _z_at(C2, state, x)), Assign(Symbol("y1"), state[1])],
+        exact=[Assign(state[2], x + u * h)],
+        # The rotor node moving with the arm: zero gas deflection, tau(0) = 0 (spec 3).
+        initial_state=[0.0, v, x],
+        # The rotor inertia keeps theta_r from responding instantly, so the instantaneous
+        # tangent d torque/d theta is the gas-spring stiffness.
+        output_lines=[Assign(z, _z_at(C2, state, x)), Assign(cosh_z, cosh(z))],
+        outputs=[C1 * sinh(2.0 * z), C2 * tanh(z), state[1], Lookup(DASHPOT, state[1]),
+                 2.0 * C1 * cosh(2.0 * z) * cosh_z * cosh_z / C2],
+        input_limit=InputLimit(
+            [Assign(deflection, _gas_deflection(C2, state, x))], abs(deflection) < C2,
+            Message("angle ", Format(x, ".9g"), " rad puts the gas-spring deflection at ",
+                    Format(deflection), " rad, outside its limit |xd| < C2 = ", Format(C2),
+                    " rad")),
+        # Almost always an arm rate that jumped far from the rotor's: the gas spring can
+        # only stop that with a torque spike beyond any step size (e.g. 0 -> 100 rad/s in
+        # one step gives ~1e14 N.m in the model).
+        failure_hint=Message("the arm rate ", Format(v), " rad/s met the rotor at ",
+                             Format(state[1]), " rad/s, a jump the gas spring cannot absorb "
+                             "within the step: ramp the rate over several steps"),
+        # z is dimensionless, and the rotor rate is taken on the scale of 1 rad/s (the
+        # thesis rig's range, section 11.0).
+        state_scale=[1.0, 1.0],
+        tables=[Table(DASHPOT, rates, torques, abscissa=("rate", "rad/s"),
+                      ordinate=("torque", "N.m"), dissipative=True)])

@@ -81,8 +81,9 @@ class MonotoneCubic:
                 piece = self._below
             elif x >= self.xs[-1]:
                 piece = self._above
-            else:
-                piece = self._pieces[bisect.bisect_right(self.xs, x) - 1]
+            else:  # NaN lands on the last piece, as in the C runtime
+                index = bisect.bisect_right(self.xs, x) - 1
+                piece = self._pieces[min(index, len(self._pieces) - 1)]
             self._last = piece
         return piece
 

@@ -7,26 +7,22 @@ linearly implicit: each step factors W = I/(gamma*h) - J once and solves a few s
 linear systems, so there are no Newton iterations to converge or fail. The problems here
 are small (two states per nested rubber branch, two for the damper).
 
-The integrator knows nothing of what it integrates. A *system* provides
-
-* ``rhs(y, u)``: dy/dt for the state sequence ``y`` and an input ``u`` held over the step,
-  or instead ``rhs_source()``: the same as straight-line Python (an ``RhsSource``), which
-  the integrator compiles into its stage code,
-* ``jacobian(y, u)``: d rhs / dy as a sequence of rows (or, in its RhsSource, as lines
-  the integrator compiles into the factorisation of W),
-* ``inside(y)``: False where the state leaves the region the model is defined in (or
-  ``None`` when the model is defined everywhere),
-* ``state_scale``: a typical magnitude of each state, which sets the absolute tolerance
-  ``rtol * state_scale``.
+The integrator knows nothing of what it integrates. A *system* (``model.Model``) gives its
+equations as expression trees (``equations``: ``held``, ``stage``, ``jacobian``, ``region``,
+see ``model.Equations``), the printer that turns them into Python with its parameter values
+(``printer``), the functions they call (``namespace``) and ``state_scale``, a typical
+magnitude of each state, which sets the absolute tolerance ``rtol * state_scale``.
 
 Steps that fail the error test, or whose stages leave the valid region or stop being
 finite, are rejected and retried smaller; nothing is ever clipped. A failure comes back as
 a message, never as an exception in the middle of a step.
 
-Speed: a step is straight-line code generated from the tableau below and the system's
-right-hand side, once per system, so that a step of a two-state system costs about two
-microseconds in CPython rather than tens: no loops, no lists, and no function call per
-stage, which would cost more than the stage's arithmetic (see ``compile_step``). A
+One step, its factorisation of W and its error norm are statements built here from the
+tableau and the system's equations (``factor_statements``, ``step_statements``), which
+either printer prints: as Python below, as C for the native flavour (``fmu_components.cgen``).
+The Python is straight-line code, once per system, so that a step of a two-state system
+costs about two microseconds in CPython rather than tens: no loops, no lists, and no
+function call per stage, which would cost more than the stage's arithmetic. A
 communication step that is one integrator step, nearly every step at 1 ms, goes through a
 second generated function that also holds the step-size control and the model's
 closed-form part (``Rosenbrock.single_step``), bit for bit what ``integrate`` and the
@@ -34,6 +30,9 @@ model's ``advance`` would do, without their loops and calls.
 """
 
 import math
+
+from .expressions import (Assign, Number, Require, Symbol, all_of, differs, equal, total,
+                          where)
 
 DEFAULT_RTOL = 1e-4
 """Relative tolerance used when the host gives none in fmi2SetupExperiment."""
@@ -142,268 +141,195 @@ def invert(matrix):
     return [row[n:] for row in work]
 
 
-class RhsSource:
-    """A right-hand side as straight-line Python, for the integrator to inline.
-
-    * ``stage``: lines that set ``f0 .. f{n-1}`` (dy/dt) from the stage state
-      ``Y0 .. Y{n-1}``, the held input ``u`` and any name set by ``held``;
-    * ``held``: lines that depend on ``u`` alone, run once per step rather than per stage;
-    * ``region``: an expression in ``Y0 ..`` that is false where the state leaves the
-      region the model is defined in (the inline form of ``system.inside``), or None;
-    * ``jacobian``: lines that set the entries ``j{row}_{column}`` of d rhs / dy at the
-      state ``Y0 ..`` (entries they leave unset are zero), or empty: then the integrator
-      calls ``system.jacobian``;
-    * ``namespace``: the functions and objects the lines name.
-
-    A model whose whole state is not integrated also describes a communication step over
-    which its input is held, for the single-step path (``Rosenbrock.single_step``): the
-    model's state list is ``state``, its first n entries the integrated ones, ``x`` the
-    deflection at the start of the step, ``u`` its held rate and ``h`` the step size.
-
-    * ``start``: lines that set ``y0 .. y{n-1}``, the integrated states at the start of
-      the step, from ``state`` and ``x`` (default: the first n entries of ``state``);
-    * ``exact``: lines that advance the other entries of ``state`` over the step by their
-      closed-form solution (they may use the names set by ``held``);
-    * ``one_segment``: an expression, true when the step is a single interval over which
-      the integrated states see the held input ``u`` itself and ``exact`` applies (None:
-      always).
-
-    Numbers are best written into the lines as literals (``repr``), which CPython loads
-    fastest; systems with the same source and namespace share one compiled step.
-    """
-
-    def __init__(self, stage, held=(), region=None, namespace=None, jacobian=(), start=(),
-                 exact=(), one_segment=None):
-        self.stage = tuple(stage)
-        self.held = tuple(held)
-        self.region = region
-        self.jacobian = tuple(jacobian)
-        self.namespace = dict(namespace or {})
-        self.start = tuple(start)
-        self.exact = tuple(exact)
-        self.one_segment = one_segment
-
-    def start_lines(self, n):
-        return self.start or tuple(f"y{i} = state[{i}]" for i in range(n))
-
-    def key(self):
-        return (self.stage, self.held, self.region, self.jacobian, self.start, self.exact,
-                self.one_segment,
-                tuple(sorted(self.namespace.items(), key=lambda item: item[0])))
-
+# --- the step as statements, for either printer -------------------------------------------
 
 def _names(prefix, n):
-    """'p0, p1, ..,' as a tuple display's contents (a trailing comma for one)."""
-    return ", ".join(f"{prefix}{i}" for i in range(n)) + ","
+    return [f"{prefix}{i}" for i in range(n)]
 
 
-def rhs_source(system, n):
-    """The system's RhsSource, or one that calls its ``rhs`` method."""
-    if hasattr(system, "rhs_source"):
-        return system.rhs_source()
-    states = _names("Y", n)
-    region = None if system.inside is None else f"inside(({states}))"
-    return RhsSource([f"{_names('f', n)} = rhs(({states}), u)"], region=region,
-                     namespace={"rhs": system.rhs, "inside": system.inside})
+def _combination(terms):
+    """sum of coefficient * symbol, dropping zero coefficients and unit factors."""
+    parts = [Symbol(name) if coefficient == 1.0 else coefficient * Symbol(name)
+             for coefficient, name in terms if coefficient]
+    return total(parts) if parts else Number(0.0)
 
 
-def _compile(source_text, namespace, label):
-    namespace = {"math": math, "invert": invert, **namespace}
-    exec(compile(source_text, label, "exec"), namespace)
-    return namespace
+def jacobian_statements(equations):
+    """d rhs / dy into j0_0 .. at the stage state Y0 .. (entries the equations leave unset
+    are zero): the held and stage statements first, whose values the Jacobian's may use."""
+    n = equations.integrated
+    zero = [Assign(Symbol(f"j{i}_{k}"), 0.0) for i in range(n) for k in range(n)]
+    return zero + list(equations.held) + list(equations.stage) + list(equations.jacobian)
 
 
-def _compile_function(signature, body, result, source):
-    """One generated function: ``def signature:`` running `body` (lines) then returning
-    `result`, with the source's namespace."""
-    lines = [f"def {signature}:"] + [f"    {line}" for line in body] + [f"    return {result}"]
-    name = signature.split("(")[0]
-    return _compile("\n".join(lines) + "\n", source.namespace, f"<{name}>")[name]
+def factor_statements(tableau, equations):
+    """W = I/(gamma h) - J at Y0 .., u, h: for two states its inverse into w0 .. w3, which
+    fails when W is singular; for more, the matrix entries (the caller inverts them)."""
+    n = equations.integrated
+    d = Symbol("d")
+    lines = jacobian_statements(equations) + [Assign(d, 1.0 / (tableau.gamma * Symbol("h")))]
+    j = [[Symbol(f"j{i}_{k}") for k in range(n)] for i in range(n)]
+    if n != 2:
+        return lines, [[d - j[i][k] if i == k else -j[i][k] for k in range(n)] for i in range(n)]
+    a, b, det = Symbol("a"), Symbol("b"), Symbol("det")
+    lines += [Assign(a, d - j[0][0]), Assign(b, d - j[1][1]),
+              Assign(det, a * b - j[0][1] * j[1][0]),
+              # x - x is 0 for finite x: "det is finite and not zero", without a call
+              Require(all_of(differs(det, 0.0), equal(det - det, 0.0))),
+              Assign(Symbol("w0"), b / det), Assign(Symbol("w1"), j[0][1] / det),
+              Assign(Symbol("w2"), j[1][0] / det), Assign(Symbol("w3"), a / det)]
+    return lines, None
 
 
-def compile_rhs(system, n):
-    """The system's right-hand side as a function ``rhs(y, u) -> tuple``, compiled from its
-    source: what the integrator's stages compute, callable on its own (tests, tools)."""
-    source = rhs_source(system, n)
-    return _compile_function("rhs(y, u)", [f"{_names('Y', n)} = y", *source.held, *source.stage],
-                             f"({_names('f', n)})", source)
-
-
-def compile_exact(source):
-    """The source's closed-form update as a function ``exact(state, u, h)``, for a model's
-    own step when it does not take the single-step path (see RhsSource)."""
-    return _compile_function("exact(state, u, h)", [*source.held, *source.exact], "None",
-                             source)
-
-
-def _jacobian_lines(source, n):
-    """Lines that leave d rhs / dy in j0_0 .. from ``y``, ``u``: the source's own, after the
-    stage lines (its lines may use f0 ..), or a call of ``system.jacobian``."""
-    if n == 0:
-        return []
-    names = [[f"j{i}_{k}" for k in range(n)] for i in range(n)]
-    if not source.jacobian:
-        return [f"({', '.join('(' + ', '.join(row) + ',)' for row in names)},) = "
-                "system.jacobian(y, u)"]
-    return ([f"{_names('Y', n)} = y", f"{' = '.join(name for row in names for name in row)} = 0.0",
-             *source.held, *source.stage, *source.jacobian])
-
-
-def compile_jacobian(source, n):
-    """The source's Jacobian as a function ``jacobian(y, u) -> rows``: the one the
-    integrator factors, callable on its own (the model's ``jacobian``, tests)."""
-    rows = " ".join("(" + ", ".join(f"j{i}_{k}" for k in range(n)) + ",)," for i in range(n))
-    return _compile_function("jacobian(y, u)", _jacobian_lines(source, n), f"({rows})",
-                             source)
-
-
-def compile_start(source, n):
-    """The source's start of a step as a function ``start(state, x) -> (y0, ..)``."""
-    return _compile_function("start(state, x)", source.start_lines(n), f"({_names('y', n)})",
-                             source)
-
-
-def compile_step(tableau, n, source, state_scale):
-    """Straight-line Python for one step of `tableau` on an n-state system with right-hand
-    side `source` (an RhsSource): three generated functions,
-
-    * ``factor(system, y, u, h)``: W^-1 = (I/(gamma*h) - J(y, u))^-1 as a flat tuple, or
-      None when W is singular;
-    * ``step(y, u, h, rtol, w)``: one step with that W^-1, returning
-      ``(y_new, error_norm ** 2)``, or None when a stage or the result leaves the valid
-      region or is not finite;
-    * ``single_step_for(memory, system, max_reuse)``: the single-step path of a Rosenbrock
-      instance (``memory``), see ``Rosenbrock.single_step``.
+def step_statements(tableau, equations, state_scale):
+    """One step from y0 .. with W^-1 in w00 .. (row-major, w{i}{j}), input u, size h and
+    tolerance rtol: the new state into Y0 .. and the squared, filtered error norm into
+    ``error``. It fails when a stage or the result leaves the valid region or is not
+    finite.
 
     The error is filtered through (I - gamma*h*J)^-1 = W^-1/(gamma*h) before its norm is
     taken: the embedded solution is not L-stable (|Rhat(inf)| = 0.48), and a raw estimate
     would report stiff transients as error at any step size (Hairer & Wanner IV.8, the
-    RADAU5 estimate).
-    """
-    q = range(n)
-    states = _names("Y", n)
-    inverse = ", ".join(f"w{i}{j}" for i in q for j in q)
-    d = f"(1.0 / ({tableau.gamma!r} * h))"
-    jacobian = [f"    {line}" for line in _jacobian_lines(source, n)]
-    if n == 2:  # written out for two states, the common case here
-        factor = (["def factor(system, y, u, h, isfinite=math.isfinite):"] + jacobian +
-                  [f"    d = {d}",
-                   "    a = d - j0_0",
-                   "    b = d - j1_1",
-                   "    det = a * b - j0_1 * j1_0",
-                   "    if det == 0.0 or not isfinite(det):",
-                   "        return None",
-                   "    return (b / det, j0_1 / det, j1_0 / det, a / det)"])
-    else:
-        factor = (["def factor(system, y, u, h):"] + jacobian +
-                  [f"    d = {d}",
-                   "    inverse = invert([" + ", ".join(
-                       "[" + ", ".join(f"{'d - ' if i == k else '-'}j{i}_{k}" for k in q) + "]"
-                       for i in q) + "])",
-                   "    return None if inverse is None else tuple(v for row in inverse for v in row)"])
-    step = ["def step(y, u, h, rtol, w):",
-            f"    {_names('y', n)} = {states} = y",
-            f"    ({inverse},) = w"]
-    step += _step_lines(tableau, n, source, state_scale, "return None", "    ")
-    step.append(f"    return ({states}), error")
-    text = "\n".join(factor) + "\n\n\n" + "\n".join(step) + "\n\n\n" + "\n".join(
-        _single_step_lines(tableau, n, source, state_scale, inverse)) + "\n"
-    namespace = _compile(text, source.namespace, f"<{tableau.name} step, {n} states>")
-    return namespace["factor"], namespace["step"], namespace["single_step_for"], text
-
-
-def _step_lines(tableau, n, source, state_scale, fail, indent):
-    """The body of one step from y0.. with W^-1 in w00.., input u, size h and tolerance
-    rtol: it leaves the new state in Y0.. and the squared error norm in ``error``, or runs `fail`
-    when a stage or the result leaves the valid region or is not finite."""
+    RADAU5 estimate)."""
+    n = equations.integrated
     q = range(n)
     stages = range(len(tableau.m))
-
-    def combination(terms):
-        """sum of coefficient * symbol, dropping zero coefficients and unit factors."""
-        parts = [symbol if coefficient == 1.0 else f"{coefficient!r} * {symbol}"
-                 for coefficient, symbol in terms if coefficient]
-        return " + ".join(parts) if parts else "0.0"
-
-    region_check = [] if source.region is None else [f"if not ({source.region}):", f"    {fail}"]
-    lines = [f"d = (1.0 / ({tableau.gamma!r} * h))", "ih = 1.0 / h"]
-    lines += source.held
+    Y, y = [Symbol(f"Y{i}") for i in q], [Symbol(f"y{i}") for i in q]
+    w = [[Symbol(f"w{i}{k}") for k in q] for i in q]
+    region = [] if equations.region is None else [Require(equations.region)]
+    lines = [Assign(Symbol("d"), 1.0 / (tableau.gamma * Symbol("h"))),
+             Assign(Symbol("ih"), 1.0 / Symbol("h"))]
+    lines += [Assign(Y[i], y[i]) for i in q]
+    lines += equations.held
     for s in stages:
         if s > 0:
             for i in q:
-                terms = [(tableau.a[s][j], f"k{j}_{i}") for j in range(s)]
-                lines.append(f"Y{i} = y{i} + {combination(terms)}")
-            lines += region_check
-        lines += source.stage
+                lines.append(Assign(Y[i], _combination(
+                    [(1.0, f"y{i}")] + [(tableau.a[s][j], f"k{j}_{i}") for j in range(s)])))
+            lines += region
+        lines += equations.stage
         right = "f"  # the right-hand side of the stage's linear system, f + sum c_ij/h k_j
         if any(tableau.c[s][j] for j in range(s)):
             right = "r"
             for i in q:
-                terms = [(tableau.c[s][j], f"k{j}_{i}") for j in range(s)]
-                lines.append(f"r{i} = f{i} + ih * ({combination(terms)})")
+                lines.append(Assign(Symbol(f"r{i}"), Symbol(f"f{i}") + Symbol("ih") * _combination(
+                    [(tableau.c[s][j], f"k{j}_{i}") for j in range(s)])))
         for i in q:
-            lines.append(f"k{s}_{i} = " + " + ".join(f"w{i}{j} * {right}{j}" for j in q))
+            lines.append(Assign(Symbol(f"k{s}_{i}"),
+                                total([w[i][j] * Symbol(f"{right}{j}") for j in q])))
     last = len(tableau.m) - 1
     for i in q:
         if tableau.stiffly_accurate:
             # y1 = y + sum_j a_last,j k_j + k_last: the last stage's state plus its k.
-            lines.append(f"Y{i} = Y{i} + k{last}_{i}")
+            lines.append(Assign(Y[i], Y[i] + Symbol(f"k{last}_{i}")))
         else:
-            lines.append(f"Y{i} = y{i} + {combination([(tableau.m[s], f'k{s}_{i}') for s in stages])}")
-        lines.append(f"e{i} = d * ({combination([(tableau.e[s], f'k{s}_{i}') for s in stages])})")
+            lines.append(Assign(Y[i], _combination(
+                [(1.0, f"y{i}")] + [(tableau.m[s], f"k{s}_{i}") for s in stages])))
+        lines.append(Assign(Symbol(f"e{i}"), Symbol("d") * _combination(
+            [(tableau.e[s], f"k{s}_{i}") for s in stages])))
     # A sum is finite only if every term is (or it overflows, which is no valid state
     # either), and x - x is 0 for finite x, nan for inf and nan: the test without a call.
-    lines.append(f"total = {' + '.join(f'Y{i}' for i in q)}")
-    lines.append("if total - total != 0.0:")
-    lines.append(f"    {fail}")
-    lines += region_check
+    lines.append(Assign(Symbol("sum_Y"), total(Y)))
+    lines.append(Require(equal(Symbol("sum_Y") - Symbol("sum_Y"), 0.0)))
+    lines += region
     for i in q:
-        # max(abs(y), abs(Y)) as conditional expressions, and squares as products: the
-        # same values without calls.
-        lines += [f"a{i} = y{i} if y{i} >= 0.0 else -y{i}",
-                  f"b{i} = Y{i} if Y{i} >= 0.0 else -Y{i}"]
-        filtered = " + ".join(f"w{i}{j} * e{j}" for j in q)
-        weight = f"({float(state_scale[i])!r} + (b{i} if b{i} > a{i} else a{i}))"
-        lines.append(f"z{i} = ({filtered}) / {weight}")
-    # The squared norm: its tests against 1 and 0 are the norm's, and the controller
-    # takes its power with half the exponent, which saves the square root.
-    lines.append(f"error = ({' + '.join(f'z{i} * z{i}' for i in q)}) / ({n} * rtol * rtol)")
-    return [indent + line for line in lines]
+        a, b = Symbol(f"a{i}"), Symbol(f"b{i}")
+        lines += [Assign(a, abs(y[i])), Assign(b, abs(Y[i])),
+                  Assign(Symbol(f"z{i}"), total([w[i][j] * Symbol(f"e{j}") for j in q])
+                         / (state_scale[i] + where(b > a, b, a)))]
+    # The squared norm: its tests against 1 and 0 are the norm's, and the controller takes
+    # its power with half the exponent, which saves the square root.
+    lines.append(Assign(Symbol("error"), total([Symbol(f"z{i}") * Symbol(f"z{i}") for i in q])
+                        / (float(n) * Symbol("rtol") * Symbol("rtol"))))
+    return lines
 
 
-def _single_step_lines(tableau, n, source, state_scale, inverse):
-    """``single_step_for(memory, system, max_reuse)``: the one-step case of
-    ``Rosenbrock.integrate`` fused with the model's closed-form update (RhsSource.exact),
-    as one function. It decides, reuses or rebuilds W^-1 and controls the step size exactly
-    as ``integrate`` does, so a step it takes is bit for bit the one ``integrate`` would
-    take; whenever ``integrate`` would do anything else it returns False having changed
-    nothing."""
-    q = range(n)
-    lines = ["def single_step_for(memory, system, max_reuse):",
-             "    def single_step(state, x, u, h, inf=math.inf):"]
+# --- the step in Python -----------------------------------------------------------------------
+
+def _function(signature, body, result):
+    return "\n".join([f"def {signature}:"] + [f"    {line}" for line in body]
+                     + [f"    return {result}"])
+
+
+def _tuple(names):
+    return "(" + ", ".join(names) + ",)"
+
+
+def compile_python(text, namespace, label):
+    namespace = {"math": math, "invert": invert, **namespace}
+    exec(compile(text, label, "exec"), namespace)
+    return namespace
+
+
+def python_step(tableau, system):
+    """Straight-line Python for one step of `tableau` on `system` (a compiled model:
+    ``equations``, ``printer()`` and ``state_scale``): the source of three functions,
+
+    * ``factor(y, u, h)``: W^-1 = (I/(gamma*h) - J(y, u))^-1 as a flat tuple, or None
+      when W is singular;
+    * ``step(y, u, h, rtol, w)``: one step with that W^-1, returning
+      ``(y_new, error_norm ** 2)``, or None when a stage or the result leaves the valid
+      region or is not finite;
+    * ``single_step_for(memory, max_reuse)``: the single-step path of a Rosenbrock
+      instance (``memory``), see ``Rosenbrock.single_step``.
+    """
+    equations = system.equations
+    n = equations.integrated
+    Y, y = _names("Y", n), _names("y", n)
+    inverse = [f"w{i}{k}" for i in range(n) for k in range(n)]
+    factor_lines, matrix = factor_statements(tableau, equations)
+    printer = system.printer(["u", "h", *Y])
+    body = [f"{_tuple(Y)} = y"] + printer.statements(factor_lines, "return None")
+    if matrix is None:
+        factor = _function("factor(y, u, h)", body, _tuple(_names("w", 4)))
+    else:
+        rows = ", ".join("[" + ", ".join(printer.expression(e) for e in row) + "]" for row in matrix)
+        body.append(f"inverse = invert([{rows}])")
+        factor = _function("factor(y, u, h)", body,
+                           "None if inverse is None else tuple(v for row in inverse for v in row)")
+    statements = step_statements(tableau, equations, [Number(s) for s in system.state_scale])
+    printer = system.printer(["u", "h", "rtol", *y, *inverse])
+    step = _function("step(y, u, h, rtol, w)",
+                     [f"{_tuple(y)} = y", f"{_tuple(inverse)} = w",
+                      *printer.statements(statements, "return None")],
+                     f"{_tuple(Y)}, error")
+    return "\n\n\n".join([factor, step, _single_step_source(tableau, system, statements,
+                                                                inverse)]) + "\n"
+
+
+def _single_step_source(tableau, system, statements, inverse):
+    """``single_step_for(memory, max_reuse)``: the one-step case of ``Rosenbrock.integrate``
+    fused with the model's closed-form update, as one function. It decides, reuses or
+    rebuilds W^-1 and controls the step size exactly as ``integrate`` does, so a step it
+    takes is bit for bit the one ``integrate`` would take; whenever ``integrate`` would do
+    anything else it returns False having changed nothing."""
+    equations = system.equations
+    n = equations.integrated
+    y = _names("y", n)
+    printer = system.printer(["state", "x", "u", "h", "rtol"])
     body = []
-    if source.one_segment is not None:
-        body += [f"if not ({source.one_segment}):", "    return False"]
+    if equations.unilateral:  # the rubber rate is u over the whole step (Model.rate_segments)
+        body += ["if not (x > 0.0 and x + u * h > 0.0):", "    return False"]
     body += ["h_control = memory.h_next",
              "if h_control is None:",
              "    h_control = h",
              "elif h_control < h:",
              "    return False  # the controller wants more than one step"]
-    body += source.start_lines(n)
-    body.append(f"{_names('Y', n)} = {_names('y', n)}")
+    body += printer.statements(equations.start_statements(), "return False")
     body += ["cached = memory.w",
              f"same = {SAME_STEP_SIZE!r} * h",
              "if cached is not None and -same <= cached[0] - h <= same and cached[2] < max_reuse:",
              "    w = cached[1]",
              "    uses = cached[2] + 1",
              "else:",
-             f"    w = factor(system, ({_names('y', n)}), u, h)",
+             f"    w = factor({_tuple(y)}, u, h)",
              "    if w is None:",
              "        return False",
              "    uses = 1",
-             f"({inverse},) = w",
+             f"{_tuple(inverse)} = w",
              "rtol = memory.rtol"]
-    body += _step_lines(tableau, n, source, state_scale, "return False", "")
+    printer.known.update(inverse)
+    body += printer.statements(statements, "return False")
     body += ["if not error <= 1.0:",
              "    return False",
              f"allowed = h * {SAFETY!r} * error ** ({tableau.squared_error_exponent!r})"
@@ -414,12 +340,13 @@ def _single_step_lines(tableau, n, source, state_scale, inverse):
              "memory.h_next = grown if allowed > grown else allowed if allowed > shrunk else shrunk",
              "memory.w = (h, w, uses)",
              "memory.accepted_steps += 1"]
-    body += source.exact
-    body += [f"state[{i}] = Y{i}" for i in q]
+    body += printer.statements(equations.exact, "return False")  # held values in scope
+    body += [f"state[{i}] = Y{i}" for i in range(n)]
     body.append("return True")
-    lines += ["        " + line for line in body]
-    lines.append("    return single_step")
-    return lines
+    return "\n".join(["def single_step_for(memory, max_reuse):",
+                      "    def single_step(state, x, u, h, inf=math.inf):",
+                      *[f"        {line}" for line in body],
+                      "    return single_step"])
 
 
 class Rosenbrock:
@@ -435,8 +362,8 @@ class Rosenbrock:
     """
 
     MAX_W_REUSE = 8
-    # (tableau, n, right-hand side, state scale) -> (factor, step, single_step_for, source
-    # text): systems with the same equations and parameters share one compiled step.
+    # Python source and namespace -> (factor, step, single_step_for, source): systems with
+    # the same equations and parameters share one compiled step.
     _compiled = {}
     MAX_COMPILED = 64
 
@@ -449,44 +376,47 @@ class Rosenbrock:
         self.w = None  # (h, W^-1 as a flat tuple, uses so far)
         self.accepted_steps = 0
         self.rejected_steps = 0
-        self._last_compiled = (None, None, None)  # (system, n, compiled)
+        self._last_compiled = (None, None)  # (system, compiled)
 
-    def compiled(self, system, n):
-        """(factor, step, single_step_for, source text) for an n-state system."""
-        last_system, last_n, compiled = self._last_compiled
-        if last_system is not system or last_n != n:
-            source = rhs_source(system, n)
-            key = (self.tableau.name, n, source.key(), tuple(system.state_scale))
+    def compiled(self, system):
+        """(factor, step, single_step_for, source text) for a system (a compiled model)."""
+        last_system, compiled = self._last_compiled
+        if last_system is not system:
+            source = python_step(self.tableau, system)
+            key = (source, tuple(sorted(system.namespace.items())))
             compiled = self._compiled.get(key)
             if compiled is None:
                 if len(self._compiled) >= self.MAX_COMPILED:
                     self._compiled.clear()  # a host sweeping parameters: do not grow forever
-                compiled = self._compiled[key] = compile_step(self.tableau, n, source,
-                                                              system.state_scale)
-            self._last_compiled = (system, n, compiled)
+                functions = compile_python(source, system.namespace,
+                                           f"<{self.tableau.name} step>")
+                compiled = self._compiled[key] = (functions["factor"], functions["step"],
+                                                  functions["single_step_for"], source)
+            self._last_compiled = (system, compiled)
         return compiled
 
     def step(self, system, y, u, h):
         """One step of size h with a fresh Jacobian: (y_new, error_norm ** 2), or None."""
-        factor, step, _, _ = self.compiled(system, len(y))
-        w = factor(system, y, u, h)
+        factor, step, _, _ = self.compiled(system)
+        w = factor(y, u, h)
         return None if w is None else step(y, u, h, self.rtol, w)
 
-    def single_step(self, system, n):
+    def single_step(self, system):
         """The single-step path for `system`, a model whose first n state entries this
-        integrator advances and whose RhsSource describes the rest (``exact``), or None if
-        it has none. ``single_step(state, x, u, h)`` advances the model's state list over
-        a communication step of size h with the rate u held, in one integrator step, and
-        returns True; it returns False, with nothing changed, when that is not what
-        ``integrate`` would do (the step is not one segment, the controller wants smaller
-        steps, the step is rejected). Then the model's own ``advance`` takes the step.
+        integrator advances and whose equations advance the rest in closed form
+        (``exact``), or None if it integrates nothing. ``single_step(state, x, u, h)``
+        advances the model's state list over a communication step of size h with the rate
+        u held, in one integrator step, and returns True; it returns False, with nothing
+        changed, when that is not what ``integrate`` would do (the step is not one segment,
+        the controller wants smaller steps, the step is rejected). Then the model's own
+        ``advance`` takes the step.
 
         Why: a communication step of 1 ms is one integrator step almost always, and the
         layers between the FMI call and the generated step (co-simulation, model,
         integrator loop) cost more than the step itself (benchmarks/results.md)."""
-        if n == 0 or not hasattr(system, "rhs_source"):
+        if system.equations.integrated == 0:
             return None
-        return self.compiled(system, n)[2](self, system, self.MAX_W_REUSE)
+        return self.compiled(system)[2](self, self.MAX_W_REUSE)
 
     def memory(self):
         return {"h_next": self.h_next, "w": list(self.w) if self.w else None}
@@ -505,7 +435,7 @@ class Rosenbrock:
         """
         if duration <= 0.0 or not y:
             return None
-        factor, step, _, _ = self.compiled(system, len(y))
+        factor, step, _, _ = self.compiled(system)
         rtol = self.rtol
         exponent = self.tableau.squared_error_exponent
         max_reuse = self.MAX_W_REUSE
@@ -532,7 +462,7 @@ class Rosenbrock:
                 w = cached[1]
                 self.w = (h_try, w, cached[2] + 1)
             else:
-                w = factor(system, current, u, h_try)
+                w = factor(current, u, h_try)
                 self.w = None if w is None else (h_try, w, 1)
             result = None if w is None else step(current, u, h_try, rtol, w)
             if result is None:

@@ -1,0 +1,136 @@
+/*
+ * The co-simulation step (spec section 4): runtime/cosim.py and model.py's advance,
+ * statement for statement. Inputs set before doStep(tc, h) are the values at tc; over the
+ * step the rate is held and the deflection moves with it; a step either completes or
+ * leaves everything as it was.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "runtime.h"
+#include "text.h"
+
+#define N MODEL_INTEGRATED
+
+void cosim_start(Instance *instance) {
+    Snapshot *s = &instance->s;
+    build_model_data(&instance->data, s->values);
+    memset(&s->memory, 0, sizeof s->memory);
+    s->memory.rtol = s->tolerance;
+    s->time = s->start_time;
+    s->deflection = s->values[INPUT_DEFLECTION];
+    s->rate = s->values[INPUT_RATE];
+    model_initial_state(&instance->data, s->deflection, s->rate, s->state);
+    s->initialized = 1;
+    instance->outputs_fresh = 0;
+}
+
+int cosim_input_problem(Instance *instance, double deflection, char *message, size_t size) {
+    if (!instance->s.initialized) return 0;
+    return model_input_problem(&instance->data, instance->s.state, deflection, message, size);
+}
+
+typedef struct {
+    double duration, rate, x; /* the rate the rubber sees, the deflection at the start */
+} Segment;
+
+/* As model.rate_segments: the whole step, or for a contact the parts in and out of it. */
+static int rate_segments(double x, double v, double h, Segment *segments) {
+    if (!MODEL_INFO.unilateral) {
+        segments[0] = (Segment){h, v, x};
+        return 1;
+    }
+    double x_end = x + v * h;
+    if (x > 0.0 && x_end > 0.0) {
+        segments[0] = (Segment){h, v, x};
+        return 1;
+    }
+    if (x <= 0.0 && x_end <= 0.0) {
+        segments[0] = (Segment){h, 0.0, x};
+        return 1;
+    }
+    double crossing = -x / v; /* x reaches 0 inside the step */
+    segments[0] = (Segment){crossing, x > 0.0 ? v : 0.0, x};
+    segments[1] = (Segment){h - crossing, x > 0.0 ? 0.0 : v, x + v * crossing};
+    return 2;
+}
+
+/* As Model.advance: the state is written only once the whole step has succeeded. */
+static int advance(Instance *instance, double x, double v, double h, char *message,
+                   size_t size) {
+    Snapshot *s = &instance->s;
+    double work[SLOTS(MODEL_STATES)], y[SLOTS(N)];
+    memcpy(work, s->state, sizeof work);
+    Segment segments[2];
+    int count = rate_segments(x, v, h, segments);
+    for (int k = 0; k < count; k++) {
+        const Segment *segment = &segments[k];
+        if (!(segment->duration > 0.0)) continue;
+        if (N) {
+            model_start(&instance->data, work, segment->x, y);
+            char problem[MESSAGE_SIZE];
+            if (integrate(&instance->data, &s->memory, y, segment->rate, segment->duration,
+                          problem, sizeof problem)) {
+                char hint[MESSAGE_SIZE];
+                model_failure_hint(&instance->data, s->state, v, hint, sizeof hint);
+                snprintf(message, size, hint[0] ? "%s; %s" : "%s%s", problem, hint);
+                return 1;
+            }
+        }
+        model_exact(&instance->data, work, segment->x, segment->rate, segment->duration);
+        for (int i = 0; i < N; i++) work[i] = y[i];
+    }
+    memcpy(s->state, work, sizeof work);
+    return 0;
+}
+
+int cosim_do_step(Instance *instance, double current_time, double step_size, char *message,
+                  size_t size) {
+    Snapshot *s = &instance->s;
+    char a[REPR_SIZE], b[REPR_SIZE];
+    if (!(0.0 < step_size && step_size < INFINITY)) {
+        snprintf(message, size, "communication step size %s s must be positive and finite",
+                 format_repr(step_size, a));
+        return STEP_REFUSED;
+    }
+    double time = s->time;
+    /* |current_time - time| <= 1e-9 max(1, |time|) */
+    double slack = 1e-9 * (time > 1.0 ? time : time < -1.0 ? -time : 1.0);
+    double gap = current_time - time;
+    if (!(-slack <= gap && gap <= slack)) {
+        snprintf(message, size, "current time %s s does not follow from the last step, which "
+                 "ended at %s s", format_repr(current_time, a), format_repr(time, b));
+        return STEP_REFUSED;
+    }
+    /* Nearly every step is one integrator step: the fused path takes it, or hands it back
+       untouched to advance. */
+    if (N == 0 || !single_step(&instance->data, &s->memory, s->state, s->deflection, s->rate,
+                               step_size)) {
+        Memory memory = s->memory;
+        char problem[MESSAGE_SIZE];
+        if (advance(instance, s->deflection, s->rate, step_size, problem, sizeof problem)) {
+            s->memory.has_h_next = memory.has_h_next;
+            s->memory.h_next = memory.h_next;
+            s->memory.w_uses = memory.w_uses;
+            s->memory.w_h = memory.w_h;
+            memcpy(s->memory.w, memory.w, sizeof memory.w);
+            snprintf(message, size, "step from t = %.9g s by %.6g s failed: %s", current_time,
+                     step_size, problem);
+            return STEP_FAILED_TO_COMPLETE;
+        }
+    }
+    s->time = current_time + step_size;
+    s->deflection += s->rate * step_size;
+    instance->outputs_fresh = 0;
+    return STEP_DONE;
+}
+
+const double *cosim_outputs(Instance *instance) {
+    if (!instance->outputs_fresh) {
+        Snapshot *s = &instance->s;
+        model_outputs(&instance->data, s->state, s->deflection, s->rate, instance->outputs);
+        instance->outputs_fresh = 1;
+    }
+    return instance->outputs;
+}

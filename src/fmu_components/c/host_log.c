@@ -1,0 +1,85 @@
+#include "host_log.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+const char *log_category(fmi2Status status) {
+    switch (status) {
+    case fmi2Warning: return "logStatusWarning";
+    case fmi2Discard: return "logStatusDiscard";
+    case fmi2Error: return "logStatusError";
+    case fmi2Fatal: return "logStatusFatal";
+    default: return "logAll";
+    }
+}
+
+int host_log_wants(const HostLog *log, fmi2Status status, const char *category) {
+    if (log->logger == NULL) return 0;
+    if (status >= fmi2Warning) return 1;
+    if (!log->debug_logging) return 0;
+    if (log->n_categories == 0) return 1;
+    for (size_t i = 0; i < log->n_categories; i++)
+        if (strcmp(log->categories[i], "logAll") == 0 ||
+            (category && strcmp(category, log->categories[i]) == 0))
+            return 1;
+    return 0;
+}
+
+void host_log_send(const HostLog *log, fmi2Status status, const char *category,
+                   const char *message) {
+    if (log->logger == NULL) return;
+    const char *name = log->instance_name ? log->instance_name : "";
+    if (strchr(message, '%') == NULL) {
+        log->logger(log->environment, name, status, category, message);
+        return;
+    }
+    char escaped[2 * MESSAGE_SIZE + 1];
+    size_t n = 0;
+    for (const char *in = message; *in && n + 2 < sizeof escaped; in++) {
+        if (*in == '%') escaped[n++] = '%';
+        escaped[n++] = *in;
+    }
+    escaped[n] = '\0';
+    log->logger(log->environment, name, status, category, escaped);
+}
+
+void host_log(const HostLog *log, fmi2Status status, const char *message) {
+    const char *category = log_category(status);
+    if (host_log_wants(log, status, category)) host_log_send(log, status, category, message);
+}
+
+void host_log_forget(HostLog *log) {
+    for (size_t i = 0; i < log->n_categories; i++) free(log->categories[i]);
+    log->n_categories = 0;
+}
+
+int host_log_set(HostLog *log, fmi2Boolean on, size_t n, const fmi2String categories[],
+                 char *problem) {
+    if (n > MAX_LOG_CATEGORIES) {
+        snprintf(problem, MESSAGE_SIZE, "fmi2SetDebugLogging: %u categories given, at most %d "
+                 "are kept", (unsigned)n, MAX_LOG_CATEGORIES);
+        return 1;
+    }
+    if (n > 0 && categories == NULL) {
+        snprintf(problem, MESSAGE_SIZE, "fmi2SetDebugLogging: %u categories announced but "
+                 "the list is NULL", (unsigned)n);
+        return 1;
+    }
+    char *copies[MAX_LOG_CATEGORIES];
+    for (size_t i = 0; i < n; i++) {
+        const char *category = categories[i] ? categories[i] : "";
+        copies[i] = malloc(strlen(category) + 1);
+        if (copies[i] == NULL) {
+            while (i > 0) free(copies[--i]);
+            snprintf(problem, MESSAGE_SIZE, "fmi2SetDebugLogging: out of memory");
+            return 1;
+        }
+        strcpy(copies[i], category);
+    }
+    host_log_forget(log);
+    log->debug_logging = on;
+    for (size_t i = 0; i < n; i++) log->categories[i] = copies[i];
+    log->n_categories = n;
+    return 0;
+}

@@ -1,0 +1,43 @@
+/*
+ * Messages to the host's logger, shared by both flavours' binaries: errors and warnings
+ * always reach the host, whatever loggingOn says; other messages when the host switched
+ * debug logging on for their category (or for all).
+ */
+#ifndef HOST_LOG_H
+#define HOST_LOG_H
+
+#include <stddef.h>
+
+#include "fmi2Functions.h"
+
+#define MAX_LOG_CATEGORIES 16
+#define MESSAGE_SIZE 1024
+
+typedef struct {
+    fmi2CallbackLogger logger; /* may be NULL: then nothing is logged */
+    fmi2ComponentEnvironment environment;
+    const char *instance_name;
+    fmi2Boolean debug_logging;
+    size_t n_categories; /* 0: every category */
+    char *categories[MAX_LOG_CATEGORIES];
+} HostLog;
+
+/* The category a status is logged under (the modelDescription's LogCategories). */
+const char *log_category(fmi2Status status);
+
+int host_log_wants(const HostLog *log, fmi2Status status, const char *category);
+
+/* Pass one finished message on, as a format string with any '%' doubled: hosts that
+   format print it exactly, and hosts that do not still get the text. */
+void host_log_send(const HostLog *log, fmi2Status status, const char *category,
+                   const char *message);
+
+/* Log a message under its status's category, if the host wants it. */
+void host_log(const HostLog *log, fmi2Status status, const char *message);
+
+/* fmi2SetDebugLogging: 0, or 1 with the reason in problem[MESSAGE_SIZE]. */
+int host_log_set(HostLog *log, fmi2Boolean on, size_t n, const fmi2String categories[],
+                 char *problem);
+void host_log_forget(HostLog *log);
+
+#endif

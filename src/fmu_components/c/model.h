@@ -1,0 +1,98 @@
+/*
+ * The interface between the hand-written runtime (this folder, the same for every
+ * component) and one component's generated code: model_config.h (its sizes) and model.c
+ * (MODEL_INFO and the model_* functions), which fmu_components.cgen prints at build time
+ * from the same expression trees as the Python flavour's equations.
+ *
+ * Names follow the Python runtime (fmu_components.runtime.model): x the deflection at the
+ * start of a step, u the rate the rubber or rotor sees over it, h its length, v the input
+ * rate; `state` the model's state list, its first MODEL_INTEGRATED entries integrated.
+ */
+#ifndef MODEL_H
+#define MODEL_H
+
+/* The same arithmetic in the same order as the Python flavour: never fuse a*b + c into
+   one rounding (gcc needs -ffp-contract=off as well; the build passes it). */
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT OFF
+#elif defined(_MSC_VER)
+#pragma fp_contract(off)
+#endif
+
+#include <stddef.h>
+
+#include "hermite.h"
+#include "model_config.h"
+
+/* Arrays of at least one entry, whatever the model's sizes. */
+#define SLOTS(n) ((n) > 0 ? (n) : 1)
+
+enum { CAUSALITY_INPUT, CAUSALITY_OUTPUT, CAUSALITY_PARAMETER };
+enum { ANY_FINITE, POSITIVE, NON_NEGATIVE };
+
+typedef struct {
+    const char *name;
+    int causality;
+    const char *unit;
+    int constraint;
+    double start; /* NAN for outputs */
+} VariableInfo;
+
+typedef struct {
+    double low, high;     /* the range the thesis measured */
+    const char *measured; /* what it measured there */
+} RangeInfo;
+
+typedef struct {
+    const char *name;
+    size_t size;
+    const unsigned *abscissae, *ordinates; /* value references of the points */
+    const char *abscissa, *abscissa_unit, *ordinate, *ordinate_unit;
+    int dissipative; /* the ordinate takes the abscissa's sign */
+} TableInfo;
+
+typedef struct {
+    const char *name, *guid;
+    const VariableInfo *variables; /* by value reference: inputs, outputs, parameters */
+    RangeInfo ranges[2];           /* deflection, rate */
+    const TableInfo *tables;
+    const int *direct_outputs;     /* per output: depends directly on the deflection */
+    int unilateral;                /* a contact: deformed only while x > 0 */
+} ModelInfo;
+
+#define INPUT_DEFLECTION 0
+#define INPUT_RATE 1
+#define FIRST_OUTPUT 2
+#define FIRST_PARAMETER (FIRST_OUTPUT + MODEL_OUTPUTS)
+
+extern const ModelInfo MODEL_INFO;
+
+/* What the equations read: the parameter values by value reference, then the derived
+   constants and state scales (K); the Hermite curves built from their points. */
+typedef struct {
+    double K[MODEL_CONSTANTS];
+    Hermite tables[SLOTS(MODEL_TABLES)];
+} ModelData;
+
+void model_derive(ModelData *m, const double *values);
+void model_initial_state(ModelData *m, double x, double v, double *state);
+void model_start(ModelData *m, const double *state, double x, double *y);
+/* W^-1 = (I/(gamma h) - J)^-1 into w (row-major); 0 when W is singular. */
+int model_factor(ModelData *m, const double *y, double u, double h, double *w);
+/* One step with W^-1: the new state and the squared error norm; 0 when a stage or the
+   result leaves the valid region or is not finite. */
+int model_step(ModelData *m, const double *y, double u, double h, double rtol,
+               const double *w, double *y_new, double *error_norm);
+void model_exact(ModelData *m, double *state, double x, double u, double h);
+void model_outputs(ModelData *m, const double *state, double x, double v, double *outputs);
+/* 1, with the reason in message, when the model cannot take deflection x. */
+int model_input_problem(ModelData *m, const double *state, double x, char *message,
+                        size_t size);
+void model_failure_hint(ModelData *m, const double *state, double v, char *message,
+                        size_t size);
+
+/* Gauss-Jordan inverse of an n x n matrix (row-major) into inverse; 0 when singular
+   (integrator.c, as runtime/integrator.py's invert). */
+int invert(int n, double *matrix, double *inverse);
+
+#endif

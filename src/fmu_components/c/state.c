@@ -1,0 +1,211 @@
+/*
+ * FMU states: a copy of the instance's Snapshot (what the host set and what the run has
+ * done; the constants and curves are rebuilt from its parameters). A serialized state is
+ * the Snapshot in its envelope (state_envelope.h: format version, GUID, checksum); every
+ * value in a state passes the checks fmi2SetReal applies before anything of it is used.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "runtime.h"
+#include "state_envelope.h"
+
+#define STATE_FORMAT_VERSION 1u
+#define STATE_MAGIC 0x53544154u /* "STAT" */
+#define ALL_MODES                                                                          \
+    (INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED |       \
+     EVENT_MODE | CONTINUOUS_TIME_MODE)
+
+typedef struct {
+    uint32_t magic;
+    Snapshot s;
+} SavedState;
+
+static int finite_all(const double *values, size_t n) {
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(values[i])) return 0;
+    return 1;
+}
+
+/* 0 when every value of the snapshot is one the instance could have reached, else 1 with
+   the reason. */
+static int snapshot_problem(const Snapshot *s, char *message, size_t size) {
+    int mode = s->mode;
+    if (mode == 0 || (mode & (mode - 1)) != 0 || (mode & ~ALL_MODES)) {
+        snprintf(message, size, "the state's FMI state %d is not one", mode);
+        return 1;
+    }
+    char problem[MESSAGE_SIZE];
+    for (unsigned vr = 0; vr < MODEL_VARIABLES; vr++) {
+        if (MODEL_INFO.variables[vr].causality == CAUSALITY_OUTPUT) continue;
+        if (variable_problem(vr, s->values[vr], problem, sizeof problem)) {
+            snprintf(message, size, "the state's %s", problem);
+            return 1;
+        }
+    }
+    if (!isfinite(s->start_time) || !(s->tolerance > 0.0 && isfinite(s->tolerance)) ||
+        !isfinite(s->last_successful_time) || s->warned > 3u) {
+        snprintf(message, size, "the state's experiment settings are not valid");
+        return 1;
+    }
+    if (!s->initialized) return 0;
+    if (s->initialized != 1) {
+        snprintf(message, size, "the state's initialization flag %d is not 0 or 1",
+                 s->initialized);
+        return 1;
+    }
+    if (parameter_problem(s->values, problem, sizeof problem)) {
+        snprintf(message, size, "the state's parameters are not valid: %s", problem);
+        return 1;
+    }
+    const Memory *memory = &s->memory;
+    if (!isfinite(s->time) || !isfinite(s->deflection) || !isfinite(s->rate) ||
+        !finite_all(s->state, MODEL_STATES) || !(memory->rtol > 0.0 && isfinite(memory->rtol)) ||
+        (memory->has_h_next != 0 && memory->has_h_next != 1) ||
+        (memory->has_h_next && !(memory->h_next > 0.0 && isfinite(memory->h_next))) ||
+        memory->w_uses < 0 || memory->w_uses > MAX_W_REUSE ||
+        (memory->w_uses && (!(memory->w_h > 0.0 && isfinite(memory->w_h)) ||
+                            !finite_all(memory->w, MODEL_INTEGRATED * MODEL_INTEGRATED)))) {
+        snprintf(message, size, "the state's co-simulation values are not finite or out of "
+                 "range");
+        return 1;
+    }
+    ModelData data;
+    build_model_data(&data, s->values);
+    if (model_input_problem(&data, s->state, s->deflection, problem, sizeof problem)) {
+        snprintf(message, size, "the state's inputs do not fit its model state: %s", problem);
+        return 1;
+    }
+    return 0;
+}
+
+static SavedState *saved(Instance *instance, fmi2FMUstate state, const char *function) {
+    SavedState *saved_state = (SavedState *)state;
+    if (saved_state == NULL || saved_state->magic != STATE_MAGIC) {
+        log_status(instance, fmi2Error, "%s: the FMU state is NULL or not one this FMU made",
+                   function);
+        return NULL;
+    }
+    return saved_state;
+}
+
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
+    Instance *instance = (Instance *)c;
+    if (!call_begin(instance, ALL_MODES, __func__)) return fmi2Error;
+    if (FMUstate == NULL) {
+        log_status(instance, fmi2Error, "fmi2GetFMUstate: the place for the state is NULL");
+        return call_end(instance, fmi2Error);
+    }
+    SavedState *state = (SavedState *)*FMUstate;
+    if (state != NULL && state->magic != STATE_MAGIC) {
+        log_status(instance, fmi2Error, "fmi2GetFMUstate: the state to update is not one this "
+                   "FMU made");
+        return call_end(instance, fmi2Error);
+    }
+    if (state == NULL) state = malloc(sizeof *state);
+    if (state == NULL) {
+        log_status(instance, fmi2Error, "fmi2GetFMUstate: out of memory");
+        return call_end(instance, fmi2Error);
+    }
+    state->magic = STATE_MAGIC;
+    state->s = instance->s;
+    *FMUstate = state;
+    return call_end(instance, fmi2OK);
+}
+
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
+    Instance *instance = (Instance *)c;
+    if (!call_begin(instance, ALL_MODES, __func__)) return fmi2Error;
+    SavedState *state = saved(instance, FMUstate, "fmi2SetFMUstate");
+    char problem[MESSAGE_SIZE];
+    if (state == NULL) return call_end(instance, fmi2Error);
+    if (snapshot_problem(&state->s, problem, sizeof problem)) {
+        log_status(instance, fmi2Error, "fmi2SetFMUstate: %s; state unchanged", problem);
+        return call_end(instance, fmi2Error);
+    }
+    instance->s = state->s;
+    if (instance->s.initialized) build_model_data(&instance->data, instance->s.values);
+    instance->outputs_fresh = 0;
+    return call_end(instance, fmi2OK);
+}
+
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
+    Instance *instance = (Instance *)c;
+    if (!call_begin(instance, ALL_MODES, __func__)) return fmi2Error;
+    if (FMUstate == NULL || *FMUstate == NULL) return call_end(instance, fmi2OK);
+    SavedState *state = saved(instance, *FMUstate, "fmi2FreeFMUstate");
+    if (state == NULL) return call_end(instance, fmi2Error);
+    state->magic = 0;
+    free(state);
+    *FMUstate = NULL;
+    return call_end(instance, fmi2OK);
+}
+
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
+    Instance *instance = (Instance *)c;
+    if (!call_begin(instance, ALL_MODES, __func__)) return fmi2Error;
+    if (saved(instance, FMUstate, "fmi2SerializedFMUstateSize") == NULL || size == NULL)
+        return call_end(instance, fmi2Error);
+    *size = ENVELOPE_OVERHEAD + sizeof(Snapshot);
+    return call_end(instance, fmi2OK);
+}
+
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate,
+                                 fmi2Byte serializedState[], size_t size) {
+    Instance *instance = (Instance *)c;
+    if (!call_begin(instance, ALL_MODES, __func__)) return fmi2Error;
+    SavedState *state = saved(instance, FMUstate, "fmi2SerializeFMUstate");
+    if (state == NULL) return call_end(instance, fmi2Error);
+    size_t needed = ENVELOPE_OVERHEAD + sizeof(Snapshot);
+    if (serializedState == NULL || size < needed) {
+        log_status(instance, fmi2Error, "fmi2SerializeFMUstate: the buffer holds %u bytes, the "
+                   "state needs %u (fmi2SerializedFMUstateSize)", (unsigned)size,
+                   (unsigned)needed);
+        return call_end(instance, fmi2Error);
+    }
+    envelope_write((unsigned char *)serializedState, MODEL_INFO.name, MODEL_INFO.guid,
+                   STATE_FORMAT_VERSION, (const unsigned char *)&state->s, sizeof(Snapshot));
+    return call_end(instance, fmi2OK);
+}
+
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
+                                   fmi2FMUstate *FMUstate) {
+    Instance *instance = (Instance *)c;
+    if (!call_begin(instance, ALL_MODES, __func__)) return fmi2Error;
+    const unsigned char *payload;
+    size_t length;
+    char problem[MESSAGE_SIZE];
+    if (FMUstate == NULL) {
+        log_status(instance, fmi2Error, "fmi2DeSerializeFMUstate: the place for the state is "
+                   "NULL");
+        return call_end(instance, fmi2Error);
+    }
+    if (envelope_read((const unsigned char *)serializedState, size, MODEL_INFO.name,
+                      MODEL_INFO.guid, STATE_FORMAT_VERSION, &payload, &length, problem,
+                      sizeof problem)) {
+        log_status(instance, fmi2Error, "fmi2DeSerializeFMUstate: %s", problem);
+        return call_end(instance, fmi2Error);
+    }
+    SavedState restored = {STATE_MAGIC, {0}};
+    if (length != sizeof restored.s) {
+        log_status(instance, fmi2Error, "fmi2DeSerializeFMUstate: the serialized state cannot "
+                   "be read: %u bytes of content, this build's state has %u", (unsigned)length,
+                   (unsigned)sizeof restored.s);
+        return call_end(instance, fmi2Error);
+    }
+    memcpy(&restored.s, payload, length);
+    if (snapshot_problem(&restored.s, problem, sizeof problem)) {
+        log_status(instance, fmi2Error, "fmi2DeSerializeFMUstate: %s", problem);
+        return call_end(instance, fmi2Error);
+    }
+    SavedState *state = malloc(sizeof *state);
+    if (state == NULL) {
+        log_status(instance, fmi2Error, "fmi2DeSerializeFMUstate: out of memory");
+        return call_end(instance, fmi2Error);
+    }
+    *state = restored;
+    *FMUstate = state;
+    return call_end(instance, fmi2OK);
+}

@@ -1,0 +1,247 @@
+"""What a component is to both runtimes: its equations as expression trees (``Equations``),
+and those equations compiled to Python with the parameter values of one instance
+(``Model``, the pythonfmu flavour's model).
+
+A component's physics (rubber.py, damper.py) builds one ``Equations``: the names below are
+what its statements read and write. The native flavour prints the same statements as C
+(``fmu_components.cgen``); the hand-written runtimes of both flavours (this module and
+``cosim``/``integrator`` here, ``c/`` there) drive them the same way.
+
+Names the statements use:
+
+* parameters by their FMU variable names, and the derived ``constants``, computed once
+  when the instance is initialised (statements over the parameters);
+* ``x`` the deflection at the start of a step or segment, ``u`` the rate the rubber or rotor
+  sees over it, ``h`` its length, ``v`` the input rate (outputs, messages);
+* ``state[i]`` the model's state list, of which the first ``integrated`` entries are
+  integrated and the others advanced in closed form (``exact``);
+* the integrated system: stage state ``Y0 ..``, derivatives ``f0 ..``, Jacobian entries
+  ``j{row}_{column}``, start state ``y0 ..``.
+"""
+
+import math
+
+from .expressions import FUNCTIONS, Assign, Element, PythonPrinter, Symbol, wrap
+from .hermite import MonotoneCubic, check_monotone_table
+from .integrator import compile_python, jacobian_statements
+
+
+class Table:
+    """A monotone Hermite curve through parameter points: abscissa and ordinate names, what
+    each means (name, unit), and whether it is a dissipative characteristic (the ordinate
+    takes the abscissa's sign, as a dashpot's torque takes its rate's)."""
+
+    def __init__(self, name, abscissae, ordinates, abscissa=("x", ""), ordinate=("y", ""),
+                 dissipative=False):
+        self.name = name
+        self.abscissae = tuple(abscissae)
+        self.ordinates = tuple(ordinates)
+        self.abscissa, self.ordinate = abscissa, ordinate
+        self.dissipative = dissipative
+
+    def points(self, values):
+        return [values[n] for n in self.abscissae], [values[n] for n in self.ordinates]
+
+    def check(self, values):
+        """A message if these parameter values cannot define the curve, else None."""
+        xs, ys = self.points(values)
+        problem = check_monotone_table(xs, ys)
+        if problem:
+            return f"{self.name} table: {problem}"
+        for x, y in zip(xs, ys) if self.dissipative else ():
+            if x * y < 0.0 or (x == 0.0 and y != 0.0):
+                return (f"{self.name} table: {self.ordinate[0]} {y:.6g} {self.ordinate[1]} at "
+                        f"{self.abscissa[0]} {x:.6g} {self.abscissa[1]} would feed energy in; "
+                        f"a {self.name}'s {self.ordinate[0]} takes the sign of its "
+                        f"{self.abscissa[0]}")
+        return None
+
+
+class InputLimit:
+    """The inputs a model cannot take: after ``lines``, ``test`` must hold for the deflection
+    ``x`` at the current ``state``, else ``message`` says why."""
+
+    def __init__(self, lines, test, message):
+        self.lines, self.test, self.message = lines, test, message
+
+
+class Equations:
+    """A component's equations (see the module docstring for the names).
+
+    * ``integrated``, ``state_size``: the integrated entries of the state list, and all;
+    * ``constants``: statements deriving constants from the parameters;
+    * ``held``: statements depending on ``u`` alone, once per step; ``stage``: the
+      derivatives ``f0 ..`` at ``Y0 ..``; ``jacobian``: the entries ``j{i}_{k}`` of d f / d Y
+      (after ``stage``, whose values they may use; entries left unset are zero);
+    * ``region``: a condition on ``Y0 ..`` that fails where the model is not defined, or
+      None;
+    * ``start``: statements setting ``y0 ..`` from ``state`` and ``x`` (None: the first
+      entries of ``state``); ``exact``: statements advancing the other entries of ``state``
+      over a step in closed form (after ``held``);
+    * ``initial_state``: the state list, relaxed at the initial inputs ``x``, ``v``;
+    * ``output_lines`` then ``outputs``: the outputs from ``state``, ``x``, ``v``;
+    * ``input_limit``: an ``InputLimit``, or None; ``failure_hint``: a Message over
+      ``state`` and ``v`` added to the message of a step that fails, or None;
+    * ``state_scale``: the typical magnitude of each integrated state (over the parameters);
+    * ``tables``: the ``Table`` curves ``Lookup`` nodes name;
+    * ``unilateral``: a contact whose rubber is deformed only while ``x > 0``: a step that
+      crosses ``x = 0`` is two segments, the rate ``u`` being 0 on the part out of contact.
+    """
+
+    def __init__(self, *, integrated, state_size, stage, jacobian, initial_state, outputs,
+                 state_scale, constants=(), held=(), region=None, start=None, exact=(),
+                 output_lines=(), input_limit=None, failure_hint=None, tables=(),
+                 unilateral=False):
+        self.integrated = integrated
+        self.state_size = state_size
+        self.constants = list(constants)
+        self.held = list(held)
+        self.stage = list(stage)
+        self.jacobian = list(jacobian)
+        self.region = region
+        self.start = None if start is None else list(start)
+        self.exact = list(exact)
+        self.initial_state = [wrap(e) for e in initial_state]
+        self.output_lines = list(output_lines)
+        self.outputs = [wrap(e) for e in outputs]
+        self.input_limit = input_limit
+        self.failure_hint = failure_hint
+        self.state_scale = [wrap(e) for e in state_scale]
+        self.tables = list(tables)
+        self.unilateral = unilateral
+
+    def start_statements(self):
+        if self.start is not None:
+            return self.start
+        return [Assign(Symbol(f"y{i}"), Element("state", i)) for i in range(self.integrated)]
+
+    def constant_names(self):
+        return [statement.target.name for statement in self.constants]
+
+
+def rate_segments(x, v, h, unilateral):
+    """Pieces of a step, (duration, rate the rubber sees, deflection at the start), over
+    which that rate is constant: the whole step, or for a contact the parts in and out of
+    contact (it is deformed only while x > 0)."""
+    if not unilateral:
+        return ((h, v, x),)
+    x_end = x + v * h
+    if x > 0.0 and x_end > 0.0:
+        return ((h, v, x),)
+    if x <= 0.0 and x_end <= 0.0:
+        return ((h, 0.0, x),)
+    crossing = -x / v  # time at which x reaches 0, inside the step
+    if x > 0.0:
+        return ((crossing, v, x), (h - crossing, 0.0, x + v * crossing))
+    return ((crossing, 0.0, x), (h - crossing, v, x + v * crossing))
+
+
+class Model:
+    """One instance's equations compiled to Python, parameter values written in as
+    literals. ``values``: parameter name -> value (every parameter the equations name)."""
+
+    def __init__(self, equations, values=None):
+        values = dict(values or {})
+        self.equations = equations
+        self.integrated_size = equations.integrated
+        self.state_size = equations.state_size
+        self.tables = {table.name: MonotoneCubic(*table.points(values))
+                       for table in equations.tables}
+        self.namespace = {name: getattr(math, name) for name in FUNCTIONS}
+        for name, curve in self.tables.items():
+            self.namespace[f"{name}_value"] = curve.value
+            self.namespace[f"{name}_slope"] = curve.slope
+        self.literals = values
+        derived = self._function("derive()", equations.constants,
+                                 "(" + "".join(f"{n}, " for n in equations.constant_names()) + ")")
+        self.literals = {**values, **dict(zip(equations.constant_names(), derived()))}
+        self.state_scale = [float(s) for s in self._values((), equations.state_scale)]
+        n = equations.integrated
+        Y = [f"Y{i}" for i in range(n)]
+        unpack = [f"({''.join(name + ', ' for name in Y)}) = y"] if n else []
+        self.rhs = self._function("rhs(y, u)", equations.held + equations.stage,
+                                  self._tuple([f"f{i}" for i in range(n)]), unpack)
+        self.jacobian = self._function(
+            "jacobian(y, u)", jacobian_statements(equations),
+            self._tuple([self._tuple([f"j{i}_{k}" for k in range(n)]) for i in range(n)]), unpack)
+        self._start = self._function("start(state, x)", equations.start_statements(),
+                                     self._tuple([f"y{i}" for i in range(n)]))
+        self._exact = self._function("exact(state, u, h, x)", equations.held + equations.exact,
+                                     "None")
+        initial = ", ".join(self._print(e, (), ("x", "v")) for e in equations.initial_state)
+        self._initial_state = self._function("initial_state(x, v)", [], f"[{initial}]")
+        self.outputs = self._function("outputs(state, x, v)", equations.output_lines,
+                                      self._tuple([self._print(e, equations.output_lines, ("state", "x", "v"))
+                                                   for e in equations.outputs]))
+        limit = equations.input_limit
+        self._input_problem = None if limit is None else self._function(
+            "input_problem(state, x)", limit.lines + [Assign(Symbol("ok"), limit.test)],
+            f"None if ok else {self._message(limit.message, limit.lines)}")
+        hint = equations.failure_hint
+        self._failure_hint = None if hint is None else self._function(
+            "failure_hint(state, v)", [], self._message(hint, (), ("state", "v")))
+
+    # --- compiling ------------------------------------------------------------------------
+
+    def printer(self, known=()):
+        return PythonPrinter(self.literals, known)
+
+    def _print(self, expression, lines=(), known=()):
+        printer = self.printer(known)
+        printer.statements(lines, "pass")  # learn the names the lines assign
+        return printer.expression(expression)
+
+    def _message(self, message, lines=(), known=("state", "x")):
+        printer = self.printer(known)
+        printer.statements(lines, "pass")
+        return printer.message(message)
+
+    def _function(self, signature, statements, result, prologue=()):
+        """A generated function: the prologue, the statements printed, then `result`."""
+        arguments = signature[signature.index("(") + 1:-1]
+        names = [a.strip() for a in arguments.split(",") if a.strip()]
+        names += [f"Y{i}" for i in range(self.equations.integrated)] if prologue else []
+        body = list(prologue) + self.printer(names).statements(statements, "return None")
+        text = "\n".join([f"def {signature}:", *[f"    {line}" for line in body],
+                          f"    return {result}"]) + "\n"
+        name = signature[:signature.index("(")]
+        return compile_python(text, self.namespace, f"<{name}>")[name]
+
+    def _values(self, lines, expressions):
+        return self._function("values()", lines, self._tuple([self._print(e, lines)
+                                                               for e in expressions]))()
+
+    @staticmethod
+    def _tuple(items):
+        return "(" + "".join(f"{item}, " for item in items) + ")"
+
+    # --- the model, for the co-simulation -------------------------------------------------
+
+    def initial_state(self, x, v):
+        """Relaxed at the initial inputs (spec sections 2 and 3)."""
+        return self._initial_state(x, v)
+
+    def check_input(self, state, x):
+        """A message if the model cannot take deflection x in this state, else None."""
+        return None if self._input_problem is None else self._input_problem(state, x)
+
+    def advance(self, state, x, v, h, integrator):
+        """Advance the state over a step of length h with rate v held. Returns None, or an
+        error message with the state untouched: it is written only once all of the step
+        has succeeded."""
+        n = self.integrated_size
+        work = state[:]
+        for duration, rate, x_start in rate_segments(x, v, h, self.equations.unilateral):
+            if duration > 0.0:
+                if n:
+                    y = list(self._start(work, x_start))
+                    problem = integrator.integrate(self, y, rate, duration)
+                    if problem:
+                        if self._failure_hint is not None:
+                            problem = f"{problem}; {self._failure_hint(state, v)}"
+                        return problem
+                self._exact(work, rate, duration, x_start)
+                if n:
+                    work[:n] = y
+        state[:] = work
+        return None
