@@ -52,7 +52,7 @@ GUID_NAMESPACE = uuid.UUID("6c1f4b7e-4f5e-4a8e-9c71-2f4d8e3b9a10")
 # The native runtime, hand-written once for all components, and the FMI headers.
 RUNTIME_SOURCES = ("fmi2_functions.c", "cosimulation.c", "integrator.c", "state.c", "hermite.c",
                    "text.c", "host_log.c", "state_envelope.c", "resource_location.c")
-RUNTIME_HEADERS = ("runtime.h", "model.h", "hermite.h", "text.h", "host_log.h",
+RUNTIME_HEADERS = ("runtime.h", "model.h", "arithmetic.h", "hermite.h", "text.h", "host_log.h",
                    "state_envelope.h", "resource_location.h")
 FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
 GENERATED = ("model_config.h", "model.c")
@@ -104,9 +104,12 @@ def write_fmu(path, files):
     return path
 
 
-def provenance(definition):
-    return (f"{definition.name}: {definition.description}\n\nfmu-components {__version__}; "
-            f"the model specification and thesis references are in the project's README.\n")
+def identity(definition, guid):
+    """The resources that say which FMU this is: the GUID the binary checks the resource
+    location against (c/resource_location.h), and a line on what it models."""
+    return {"resources/fmu-guid.txt": guid + "\n",
+            "resources/provenance.txt": f"{definition.name}: {definition.description}\n"
+                                        f"fmu-components {__version__}\n"}
 
 
 # --- native -------------------------------------------------------------------------------
@@ -163,7 +166,7 @@ def build_native(names, destination, staging):
         built[name] = write_fmu(destination / f"{name}.fmu", {
             "modelDescription.xml": description, **binaries,
             **{f"sources/{p.name}": p for p in sorted(sources.iterdir())},
-            "resources/provenance.txt": provenance(definition)})
+            **identity(definition, guid)})
     return built
 
 
@@ -228,6 +231,7 @@ def build_python(names, destination, staging):
                     # pythonfmu's win64 binary would run without the guard: dropped
                     files[item.filename] = source.read(item)
         files[binary] = guard
+        files.update(identity(definition, guid))
         built[name] = write_fmu(destination / f"{name}.fmu", files)
     return built
 

@@ -8,6 +8,7 @@ from fmu_components.runtime.catalog import COMPONENTS
 
 ROOT = Path(__file__).resolve().parents[1]
 FMU_NAMES = sorted(COMPONENTS)
+FLAVOURS = ("native", "python")
 
 
 def _load_build_script():
@@ -18,11 +19,35 @@ def _load_build_script():
 
 
 @pytest.fixture(scope="session")
-def built_fmus(tmp_path_factory):
-    """The four FMUs, built once per test session from the current source."""
+def all_fmus(tmp_path_factory):
+    """Both flavours of the four FMUs, {flavour: {name: path}}, built once per test session
+    from the current source."""
     destination = tmp_path_factory.mktemp("fmus")
-    paths = _load_build_script().build(FMU_NAMES, destination)
-    return {path.stem: path for path in paths}
+    return _load_build_script().build(FMU_NAMES, destination)
+
+
+class Flavour(dict):
+    """{name: path} of the four FMUs of one flavour, which it names."""
+
+    def __init__(self, flavour, paths):
+        super().__init__(paths)
+        self.flavour = flavour
+
+
+@pytest.fixture(scope="session", params=FLAVOURS)
+def built_fmus(request, all_fmus):
+    """The four FMUs of one flavour: every test that takes it runs on both."""
+    return Flavour(request.param, all_fmus[request.param])
+
+
+@pytest.fixture(scope="session")
+def native_fmus(all_fmus):
+    return all_fmus["native"]
+
+
+@pytest.fixture(scope="session")
+def python_fmus(all_fmus):
+    return all_fmus["python"]
 
 
 def default_parameters(name):

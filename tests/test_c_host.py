@@ -87,11 +87,12 @@ def test_c_host_gets_fmi2error_for_bad_calls_and_continues(built_fmus, c_host, t
     assert bad.stdout == good.stdout  # the refused calls changed nothing
 
 
-def test_pythonfmu_library_alone_does_not_load_in_a_c_host(built_fmus, c_host, tmp_path):
-    """Why the FMUs carry the guard: pythonfmu's library leaves the Python C API undefined."""
+def test_pythonfmu_library_alone_does_not_load_in_a_c_host(python_fmus, c_host, tmp_path):
+    """Why the Python FMUs carry the guard: pythonfmu's library leaves the Python C API
+    undefined."""
     name = "TrackBushTorsion"
-    unzipped = unzip(built_fmus[name], tmp_path)
+    unzipped = unzip(python_fmus[name], tmp_path)
     engine = unzipped / "binaries" / "linux64" / "libpythonfmu-export.so"
-    run = subprocess.run(host_command(c_host, built_fmus[name], unzipped, name, binary=engine),
+    run = subprocess.run(host_command(c_host, python_fmus[name], unzipped, name, binary=engine),
                          capture_output=True, text=True, env=clean_environment(), timeout=60)
     assert run.returncode != 0 and "undefined symbol" in run.stderr

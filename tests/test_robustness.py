@@ -2,10 +2,14 @@
 for a step the integrator cannot complete) and a message naming the variable and the value,
 the instance keeps the state it had, and the run can go on, or restart from a saved state."""
 
+import json
 import math
+import struct
+import zlib
 
 import numpy as np
 import pytest
+from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2LastSuccessfulTime
 
 from fmu_components.runtime.catalog import COMPONENTS
@@ -209,13 +213,62 @@ def test_a_step_the_integrator_cannot_complete_is_discarded_and_recoverable(buil
     runner.free()
 
 
-def test_a_broken_serialized_state_is_refused(built_fmus):
+ENVELOPE_HEAD = 8 + 4 + 4 + 64 + 64  # "FMUSTATE", version, length, name, GUID
+
+
+def reseal(blob, payload=None, version=None):
+    """A serialized state with its payload or format version replaced and its length and
+    checksum made right again: what a careful forger (or another build) would send."""
+    head, body = bytearray(blob[:ENVELOPE_HEAD]), blob[ENVELOPE_HEAD:-4]
+    payload = body if payload is None else payload
+    if version is not None:
+        head[8:12] = struct.pack("<I", version)
+    head[12:16] = struct.pack("<I", len(payload))
+    content = bytes(head) + payload
+    return content + struct.pack("<I", zlib.crc32(content))
+
+
+def serialized(runner):
+    return bytes(runner.fmu.serializeFMUstate(runner.fmu.getFMUstate()))
+
+
+def refused_state(runner, blob):
+    """The status and message of deserializing and setting `blob`: refused either way."""
+    try:
+        state = runner.fmu.deSerializeFMUstate(blob)
+    except FMICallException as failure:
+        return failure.status, last_error(runner)
+    return runner.status(runner.fmu.setFMUstate, state), last_error(runner)
+
+
+def with_first_input(flavour, payload, value):
+    """The payload with the deflection input replaced: in the native Snapshot the values
+    follow the FMI state (an int, padded to 8 bytes); in the Python one it is JSON."""
+    if flavour == "native":
+        return payload[:8] + struct.pack("<d", value) + payload[16:]
+    state = json.loads(payload)
+    state["values"][0] = value
+    return json.dumps(state).encode()
+
+
+@pytest.mark.parametrize("kind, expected", [
+    ("not a state", "cannot be read"), ("truncated", "cannot be read"),
+    ("corrupted", "checksum"), ("other version", "format version"),
+    ("non-finite input", "is not a finite number")])
+def test_a_broken_serialized_state_is_refused(built_fmus, kind, expected):
     runner = FmuRunner(built_fmus["TrackBushTorsion"])
     runner.initialize(math.radians(10), 0.0)
     before = runner.step(math.radians(10), 0.1, STEP)
-    broken = runner.fmu.deSerializeFMUstate(b"{not json")
-    assert runner.status(runner.fmu.setFMUstate, broken) == ERROR
-    assert "cannot be read" in last_error(runner)
+    blob = serialized(runner)
+    broken = {"not a state": lambda: b"{not json",
+              "truncated": lambda: blob[:-9],
+              "corrupted": lambda: blob[:ENVELOPE_HEAD + 20] + bytes([blob[ENVELOPE_HEAD + 20] ^ 1])
+              + blob[ENVELOPE_HEAD + 21:],
+              "other version": lambda: reseal(blob, version=99),
+              "non-finite input": lambda: reseal(blob, with_first_input(
+                  built_fmus.flavour, blob[ENVELOPE_HEAD:-4], math.nan))}[kind]()
+    status, message = refused_state(runner, broken)
+    assert status == ERROR and expected in message, message
     assert runner.read() == before
     runner.free()
 
@@ -223,12 +276,11 @@ def test_a_broken_serialized_state_is_refused(built_fmus):
 def test_a_state_of_another_component_is_refused(built_fmus):
     damper = FmuRunner(built_fmus["RotaryDamper"])
     damper.initialize(0.0, 0.0)
-    foreign = damper.fmu.serializeFMUstate(damper.fmu.getFMUstate())
+    foreign = serialized(damper)
     bush = FmuRunner(built_fmus["TrackBushTorsion"])
     bush.initialize(math.radians(10), 0.0)
-    state = bush.fmu.deSerializeFMUstate(foreign)
-    assert bush.status(bush.fmu.setFMUstate, state) == ERROR
-    assert "RotaryDamper" in last_error(bush)
+    status, message = refused_state(bush, foreign)
+    assert status == ERROR and "RotaryDamper" in message
     damper.free()
     bush.free()
 

@@ -1,19 +1,24 @@
 /*
- * The binary of every FMU here: a thin FMI 2.0 layer in front of pythonfmu's library.
+ * The binary of every Python-flavour FMU: a thin FMI 2.0 layer in front of pythonfmu's
+ * library.
  *
  * pythonfmu's library (shipped next to this one as PYTHONFMU_ENGINE) runs the Python
  * adapter, but it can only answer fmi2OK, fmi2Discard (a step returned False) or fmi2Fatal
  * (a Python exception, after which the instance is gone and the next call crashes the host),
  * and it expects the Python C API to be present in the process already. This layer
  *
+ *  - checks what fmi2Instantiate is given (interface type, GUID, resource location) as the
+ *    native runtime does, before Python sees it;
  *  - returns, for every call, the worst of pythonfmu's status and the statuses the adapter
  *    logged during the call, so a rejected input is fmi2Error and a warning fmi2Warning;
  *  - loads the Python shared library (PYTHON_LIBRARY) with global symbols when the host
  *    process has no Python of its own, so C hosts need no LD_PRELOAD;
- *  - stops calling an instance that reported fmi2Fatal, so the host is never crashed by it;
+ *  - stops calling an instance that reported fmi2Fatal, so the host is never crashed by it,
+ *    and refuses a logger that calls back into the instance;
  *  - always lets pythonfmu log (it drops every message unless debug logging is on) and
- *    applies the host's logging choice itself: errors and warnings always reach the host,
- *    other messages when the host switched debug logging on for their category;
+ *    applies the host's logging choice itself (host_log.c, shared with the native runtime);
+ *  - wraps serialized states in the envelope the native runtime uses (state_envelope.c:
+ *    format version, GUID, checksum), and refuses a broken one before Python sees it;
  *  - answers fmi2GetRealStatus(fmi2LastSuccessfulTime) after a discarded step.
  *
  * Everything else is forwarded unchanged.
@@ -28,11 +33,18 @@
 #include <string.h>
 
 #include "fmi2Functions.h"
+#include "host_log.h"
+#include "resource_location.h"
+#include "state_envelope.h"
 
 #ifndef PYTHON_LIBRARY
 #error "build with -DPYTHON_LIBRARY=\"libpython3.X.so.1.0\""
 #endif
+#if !defined(FMU_GUID) || !defined(FMU_NAME)
+#error "build with -DFMU_GUID=\"...\" -DFMU_NAME=\"...\" (the FMU's GUID and model name)"
+#endif
 #define PYTHONFMU_ENGINE "libpythonfmu-export.so"
+#define STATE_FORMAT_VERSION 1u
 
 /* pythonfmu's functions, looked up once per process. */
 static struct {
@@ -68,19 +80,14 @@ static struct {
 static pthread_once_t engine_once = PTHREAD_ONCE_INIT;
 static char engine_problem[8192]; /* empty when the engine loaded */
 
-#define MAX_CATEGORIES 16
-
 typedef struct {
     fmi2Component engine;
     fmi2CallbackFunctions engine_callbacks; /* the host's, with our logger in between */
-    fmi2CallbackLogger host_logger;
-    fmi2ComponentEnvironment host_environment;
+    HostLog log;                            /* the host's logger and logging choice */
     char *instance_name;
-    fmi2Boolean debug_logging;               /* the host's choice */
-    size_t n_categories;                     /* 0: every category */
-    char *categories[MAX_CATEGORIES];
     fmi2Status worst; /* worst status logged during the current call */
     int fatal;        /* the engine reported fmi2Fatal: never call it again */
+    int busy;         /* inside a call: a logger calling back is refused */
     fmi2Real last_successful_time;
 } Guard;
 
@@ -143,62 +150,25 @@ static void load_engine(void) {
 #undef LOAD
 }
 
-/* Messages go on as the format string with any '%' doubled: hosts that format print them
-   exactly, and hosts that do not (fmpy's logger takes no arguments) still get the text. */
-static void pass_on(fmi2CallbackLogger logger, fmi2ComponentEnvironment environment,
-                    fmi2String instance_name, fmi2Status status, fmi2String category,
-                    const char *message) {
-    if (logger == NULL) return;
-    if (strchr(message, '%') == NULL) {
-        logger(environment, instance_name, status, category, message);
-        return;
-    }
-    char *escaped = malloc(2 * strlen(message) + 1);
-    if (escaped == NULL) return;
-    char *out = escaped;
-    for (const char *in = message; *in; in++) {
-        if (*in == '%') *out++ = '%';
-        *out++ = *in;
-    }
-    *out = '\0';
-    logger(environment, instance_name, status, category, escaped);
-    free(escaped);
-}
-
 /* The guard's own error messages. */
 static fmi2Status guard_error(const Guard *guard, const char *format, ...) {
-    char message[1024];
+    char message[MESSAGE_SIZE];
     va_list args;
     va_start(args, format);
     vsnprintf(message, sizeof message, format, args);
     va_end(args);
-    pass_on(guard->host_logger, guard->host_environment, guard->instance_name, fmi2Error,
-            "logStatusError", message);
+    host_log(&guard->log, fmi2Error, message);
     return fmi2Error;
 }
 
 /* Remember the worst status seen during the call, and pass the message on if wanted. */
-static int host_wants(const Guard *guard, fmi2Status status, fmi2String category) {
-    if (status >= fmi2Warning) return 1;
-    if (!guard->debug_logging) return 0;
-    if (guard->n_categories == 0) return 1;
-    for (size_t i = 0; i < guard->n_categories; i++)
-        if (category && strcmp(category, guard->categories[i]) == 0) return 1;
-    return 0;
-}
-
 static void guard_logger(fmi2ComponentEnvironment environment, fmi2String instance_name,
                          fmi2Status status, fmi2String category, fmi2String message, ...) {
+    (void)instance_name;
     Guard *guard = (Guard *)environment;
     if (status > guard->worst) guard->worst = status;
-    if (host_wants(guard, status, category))
-        pass_on(guard->host_logger, guard->host_environment, instance_name, status, category,
-                message ? message : "");
-}
-
-static void forget_categories(Guard *guard) {
-    for (size_t i = 0; i < guard->n_categories; i++) free(guard->categories[i]);
-    guard->n_categories = 0;
+    if (host_log_wants(&guard->log, status, category))
+        host_log_send(&guard->log, status, category, message ? message : "");
 }
 
 static fmi2Status refuse(Guard *guard, const char *function) {
@@ -212,18 +182,22 @@ static fmi2Status settle(Guard *guard, fmi2Status status) {
 }
 
 /* The opening of every call passed to pythonfmu: declares `guard`, returns for a missing
-   instance or one that failed fatally, and starts the call's worst status at fmi2OK. */
+   instance, one that failed fatally, or a logger calling back into the instance, and
+   starts the call's worst status at fmi2OK. CLOSE(status) ends the call. */
 #define GUARDED(c)                                                                          \
     Guard *guard = (Guard *)(c);                                                            \
-    if (guard == NULL) return fmi2Error;                                                    \
+    if (guard == NULL || guard->busy) return fmi2Error;                                     \
     if (guard->fatal) return refuse(guard, __func__);                                       \
+    guard->busy = 1;                                                                        \
     guard->worst = fmi2OK
+
+#define CLOSE(status) return (guard->busy = 0, (status))
 
 /* Forward one call to pythonfmu and report the worst status seen during it. */
 #define FORWARD(c, call)                                                                    \
     do {                                                                                    \
         GUARDED(c);                                                                         \
-        return settle(guard, engine.call);                                                  \
+        CLOSE(settle(guard, engine.call));                                                  \
     } while (0)
 
 const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
@@ -233,26 +207,56 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               fmi2String fmuResourceLocation,
                               const fmi2CallbackFunctions *functions, fmi2Boolean visible,
                               fmi2Boolean loggingOn) {
+    HostLog log = {0};
+    if (functions != NULL) {
+        log.logger = functions->logger;
+        log.environment = functions->componentEnvironment;
+    }
+    log.instance_name = instanceName;
+    char problem[MESSAGE_SIZE], reason[MESSAGE_SIZE - 32];
+    if (instanceName == NULL || instanceName[0] == '\0' || functions == NULL) {
+        host_log(&log, fmi2Error, "fmi2Instantiate: the instance name or the callback "
+                 "functions are missing");
+        return NULL;
+    }
+    if (fmuType != fmi2CoSimulation) {
+        snprintf(problem, sizeof problem, "fmi2Instantiate: %s offers Co-Simulation (fmuType "
+                 "%d), not the interface type %d asked for", FMU_NAME, fmi2CoSimulation,
+                 (int)fmuType);
+        host_log(&log, fmi2Error, problem);
+        return NULL;
+    }
+    if (fmuGUID == NULL || strcmp(fmuGUID, FMU_GUID) != 0) {
+        snprintf(problem, sizeof problem, "fmi2Instantiate: GUID %.100s is not this FMU's (%s "
+                 "%s): the modelDescription and the binary belong to different FMUs",
+                 fmuGUID ? fmuGUID : "(NULL)", FMU_NAME, FMU_GUID);
+        host_log(&log, fmi2Error, problem);
+        return NULL;
+    }
+    if (check_resource_location(fmuResourceLocation, FMU_GUID, NULL, 0, reason,
+                                sizeof reason)) {
+        snprintf(problem, sizeof problem, "fmi2Instantiate: %s", reason);
+        host_log(&log, fmi2Error, problem);
+        return NULL;
+    }
     pthread_once(&engine_once, load_engine);
     if (engine_problem[0]) {
-        if (functions)
-            pass_on(functions->logger, functions->componentEnvironment, instanceName, fmi2Error,
-                    "logStatusError", engine_problem);
+        host_log(&log, fmi2Error, engine_problem);
         return NULL;
     }
     Guard *guard = calloc(1, sizeof *guard);
     if (guard == NULL) return NULL;
-    guard->instance_name = strdup(instanceName ? instanceName : "");
-    if (functions) {
-        guard->engine_callbacks = *functions;
-        guard->host_logger = functions->logger;
-        guard->host_environment = functions->componentEnvironment;
-    }
-    guard->debug_logging = loggingOn;
+    guard->instance_name = strdup(instanceName);
+    guard->log = log;
+    guard->log.instance_name = guard->instance_name;
+    guard->log.debug_logging = loggingOn;
+    guard->engine_callbacks = *functions;
     guard->engine_callbacks.logger = guard_logger;
     guard->engine_callbacks.componentEnvironment = guard;
+    guard->busy = 1;
     guard->engine = engine.instantiate(instanceName, fmuType, fmuGUID, fmuResourceLocation,
                                        &guard->engine_callbacks, visible, fmi2True);
+    guard->busy = 0;
     if (guard->engine == NULL || guard->worst >= fmi2Error) {
         /* A half-made instance is not freed through pythonfmu: it may be broken. */
         free(guard->instance_name);
@@ -264,12 +268,13 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 
 void fmi2FreeInstance(fmi2Component c) {
     Guard *guard = (Guard *)c;
-    if (guard == NULL) return;
+    if (guard == NULL || guard->busy) return;
     if (!guard->fatal) {
         guard->worst = fmi2OK;
+        guard->busy = 1;
         engine.freeInstance(guard->engine);
     }
-    forget_categories(guard);
+    host_log_forget(&guard->log);
     free(guard->instance_name);
     free(guard);
 }
@@ -277,16 +282,11 @@ void fmi2FreeInstance(fmi2Component c) {
 /* Recorded here, not passed on: pythonfmu must keep logging everything. */
 fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
                                const fmi2String categories[]) {
-    Guard *guard = (Guard *)c;
-    if (guard == NULL) return fmi2Error;
-    if (nCategories > MAX_CATEGORIES)
-        return guard_error(guard, "fmi2SetDebugLogging: %zu categories given, at most %d are "
-                                  "kept", nCategories, MAX_CATEGORIES);
-    forget_categories(guard);
-    guard->debug_logging = loggingOn;
-    for (size_t i = 0; i < nCategories; i++)
-        guard->categories[guard->n_categories++] = strdup(categories[i] ? categories[i] : "");
-    return fmi2OK;
+    GUARDED(c);
+    char problem[MESSAGE_SIZE];
+    if (host_log_set(&guard->log, loggingOn, nCategories, categories, problem))
+        CLOSE(guard_error(guard, "%s", problem));
+    CLOSE(fmi2OK);
 }
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
@@ -299,7 +299,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
     /* Only an accepted call sets the time: a refused one (out of sequence: fmi2Error) did
        nothing, so the last successful time stays, as in fmi2DoStep. */
     if (status <= fmi2Warning) guard->last_successful_time = startTime;
-    return status;
+    CLOSE(status);
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
@@ -366,18 +366,48 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     FORWARD(c, freeFMUstate(guard->engine, FMUstate));
 }
 
+/* The serialized state is pythonfmu's bytes (the adapter's JSON) in the envelope. */
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
-    FORWARD(c, serializedFMUstateSize(guard->engine, FMUstate, size));
+    GUARDED(c);
+    if (size == NULL) CLOSE(guard_error(guard, "fmi2SerializedFMUstateSize: size is NULL"));
+    fmi2Status status = settle(guard, engine.serializedFMUstateSize(guard->engine, FMUstate, size));
+    if (status <= fmi2Warning) *size += ENVELOPE_OVERHEAD;
+    CLOSE(status);
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[],
                                  size_t size) {
-    FORWARD(c, serializeFMUstate(guard->engine, FMUstate, serializedState, size));
+    GUARDED(c);
+    size_t length = 0;
+    fmi2Status status = settle(guard, engine.serializedFMUstateSize(guard->engine, FMUstate,
+                                                                    &length));
+    if (status > fmi2Warning) CLOSE(status);
+    if (serializedState == NULL || size < length + ENVELOPE_OVERHEAD)
+        CLOSE(guard_error(guard, "fmi2SerializeFMUstate: the buffer holds %u bytes, the state "
+                          "needs %u (fmi2SerializedFMUstateSize)", (unsigned)size,
+                          (unsigned)(length + ENVELOPE_OVERHEAD)));
+    unsigned char *payload = malloc(length ? length : 1);
+    if (payload == NULL) CLOSE(guard_error(guard, "fmi2SerializeFMUstate: out of memory"));
+    status = settle(guard, engine.serializeFMUstate(guard->engine, FMUstate,
+                                                    (fmi2Byte *)payload, length));
+    if (status <= fmi2Warning)
+        envelope_write((unsigned char *)serializedState, FMU_NAME, FMU_GUID,
+                       STATE_FORMAT_VERSION, payload, length);
+    free(payload);
+    CLOSE(status);
 }
 
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
                                    fmi2FMUstate *FMUstate) {
-    FORWARD(c, deSerializeFMUstate(guard->engine, serializedState, size, FMUstate));
+    GUARDED(c);
+    const unsigned char *payload;
+    size_t length;
+    char problem[MESSAGE_SIZE];
+    if (envelope_read((const unsigned char *)serializedState, size, FMU_NAME, FMU_GUID,
+                      STATE_FORMAT_VERSION, &payload, &length, problem, sizeof problem))
+        CLOSE(guard_error(guard, "fmi2DeSerializeFMUstate: %s", problem));
+    CLOSE(settle(guard, engine.deSerializeFMUstate(guard->engine, (const fmi2Byte *)payload,
+                                                   length, FMUstate)));
 }
 
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[],
@@ -411,15 +441,15 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
         guard->last_successful_time = currentCommunicationPoint + communicationStepSize;
     else if (status == fmi2Discard)
         guard->last_successful_time = currentCommunicationPoint;
-    return status;
+    CLOSE(status);
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c) { FORWARD(c, cancelStep(guard->engine)); }
 
 static fmi2Status unsupported_status(fmi2Component c, const char *function) {
-    if (c == NULL) return fmi2Error;
-    return guard_error((Guard *)c, "%s: steps run synchronously, there is no status to ask for",
-                       function);
+    GUARDED(c);
+    CLOSE(guard_error(guard, "%s: steps run synchronously, there is no status to ask for",
+                      function));
 }
 
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
@@ -428,11 +458,11 @@ fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *va
 }
 
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
-    Guard *guard = (Guard *)c;
-    if (guard == NULL) return fmi2Error;
     if (s != fmi2LastSuccessfulTime) return unsupported_status(c, __func__);
+    GUARDED(c);
+    if (value == NULL) CLOSE(fmi2Error);
     *value = guard->last_successful_time;
-    return fmi2OK;
+    CLOSE(fmi2OK);
 }
 
 fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
@@ -441,11 +471,11 @@ fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Int
 }
 
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
-    Guard *guard = (Guard *)c;
-    if (guard == NULL) return fmi2Error;
     if (s != fmi2Terminated) return unsupported_status(c, __func__);
+    GUARDED(c);
+    if (value == NULL) CLOSE(fmi2Error);
     *value = fmi2False; /* the FMU never asks to end the simulation */
-    return fmi2OK;
+    CLOSE(fmi2OK);
 }
 
 fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {

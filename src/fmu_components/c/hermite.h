@@ -7,6 +7,8 @@
 #ifndef HERMITE_H
 #define HERMITE_H
 
+#include "arithmetic.h"
+
 #include <stddef.h>
 
 #include "model_config.h"

@@ -11,13 +11,7 @@
 #ifndef MODEL_H
 #define MODEL_H
 
-/* The same arithmetic in the same order as the Python flavour: never fuse a*b + c into
-   one rounding (gcc needs -ffp-contract=off as well; the build passes it). */
-#if defined(__clang__)
-#pragma STDC FP_CONTRACT OFF
-#elif defined(_MSC_VER)
-#pragma fp_contract(off)
-#endif
+#include "arithmetic.h"
 
 #include <stddef.h>
 

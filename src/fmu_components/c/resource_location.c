@@ -2,11 +2,9 @@
 
 #include <ctype.h>
 #include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
 
 #define MAX_PATH_LENGTH 4096
-#define MAX_DESCRIPTION (64L * 1024 * 1024)
 
 static int hex(int c) {
     if (c >= '0' && c <= '9') return c - '0';
@@ -44,7 +42,7 @@ static int uri_path(const char *uri, char *path, size_t size) {
 
 int check_resource_location(const char *uri, const char *guid, char *path, size_t path_size,
                             char *problem, size_t size) {
-    char folder[MAX_PATH_LENGTH], description[MAX_PATH_LENGTH + 32];
+    char folder[MAX_PATH_LENGTH], identity[MAX_PATH_LENGTH + 32];
     if (uri == NULL || uri[0] == '\0') {
         snprintf(problem, size, "fmuResourceLocation is missing: pass the file URI of the "
                  "unzipped FMU's resources folder");
@@ -55,31 +53,21 @@ int check_resource_location(const char *uri, const char *guid, char *path, size_
                  "(file:///path/to/resources)", uri);
         return 1;
     }
-    snprintf(description, sizeof description, "%s/../modelDescription.xml", folder);
-    FILE *file = fopen(description, "rb");
+    snprintf(identity, sizeof identity, "%s/%s", folder, IDENTITY_FILE);
+    FILE *file = fopen(identity, "rb");
     if (file == NULL) {
         snprintf(problem, size, "fmuResourceLocation '%.300s' is not the resources folder of "
-                 "an unzipped FMU: there is no modelDescription.xml beside it", uri);
+                 "an unzipped FMU of this kind: it has no %s", uri, IDENTITY_FILE);
         return 1;
     }
-    int found = 0;
-    if (fseek(file, 0, SEEK_END) == 0) {
-        long length = ftell(file);
-        char *text = length > 0 && length < MAX_DESCRIPTION ? malloc((size_t)length + 1) : NULL;
-        if (text != NULL) {
-            rewind(file);
-            size_t read = fread(text, 1, (size_t)length, file);
-            text[read] = '\0';
-            char quoted[128];
-            snprintf(quoted, sizeof quoted, "guid=\"%s\"", guid);
-            found = strstr(text, quoted) != NULL;
-            free(text);
-        }
-    }
+    char text[128] = "";
+    size_t read = fread(text, 1, sizeof text - 1, file);
     fclose(file);
-    if (!found) {
-        snprintf(problem, size, "fmuResourceLocation '%.300s' belongs to another FMU: the "
-                 "modelDescription.xml beside it does not carry GUID %s", uri, guid);
+    while (read > 0 && (text[read - 1] == '\n' || text[read - 1] == '\r')) read--;
+    text[read] = '\0';
+    if (strcmp(text, guid) != 0) {
+        snprintf(problem, size, "fmuResourceLocation '%.300s' belongs to another FMU: its %s "
+                 "holds GUID %.64s, this FMU's is %s", uri, IDENTITY_FILE, text, guid);
         return 1;
     }
     if (path != NULL && path_size > 0) snprintf(path, path_size, "%s", folder);

@@ -5,9 +5,11 @@
 
 #include <stddef.h>
 
-/* 0 when `uri` is a file URI of the resources folder of this FMU: the modelDescription.xml
-   beside it carries `guid`. Else 1 with the reason in problem[size]. On success the
-   folder's path is in path[path_size] (may be NULL). */
+#define IDENTITY_FILE "fmu-guid.txt" /* in resources/: the FMU's GUID */
+
+/* 0 when `uri` is a file URI of the resources folder of this FMU: its IDENTITY_FILE holds
+   `guid`. Else 1 with the reason in problem[size]. On success the folder's path is in
+   path[path_size] (may be NULL). */
 int check_resource_location(const char *uri, const char *guid, char *path, size_t path_size,
                             char *problem, size_t size);
 

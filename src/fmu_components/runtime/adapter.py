@@ -19,30 +19,13 @@ import json
 import math
 import sys
 import traceback
-from xml.etree.ElementTree import Element, SubElement
 
 from pythonfmu import Fmi2Slave
-from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Causality, Fmi2Status, Fmi2Variability
 from pythonfmu.variables import Real
 
 from .cosim import REFUSED, CoSimulation
-from .integrator import DEFAULT_RTOL
-from .units import UNITS
-
-# What the FMUs do, claimed in the modelDescription and nothing more.
-CAPABILITIES = {
-    "needsExecutionTool": "true",  # a Python 3 runtime must be present on the host
-    "canHandleVariableCommunicationStepSize": "true",
-    "canInterpolateInputs": "false",
-    "maxOutputDerivativeOrder": "0",
-    "canRunAsynchronuously": "false",
-    "canBeInstantiatedOnlyOncePerProcess": "false",
-    "canNotUseMemoryManagementFunctions": "true",
-    "canGetAndSetFMUstate": "true",
-    "canSerializeFMUstate": "true",
-    "providesDirectionalDerivative": "false",
-}
+from .integrator import DEFAULT_RTOL, Rosenbrock
 
 # pythonfmu 0.7.0 finds the slave class by executing the entry module's source against the
 # module's namespace and then calls Py_DECREF on that namespace, a borrowed reference
@@ -57,15 +40,15 @@ def hold_module_namespace(namespace):
     _NAMESPACE_REFERENCES.append(namespace)
 
 
-# FMI 2.0 co-simulation states (section 4.2.4) and the calls each allows.
+# FMI 2.0 co-simulation states (section 4.2.4) and the calls each allows (the masks the
+# native runtime uses too, c/fmi2_functions.c).
 INSTANTIATED = "Instantiated"
 INITIALIZATION = "InitializationMode"
 STEP_COMPLETE = "StepComplete"
 STEP_FAILED = "StepFailed"
 TERMINATED = "Terminated"
-# fmi2GetReal is allowed in every state, Instantiated included: pythonfmu reads start
-# values that way when it writes the modelDescription.
 ANY_STATE = frozenset({INSTANTIATED, INITIALIZATION, STEP_COMPLETE, STEP_FAILED, TERMINATED})
+READABLE = ANY_STATE - {INSTANTIATED}
 SETTABLE = frozenset({INSTANTIATED, INITIALIZATION, STEP_COMPLETE})
 
 
@@ -93,27 +76,6 @@ def _nan_values(self, vrs):
     return [math.nan] * len(vrs)
 
 
-class _RealWithUnit(Real):
-    """pythonfmu's Real with the unit and display unit it does not write itself, and a
-    start value that round-trips (pythonfmu prints 16 digits, which can lose the last bit)."""
-
-    def __init__(self, name, unit, display_unit, **kwargs):
-        super().__init__(name, **kwargs)
-        self.unit = unit
-        self.display_unit = display_unit
-
-    def to_xml(self):
-        node = super().to_xml()
-        real = node.find("Real")
-        if self.start is not None:
-            real.set("start", repr(float(self.start)))
-        if self.unit:
-            real.set("unit", self.unit)
-        if self.display_unit:
-            real.set("displayUnit", self.display_unit)
-        return node
-
-
 # The catalog lists a component's variables inputs first: deflection, then its rate.
 DEFLECTION_VR, RATE_VR = 0, 1
 
@@ -133,20 +95,15 @@ class ComponentSlave(Fmi2Slave):
         hold_module_namespace(vars(sys.modules[type(self).__module__]))
         definition = self.definition
         self.modelName = definition.name
-        self.description = definition.description
-        self.default_experiment = DefaultExperiment(
-            start_time=definition.default_experiment["startTime"],
-            stop_time=definition.default_experiment["stopTime"],
-            step_size=definition.default_experiment["stepSize"],
-            tolerance=definition.default_experiment["tolerance"])
         variables = definition.variables
         self._variables = variables
         self._values = [v.start if v.start is not None else 0.0 for v in variables]
+        # pythonfmu needs the variables registered (value references in catalog order); the
+        # modelDescription is the project's own (fmu_components.model_description).
         for vr, variable in enumerate(variables):
             causality, variability = _CAUSALITY[variable.causality]
-            self.register_variable(_RealWithUnit(
-                variable.name, variable.unit, variable.display_unit,
-                causality=causality, variability=variability, description=variable.description,
+            self.register_variable(Real(
+                variable.name, causality=causality, variability=variability,
                 getter=lambda vr=vr: self._values[vr], setter=lambda value: None))
         self._output_vrs = range(2, 2 + len(definition.outputs))
         self._parameter_vrs = range(2 + len(definition.outputs), len(variables))
@@ -236,8 +193,9 @@ class ComponentSlave(Fmi2Slave):
 
     # --- values ---------------------------------------------------------------------------
 
-    def _parameter_values(self):
-        return {self._variables[vr].name: self._values[vr] for vr in self._parameter_vrs}
+    def _parameter_values(self, values=None):
+        values = self._values if values is None else values
+        return {self._variables[vr].name: values[vr] for vr in self._parameter_vrs}
 
     def _current_inputs(self):
         """[deflection, rate] now. Once initialized the co-simulation holds them: the
@@ -259,15 +217,14 @@ class ComponentSlave(Fmi2Slave):
                 outputs = model.outputs(model.initial_state(x, v), x, v)
         else:
             outputs = cosim.outputs()
-            self._values[:2] = self._current_inputs()
         for vr, value in zip(self._output_vrs, outputs):
             self._values[vr] = value
         self._outputs_stale = False
 
     def get_real(self, vrs):
         # A hot call (every output, every step): fmi_call's checks written inline.
-        if self._mode not in ANY_STATE:
-            self._refuse_out_of_sequence("fmi2GetReal", ANY_STATE)
+        if self._mode not in READABLE:
+            self._refuse_out_of_sequence("fmi2GetReal", READABLE)
             return _nan_values(self, vrs)
         try:
             if vrs and min(vrs) < 0:
@@ -289,8 +246,9 @@ class ComponentSlave(Fmi2Slave):
             self._refuse_out_of_sequence("fmi2SetReal", SETTABLE)
             return
         try:
+            # Everything is checked before anything is set: a refused call changes nothing.
             inputs = self._current_inputs()
-            inputs_set = False
+            inputs_set = refused = False
             for vr, value in zip(vrs, values):
                 if (vr == DEFLECTION_VR or vr == RATE_VR) and math.isfinite(value):
                     inputs[vr] = float(value)
@@ -298,8 +256,17 @@ class ComponentSlave(Fmi2Slave):
                     continue
                 problem = self._check_settable(vr, value)
                 if problem:
-                    self._error(f"fmi2SetReal: {problem}; value ignored")
-                else:
+                    self._error(f"fmi2SetReal: {problem}; nothing set")
+                    refused = True
+            if refused:
+                return
+            if inputs_set and self._cosim is not None:
+                problem = self._cosim.model.check_input(self._cosim.state, inputs[DEFLECTION_VR])
+                if problem:
+                    self._error(f"fmi2SetReal: {problem}; nothing set")
+                    return
+            for vr, value in zip(vrs, values):
+                if vr != DEFLECTION_VR and vr != RATE_VR:
                     self._values[vr] = float(value)
             if inputs_set:
                 self._apply_inputs(*inputs)
@@ -319,13 +286,9 @@ class ComponentSlave(Fmi2Slave):
         return variable.check(value)
 
     def _apply_inputs(self, deflection, rate):
-        """Take both inputs, or neither: the model may reject a deflection (the damper's
-        gas spring has a limit), and then nothing changes."""
+        """Take both inputs (checked), and warn once for each outside its measured range."""
         if self._cosim is not None:
-            problem = self._cosim.set_inputs(deflection, rate)
-            if problem:
-                self._error(f"fmi2SetReal: {problem}; values ignored")
-                return
+            self._cosim.set_inputs(deflection, rate)
         self._values[DEFLECTION_VR], self._values[RATE_VR] = deflection, rate
         if self._range_checks:
             for vr, value in ((DEFLECTION_VR, deflection), (RATE_VR, rate)):
@@ -380,29 +343,25 @@ class ComponentSlave(Fmi2Slave):
 
     @fmi_call("fmi2GetFMUstate", ANY_STATE, on_failure=lambda self: {})
     def _get_fmu_state(self):
-        values = self._values[:]
-        values[:2] = self._current_inputs()
-        return {"model": self.definition.name, "values": values, "mode": self._mode,
+        return {"model": self.definition.name, "values": self._values[:], "mode": self._mode,
                 "start_time": self._start_time, "tolerance": self._tolerance,
                 "warned": sorted(self._warned),
                 "cosim": self._cosim.snapshot() if self._cosim is not None else None}
 
     @fmi_call("fmi2SetFMUstate", ANY_STATE)
     def _set_fmu_state(self, state):
-        problem = state.get("invalid") if isinstance(state, dict) else "not a state"
-        if not problem and state.get("model") != self.definition.name:
-            problem = (f"the state belongs to {state.get('model')!r}, not to "
-                       f"{self.definition.name}")
+        try:
+            problem = self._state_problem(state)
+        except (KeyError, TypeError, ValueError, IndexError) as exc:
+            problem = f"the state is incomplete ({type(exc).__name__}: {exc})"
         if problem:
             self._error(f"fmi2SetFMUstate: {problem}; state unchanged")
             return
-        values = list(state["values"])
+        values = [float(v) for v in state["values"]]
         cosim = None
         if state["cosim"] is not None:
-            names = [v.name for v in self._variables]
-            model = self.definition.build_model(
-                {names[vr]: values[vr] for vr in self._parameter_vrs})
-            cosim = CoSimulation(model, state["tolerance"])
+            cosim = CoSimulation(self.definition.build_model(self._parameter_values(values)),
+                                 state["tolerance"])
             cosim.restore(state["cosim"])
         self._values = values
         self._mode = state["mode"]
@@ -413,6 +372,49 @@ class ComponentSlave(Fmi2Slave):
         self._cosim = cosim
         self._outputs_stale = True
 
+    def _state_problem(self, state):
+        """Why a state cannot be this instance's, or None: every value passes the checks
+        fmi2SetReal applies, and the co-simulation's values are ones a run could reach."""
+        if not isinstance(state, dict):
+            return "not a state"
+        if state.get("invalid"):
+            return state["invalid"]
+        if state.get("model") != self.definition.name:
+            return f"the state belongs to {state.get('model')!r}, not to {self.definition.name}"
+        values = state["values"]
+        if len(values) != len(self._variables) or state["mode"] not in ANY_STATE:
+            return "the state's values or FMI state do not fit this FMU"
+        for variable, value in zip(self._variables, values):
+            problem = variable.causality != "output" and variable.check(float(value))
+            if problem:
+                return f"the state's {problem}"
+        if not (_finite(state["start_time"]) and _positive(state["tolerance"])
+                and set(state["warned"]) <= {v.name for v in self.definition.inputs}):
+            return "the state's experiment settings are not valid"
+        cosim = state["cosim"]
+        if cosim is None:
+            return None
+        problem = self.definition.check_parameters(self._parameter_values(values))
+        if problem:
+            return f"the state's parameters are not valid: {problem}"
+        memory = cosim["integrator"]
+        size = self.definition.equations.state_size
+        n = self.definition.equations.integrated
+        w = memory["w"]
+        if not (all(_finite(cosim[k]) for k in ("time", "deflection", "rate"))
+                and len(cosim["state"]) == size and all(_finite(v) for v in cosim["state"])
+                and _positive(cosim["rtol"])
+                and (memory["h_next"] is None or _positive(memory["h_next"]))
+                and (w is None or (_positive(w[0]) and len(w[1]) == n * n
+                                   and all(_finite(v) for v in w[1])
+                                   and 1 <= int(w[2]) <= Rosenbrock.MAX_W_REUSE))):
+            return "the state's co-simulation values are not finite or out of range"
+        model = self.definition.build_model(self._parameter_values(values))
+        problem = model.check_input(list(cosim["state"]), cosim["deflection"])
+        if problem:
+            return f"the state's inputs do not fit its model state: {problem}"
+        return None
+
     @staticmethod
     def _fmu_state_to_bytes(state):
         return json.dumps(state).encode("utf-8")
@@ -420,48 +422,17 @@ class ComponentSlave(Fmi2Slave):
     @staticmethod
     def _fmu_state_from_bytes(state):
         # No instance to log to here: a broken buffer becomes a state that
-        # fmi2SetFMUstate refuses with a message.
+        # fmi2SetFMUstate refuses with a message (the guard has checked its envelope).
         try:
             decoded = json.loads(state.decode("utf-8"))
             return decoded if isinstance(decoded, dict) else {"invalid": "not a state"}
         except Exception as exc:
             return {"invalid": f"the serialized state cannot be read ({exc})"}
 
-    # --- modelDescription: what pythonfmu 0.7.0 leaves out ------------------------------
 
-    def to_xml(self, model_options=None):
-        root = super().to_xml(model_options or {})
-        co_simulation = root.find("CoSimulation")
-        for flag, value in CAPABILITIES.items():
-            co_simulation.set(flag, value)
-        position = list(root).index(co_simulation) + 1
-        root.insert(position, self._unit_definitions())
-        root.remove(root.find("ModelStructure"))
-        root.append(self._model_structure())
-        return root
+def _finite(value):
+    return isinstance(value, (int, float)) and math.isfinite(value)
 
-    def _unit_definitions(self):
-        node = Element("UnitDefinitions")
-        for name in sorted({v.unit for v in self._variables}):
-            exponents, display_units = UNITS[name]
-            unit = SubElement(node, "Unit", name=name)
-            SubElement(unit, "BaseUnit", {k: str(e) for k, e in exponents.items()})
-            for display, factor in display_units:
-                SubElement(unit, "DisplayUnit", name=display, factor=repr(factor))
-        return node
 
-    def _model_structure(self):
-        """Outputs, each with its direct dependence on the inputs, and the initial
-        unknowns (depending on all knowns, so no dependency list is given)."""
-        node = Element("ModelStructure")
-        outputs = SubElement(node, "Outputs")
-        deflection_index = str(DEFLECTION_VR + 1)
-        for vr in self._output_vrs:
-            direct = self._variables[vr].name in self.definition.direct_outputs
-            SubElement(outputs, "Unknown", index=str(vr + 1),
-                       dependencies=deflection_index if direct else "",
-                       dependenciesKind="dependent" if direct else "")
-        initial = SubElement(node, "InitialUnknowns")
-        for vr in self._output_vrs:
-            SubElement(initial, "Unknown", index=str(vr + 1))
-        return node
+def _positive(value):
+    return _finite(value) and value > 0.0
