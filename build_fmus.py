@@ -51,9 +51,9 @@ GUID_NAMESPACE = uuid.UUID("6c1f4b7e-4f5e-4a8e-9c71-2f4d8e3b9a10")
 
 # The native runtime, hand-written once for all components, and the FMI headers.
 RUNTIME_SOURCES = ("fmi2_functions.c", "cosimulation.c", "integrator.c", "state.c", "hermite.c",
-                   "text.c", "host_log.c", "state_envelope.c", "resource_location.c")
+                   "text.c", "host_log.c", "state_envelope.c", "instantiation.c")
 RUNTIME_HEADERS = ("runtime.h", "model.h", "arithmetic.h", "hermite.h", "text.h", "host_log.h",
-                   "state_envelope.h", "resource_location.h")
+                   "state_envelope.h", "instantiation.h")
 FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
 GENERATED = ("model_config.h", "model.c")
 # The same arithmetic in the same order as the Python flavour: no fused multiply-add, no
@@ -106,7 +106,7 @@ def write_fmu(path, files):
 
 def identity(definition, guid):
     """The resources that say which FMU this is: the GUID the binary checks the resource
-    location against (c/resource_location.h), and a line on what it models."""
+    location against (c/instantiation.h), and a line on what it models."""
     return {"resources/fmu-guid.txt": guid + "\n",
             "resources/provenance.txt": f"{definition.name}: {definition.description}\n"
                                         f"fmu-components {__version__}\n"}
@@ -197,7 +197,7 @@ def compile_guard(directory, name, guid):
                     f'-DPYTHON_LIBRARY="{python_library()}"', f'-DFMU_GUID="{guid}"',
                     f'-DFMU_NAME="{name}"', str(C_SOURCE / "fmi2_guard.c"),
                     *[str(C_SOURCE / f) for f in ("host_log.c", "state_envelope.c",
-                                                  "resource_location.c")],
+                                                  "instantiation.c")],
                     "-o", str(library), "-ldl", "-lpthread"], check=True)
     return library
 

@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "resource_location.h"
+#include "instantiation.h"
 #include "runtime.h"
 #include "text.h"
 
@@ -181,38 +181,11 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               const fmi2CallbackFunctions *functions, fmi2Boolean visible,
                               fmi2Boolean loggingOn) {
     (void)visible;
-    HostLog log = {0};
-    if (functions != NULL) {
-        log.logger = functions->logger;
-        log.environment = functions->componentEnvironment;
-    }
-    log.instance_name = instanceName;
-    char problem[MESSAGE_SIZE];
-    if (instanceName == NULL || instanceName[0] == '\0') {
-        host_log(&log, fmi2Error, "fmi2Instantiate: the instance name is missing");
+    HostLog log = instantiation_log(instanceName, functions);
+    if (instantiation_problem(&log, instanceName, fmuType, fmuGUID, fmuResourceLocation,
+                              functions, MODEL_INFO.name, MODEL_INFO.guid,
+                              1u << fmi2CoSimulation))
         return NULL;
-    }
-    if (fmuType != fmi2CoSimulation) {
-        snprintf(problem, sizeof problem, "fmi2Instantiate: %s offers Co-Simulation (fmuType "
-                 "%d), not the interface type %d asked for", MODEL_INFO.name, fmi2CoSimulation,
-                 (int)fmuType);
-        host_log(&log, fmi2Error, problem);
-        return NULL;
-    }
-    if (fmuGUID == NULL || strcmp(fmuGUID, MODEL_INFO.guid) != 0) {
-        snprintf(problem, sizeof problem, "fmi2Instantiate: GUID %.100s is not this FMU's (%s "
-                 "%s): the modelDescription and the binary belong to different FMUs",
-                 fmuGUID ? fmuGUID : "(NULL)", MODEL_INFO.name, MODEL_INFO.guid);
-        host_log(&log, fmi2Error, problem);
-        return NULL;
-    }
-    char reason[MESSAGE_SIZE - 32];
-    if (check_resource_location(fmuResourceLocation, MODEL_INFO.guid, NULL, 0, reason,
-                                sizeof reason)) {
-        snprintf(problem, sizeof problem, "fmi2Instantiate: %s", reason);
-        host_log(&log, fmi2Error, problem);
-        return NULL;
-    }
     Instance *instance = calloc(1, sizeof *instance);
     char *name = malloc(strlen(instanceName) + 1);
     if (instance == NULL || name == NULL) {

@@ -8,7 +8,7 @@
  * and it expects the Python C API to be present in the process already. This layer
  *
  *  - checks what fmi2Instantiate is given (interface type, GUID, resource location) as the
- *    native runtime does, before Python sees it;
+ *    native runtime does (instantiation.c), before Python sees it;
  *  - returns, for every call, the worst of pythonfmu's status and the statuses the adapter
  *    logged during the call, so a rejected input is fmi2Error and a warning fmi2Warning;
  *  - loads the Python shared library (PYTHON_LIBRARY) with global symbols when the host
@@ -34,7 +34,7 @@
 
 #include "fmi2Functions.h"
 #include "host_log.h"
-#include "resource_location.h"
+#include "instantiation.h"
 #include "state_envelope.h"
 
 #ifndef PYTHON_LIBRARY
@@ -207,38 +207,10 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               fmi2String fmuResourceLocation,
                               const fmi2CallbackFunctions *functions, fmi2Boolean visible,
                               fmi2Boolean loggingOn) {
-    HostLog log = {0};
-    if (functions != NULL) {
-        log.logger = functions->logger;
-        log.environment = functions->componentEnvironment;
-    }
-    log.instance_name = instanceName;
-    char problem[MESSAGE_SIZE], reason[MESSAGE_SIZE - 32];
-    if (instanceName == NULL || instanceName[0] == '\0' || functions == NULL) {
-        host_log(&log, fmi2Error, "fmi2Instantiate: the instance name or the callback "
-                 "functions are missing");
+    HostLog log = instantiation_log(instanceName, functions);
+    if (instantiation_problem(&log, instanceName, fmuType, fmuGUID, fmuResourceLocation,
+                              functions, FMU_NAME, FMU_GUID, 1u << fmi2CoSimulation))
         return NULL;
-    }
-    if (fmuType != fmi2CoSimulation) {
-        snprintf(problem, sizeof problem, "fmi2Instantiate: %s offers Co-Simulation (fmuType "
-                 "%d), not the interface type %d asked for", FMU_NAME, fmi2CoSimulation,
-                 (int)fmuType);
-        host_log(&log, fmi2Error, problem);
-        return NULL;
-    }
-    if (fmuGUID == NULL || strcmp(fmuGUID, FMU_GUID) != 0) {
-        snprintf(problem, sizeof problem, "fmi2Instantiate: GUID %.100s is not this FMU's (%s "
-                 "%s): the modelDescription and the binary belong to different FMUs",
-                 fmuGUID ? fmuGUID : "(NULL)", FMU_NAME, FMU_GUID);
-        host_log(&log, fmi2Error, problem);
-        return NULL;
-    }
-    if (check_resource_location(fmuResourceLocation, FMU_GUID, NULL, 0, reason,
-                                sizeof reason)) {
-        snprintf(problem, sizeof problem, "fmi2Instantiate: %s", reason);
-        host_log(&log, fmi2Error, problem);
-        return NULL;
-    }
     pthread_once(&engine_once, load_engine);
     if (engine_problem[0]) {
         host_log(&log, fmi2Error, engine_problem);

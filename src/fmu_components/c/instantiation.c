@@ -1,4 +1,4 @@
-#include "resource_location.h"
+#include "instantiation.h"
 
 #include <ctype.h>
 #include <stdio.h>
@@ -40,8 +40,7 @@ static int uri_path(const char *uri, char *path, size_t size) {
     return n == 0;
 }
 
-int check_resource_location(const char *uri, const char *guid, char *path, size_t path_size,
-                            char *problem, size_t size) {
+static int resource_problem(const char *uri, const char *guid, char *problem, size_t size) {
     char folder[MAX_PATH_LENGTH], identity[MAX_PATH_LENGTH + 32];
     if (uri == NULL || uri[0] == '\0') {
         snprintf(problem, size, "fmuResourceLocation is missing: pass the file URI of the "
@@ -70,6 +69,41 @@ int check_resource_location(const char *uri, const char *guid, char *path, size_
                  "holds GUID %.64s, this FMU's is %s", uri, IDENTITY_FILE, text, guid);
         return 1;
     }
-    if (path != NULL && path_size > 0) snprintf(path, path_size, "%s", folder);
     return 0;
+}
+
+HostLog instantiation_log(fmi2String instance_name, const fmi2CallbackFunctions *functions) {
+    HostLog log = {0};
+    if (functions != NULL) {
+        log.logger = functions->logger;
+        log.environment = functions->componentEnvironment;
+    }
+    log.instance_name = instance_name;
+    return log;
+}
+
+int instantiation_problem(const HostLog *log, fmi2String instance_name, fmi2Type type,
+                          fmi2String guid, fmi2String resource_location,
+                          const fmi2CallbackFunctions *functions, const char *name,
+                          const char *expected_guid, unsigned types) {
+    char problem[MESSAGE_SIZE], reason[MESSAGE_SIZE - 32];
+    if (instance_name == NULL || instance_name[0] == '\0' || functions == NULL) {
+        snprintf(problem, sizeof problem, "fmi2Instantiate: the instance name or the callback "
+                 "functions are missing");
+    } else if ((unsigned)type > fmi2CoSimulation || !(types & (1u << type))) {
+        snprintf(problem, sizeof problem, "fmi2Instantiate: %s does not offer the interface "
+                 "type %d asked for (%s)", name, (int)type,
+                 types == (1u << fmi2CoSimulation) ? "Co-Simulation only"
+                                                   : "Model Exchange and Co-Simulation");
+    } else if (guid == NULL || strcmp(guid, expected_guid) != 0) {
+        snprintf(problem, sizeof problem, "fmi2Instantiate: GUID %.100s is not this FMU's (%s "
+                 "%s): the modelDescription and the binary belong to different FMUs",
+                 guid ? guid : "(NULL)", name, expected_guid);
+    } else if (resource_problem(resource_location, expected_guid, reason, sizeof reason)) {
+        snprintf(problem, sizeof problem, "fmi2Instantiate: %s", reason);
+    } else {
+        return 0;
+    }
+    host_log(log, fmi2Error, problem);
+    return 1;
 }
