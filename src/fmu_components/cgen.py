@@ -190,7 +190,7 @@ class ModelCode:
         return "\n\n".join([self._preamble(), self._info(), self._derive(),
                             self._initial_state(), self._start(), self._factor(), self._step(),
                             self._exact(), self._outputs(), self._input_problem(),
-                            self._failure_hint()]) + "\n"
+                            self._take_input(), self._failure_hint()]) + "\n"
 
     def _preamble(self):
         return "\n".join([
@@ -325,6 +325,13 @@ class ModelCode:
             "int model_input_problem(ModelData *m, const double *state, double x, "
             "char *message, size_t size)", lines, ["state", "x"],
             prologue=["(void)state, (void)x;"], epilogue=epilogue)
+
+    def _take_input(self):
+        limit = self.equations.input_limit
+        statements = [] if limit is None or not limit.accept else limit.lines + limit.accept
+        return self.function("void model_take_input(ModelData *m, double *state, double x)",
+                             statements, ["state", "x"], fail="return;",
+                             prologue=["(void)state, (void)x;"])
 
     def _failure_hint(self):
         hint = self.equations.failure_hint

@@ -31,6 +31,14 @@ int cosim_input_problem(Instance *instance, double deflection, char *message, si
     return model_input_problem(&instance->data, instance->s.state, deflection, message, size);
 }
 
+void cosim_take_inputs(Instance *instance, double deflection, double rate) {
+    Snapshot *s = &instance->s;
+    model_take_input(&instance->data, s->state, deflection);
+    s->deflection = deflection;
+    s->rate = rate;
+    instance->outputs_fresh = 0;
+}
+
 typedef struct {
     double duration, rate, x; /* the rate the rubber sees, the deflection at the start */
 } Segment;

@@ -47,28 +47,19 @@ void log_status(const Instance *instance, fmi2Status status, const char *format,
     host_log(&instance->log, status, message);
 }
 
-int call_begin(Instance *instance, int allowed, const char *function) {
+int call_refused(Instance *instance, int allowed, const char *function) {
     if (instance == NULL || instance->magic != INSTANCE_MAGIC || instance->busy) return 0;
-    if (!(instance->s.mode & allowed)) {
-        char list[256] = "";
-        for (size_t i = 0; i < sizeof MODES / sizeof MODES[0]; i++) {
-            if (!(allowed & MODES[i].mode)) continue;
-            if (list[0]) strncat(list, ", ", sizeof list - strlen(list) - 1);
-            strncat(list, MODES[i].name, sizeof list - strlen(list) - 1);
-        }
-        instance->busy = 1;
-        log_status(instance, fmi2Error, "%s is not allowed in state %s (allowed in: %s); call "
-                   "ignored", function, mode_name(instance->s.mode), list);
-        instance->busy = 0;
-        return 0;
+    char list[256] = "";
+    for (size_t i = 0; i < sizeof MODES / sizeof MODES[0]; i++) {
+        if (!(allowed & MODES[i].mode)) continue;
+        if (list[0]) strncat(list, ", ", sizeof list - strlen(list) - 1);
+        strncat(list, MODES[i].name, sizeof list - strlen(list) - 1);
     }
     instance->busy = 1;
-    return 1;
-}
-
-fmi2Status call_end(Instance *instance, fmi2Status status) {
+    log_status(instance, fmi2Error, "%s is not allowed in state %s (allowed in: %s); call "
+               "ignored", function, mode_name(instance->s.mode), list);
     instance->busy = 0;
-    return status;
+    return 0;
 }
 
 /* --- values ----------------------------------------------------------------------------- */
@@ -151,24 +142,23 @@ static void reset_instance(Instance *instance) {
 }
 
 /* The outputs now: the co-simulation's, or before initialization the relaxed
-   component's at the current inputs, if the parameters make sense (NaN if not). */
-static void current_outputs(Instance *instance, double *outputs) {
-    if (instance->s.initialized) {
-        memcpy(outputs, cosim_outputs(instance), sizeof(double) * MODEL_OUTPUTS);
-        return;
-    }
+   component's at the current inputs, if the parameters make sense (NaN if not), into
+   `relaxed`. */
+static const double *current_outputs(Instance *instance, double *relaxed) {
+    if (instance->s.initialized) return cosim_outputs(instance);
     const double *values = instance->s.values;
     char problem[MESSAGE_SIZE];
     if (parameter_problem(values, problem, sizeof problem)) {
-        for (int i = 0; i < MODEL_OUTPUTS; i++) outputs[i] = NAN;
-        return;
+        for (int i = 0; i < MODEL_OUTPUTS; i++) relaxed[i] = NAN;
+        return relaxed;
     }
     ModelData data;
     double state[SLOTS(MODEL_STATES)];
     double x = values[INPUT_DEFLECTION], v = values[INPUT_RATE];
     build_model_data(&data, values);
     model_initial_state(&data, x, v, state);
-    model_outputs(&data, state, x, v, outputs);
+    model_outputs(&data, state, x, v, relaxed);
+    return relaxed;
 }
 
 /* --- life cycle -------------------------------------------------------------------------- */
@@ -314,13 +304,12 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
             return call_end(instance, fmi2Error);
         }
     }
-    double outputs[MODEL_OUTPUTS];
-    int have_outputs = 0;
+    double relaxed[MODEL_OUTPUTS];
+    const double *outputs = NULL;
     for (size_t i = 0; i < nvr; i++) {
         unsigned reference = vr[i];
         if (reference >= FIRST_OUTPUT && reference < FIRST_PARAMETER) {
-            if (!have_outputs) current_outputs(instance, outputs);
-            have_outputs = 1;
+            if (outputs == NULL) outputs = current_outputs(instance, relaxed);
             value[i] = outputs[reference - FIRST_OUTPUT];
         } else {
             value[i] = instance->s.values[reference];
@@ -330,10 +319,8 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 }
 
 /* The range warning, once per input and instance. */
-static fmi2Status warn_if_unmeasured(Instance *instance, int input, double value) {
+static fmi2Status warn_unmeasured(Instance *instance, int input, double value) {
     const RangeInfo *range = &MODEL_INFO.ranges[input];
-    if ((instance->s.warned & (1u << input)) || (range->low <= value && value <= range->high))
-        return fmi2OK;
     const VariableInfo *variable = &MODEL_INFO.variables[input];
     instance->s.warned |= 1u << input;
     log_status(instance, fmi2Warning, "%s = %.6g %s is outside the range the thesis measured "
@@ -356,6 +343,11 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     char problem[MESSAGE_SIZE];
     for (size_t i = 0; i < nvr; i++) {
         unsigned reference = vr[i];
+        if (reference <= INPUT_RATE && isfinite(value[i])) { /* the call of every step */
+            inputs[reference] = value[i];
+            inputs_set = 1;
+            continue;
+        }
         if (reference >= MODEL_VARIABLES) {
             snprintf(problem, sizeof problem, "no variable has value reference %u", reference);
         } else if (MODEL_INFO.variables[reference].causality == CAUSALITY_OUTPUT) {
@@ -366,10 +358,6 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
             snprintf(problem, sizeof problem, "%s is a fixed parameter, settable only before "
                      "fmi2ExitInitializationMode", MODEL_INFO.variables[reference].name);
         } else if (!variable_problem(reference, value[i], problem, sizeof problem)) {
-            if (reference == INPUT_DEFLECTION || reference == INPUT_RATE) {
-                inputs[reference] = value[i];
-                inputs_set = 1;
-            }
             continue;
         }
         log_status(instance, fmi2Error, "fmi2SetReal: %s; nothing set", problem);
@@ -385,15 +373,14 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
         if (vr[i] != INPUT_DEFLECTION && vr[i] != INPUT_RATE) s->values[vr[i]] = value[i];
     fmi2Status status = fmi2OK;
     if (inputs_set) {
-        if (s->initialized) {
-            s->deflection = inputs[INPUT_DEFLECTION];
-            s->rate = inputs[INPUT_RATE];
-        }
+        if (s->initialized) cosim_take_inputs(instance, inputs[INPUT_DEFLECTION], inputs[INPUT_RATE]);
         s->values[INPUT_DEFLECTION] = inputs[INPUT_DEFLECTION];
         s->values[INPUT_RATE] = inputs[INPUT_RATE];
         for (int input = INPUT_DEFLECTION; input <= INPUT_RATE; input++) {
-            fmi2Status warned = warn_if_unmeasured(instance, input, inputs[input]);
-            if (warned > status) status = warned;
+            const RangeInfo *range = &MODEL_INFO.ranges[input];
+            if (!(s->warned & (1u << input)) &&
+                !(range->low <= inputs[input] && inputs[input] <= range->high))
+                status = warn_unmeasured(instance, input, inputs[input]);
         }
     }
     instance->outputs_fresh = 0;

@@ -45,6 +45,7 @@
 #endif
 #define PYTHONFMU_ENGINE "libpythonfmu-export.so"
 #define STATE_FORMAT_VERSION 1u
+#define PENDING_MESSAGES 8
 
 /* pythonfmu's functions, looked up once per process. */
 static struct {
@@ -86,6 +87,15 @@ typedef struct {
     HostLog log;                            /* the host's logger and logging choice */
     char *instance_name;
     fmi2Status worst; /* worst status logged during the current call */
+    /* Messages pythonfmu logs during a call, passed on when it has returned: a host's
+       logger then never runs inside pythonfmu (which re-delivers its queue when the logger
+       calls back into the FMU). */
+    struct {
+        fmi2Status status;
+        char category[32];
+        char text[MESSAGE_SIZE];
+    } pending[PENDING_MESSAGES];
+    int n_pending, n_dropped;
     int fatal;        /* the engine reported fmi2Fatal: never call it again */
     int busy;         /* inside a call: a logger calling back is refused */
     fmi2Real last_successful_time;
@@ -161,14 +171,40 @@ static fmi2Status guard_error(const Guard *guard, const char *format, ...) {
     return fmi2Error;
 }
 
-/* Remember the worst status seen during the call, and pass the message on if wanted. */
+/* Remember the worst status seen during the call, and keep the message if the host wants
+   it, to pass on when pythonfmu has returned. */
 static void guard_logger(fmi2ComponentEnvironment environment, fmi2String instance_name,
                          fmi2Status status, fmi2String category, fmi2String message, ...) {
     (void)instance_name;
     Guard *guard = (Guard *)environment;
     if (status > guard->worst) guard->worst = status;
-    if (host_log_wants(&guard->log, status, category))
-        host_log_send(&guard->log, status, category, message ? message : "");
+    if (!host_log_wants(&guard->log, status, category)) return;
+    if (guard->n_pending == PENDING_MESSAGES) {
+        guard->n_dropped++;
+        return;
+    }
+    int i = guard->n_pending++;
+    guard->pending[i].status = status;
+    snprintf(guard->pending[i].category, sizeof guard->pending[i].category, "%s",
+             category ? category : "");
+    snprintf(guard->pending[i].text, sizeof guard->pending[i].text, "%s", message ? message : "");
+}
+
+/* The end of every call: the messages kept during it go to the host (still busy, so a
+   logger calling back is refused), then the call's status. */
+static fmi2Status finish(Guard *guard, fmi2Status status) {
+    for (int i = 0; i < guard->n_pending; i++)
+        host_log_send(&guard->log, guard->pending[i].status, guard->pending[i].category,
+                      guard->pending[i].text);
+    if (guard->n_dropped) {
+        char message[96];
+        snprintf(message, sizeof message, "%d more messages of this call were dropped",
+                 guard->n_dropped);
+        host_log_send(&guard->log, fmi2Warning, "logStatusWarning", message);
+    }
+    guard->n_pending = guard->n_dropped = 0;
+    guard->busy = 0;
+    return status;
 }
 
 static fmi2Status refuse(Guard *guard, const char *function) {
@@ -181,17 +217,23 @@ static fmi2Status settle(Guard *guard, fmi2Status status) {
     return guard->worst;
 }
 
+#define CLOSE(status) return finish(guard, (status))
+
 /* The opening of every call passed to pythonfmu: declares `guard`, returns for a missing
    instance, one that failed fatally, or a logger calling back into the instance, and
    starts the call's worst status at fmi2OK. CLOSE(status) ends the call. */
 #define GUARDED(c)                                                                          \
     Guard *guard = (Guard *)(c);                                                            \
     if (guard == NULL || guard->busy) return fmi2Error;                                     \
-    if (guard->fatal) return refuse(guard, __func__);                                       \
     guard->busy = 1;                                                                        \
-    guard->worst = fmi2OK
+    guard->worst = fmi2OK;                                                                  \
+    if (guard->fatal) CLOSE(refuse(guard, __func__))
 
-#define CLOSE(status) return (guard->busy = 0, (status))
+/* pythonfmu reads the arrays it is given without looking: NULL is refused here. */
+#define REFUSE_NULL(function, n, a, b)                                                      \
+    if ((n) > 0 && ((a) == NULL || (b) == NULL))                                            \
+    CLOSE(guard_error(guard, "%s: %u values announced but an array is NULL; call ignored",  \
+                      function, (unsigned)(n)))
 
 /* Forward one call to pythonfmu and report the worst status seen during it. */
 #define FORWARD(c, call)                                                                    \
@@ -228,7 +270,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     guard->busy = 1;
     guard->engine = engine.instantiate(instanceName, fmuType, fmuGUID, fmuResourceLocation,
                                        &guard->engine_callbacks, visible, fmi2True);
-    guard->busy = 0;
+    finish(guard, fmi2OK);
     if (guard->engine == NULL || guard->worst >= fmi2Error) {
         /* A half-made instance is not freed through pythonfmu: it may be broken. */
         free(guard->instance_name);
@@ -245,6 +287,7 @@ void fmi2FreeInstance(fmi2Component c) {
         guard->worst = fmi2OK;
         guard->busy = 1;
         engine.freeInstance(guard->engine);
+        finish(guard, fmi2OK);
     }
     host_log_forget(&guard->log);
     free(guard->instance_name);
@@ -288,60 +331,82 @@ fmi2Status fmi2Reset(fmi2Component c) { FORWARD(c, reset(guard->engine)); }
 
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        fmi2Real value[]) {
-    FORWARD(c, getReal(guard->engine, vr, nvr, value));
+    GUARDED(c);
+    REFUSE_NULL("fmi2GetReal", nvr, vr, value);
+    CLOSE(settle(guard, engine.getReal(guard->engine, vr, nvr, value)));
 }
 
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           fmi2Integer value[]) {
-    FORWARD(c, getInteger(guard->engine, vr, nvr, value));
+    GUARDED(c);
+    REFUSE_NULL("fmi2GetInteger", nvr, vr, value);
+    CLOSE(settle(guard, engine.getInteger(guard->engine, vr, nvr, value)));
 }
 
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           fmi2Boolean value[]) {
-    FORWARD(c, getBoolean(guard->engine, vr, nvr, value));
+    GUARDED(c);
+    REFUSE_NULL("fmi2GetBoolean", nvr, vr, value);
+    CLOSE(settle(guard, engine.getBoolean(guard->engine, vr, nvr, value)));
 }
 
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                          fmi2String value[]) {
-    FORWARD(c, getString(guard->engine, vr, nvr, value));
+    GUARDED(c);
+    REFUSE_NULL("fmi2GetString", nvr, vr, value);
+    CLOSE(settle(guard, engine.getString(guard->engine, vr, nvr, value)));
 }
 
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        const fmi2Real value[]) {
-    FORWARD(c, setReal(guard->engine, vr, nvr, value));
+    GUARDED(c);
+    REFUSE_NULL("fmi2SetReal", nvr, vr, value);
+    CLOSE(settle(guard, engine.setReal(guard->engine, vr, nvr, value)));
 }
 
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           const fmi2Integer value[]) {
-    FORWARD(c, setInteger(guard->engine, vr, nvr, value));
+    GUARDED(c);
+    REFUSE_NULL("fmi2SetInteger", nvr, vr, value);
+    CLOSE(settle(guard, engine.setInteger(guard->engine, vr, nvr, value)));
 }
 
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           const fmi2Boolean value[]) {
-    FORWARD(c, setBoolean(guard->engine, vr, nvr, value));
+    GUARDED(c);
+    REFUSE_NULL("fmi2SetBoolean", nvr, vr, value);
+    CLOSE(settle(guard, engine.setBoolean(guard->engine, vr, nvr, value)));
 }
 
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                          const fmi2String value[]) {
-    FORWARD(c, setString(guard->engine, vr, nvr, value));
+    GUARDED(c);
+    REFUSE_NULL("fmi2SetString", nvr, vr, value);
+    CLOSE(settle(guard, engine.setString(guard->engine, vr, nvr, value)));
 }
 
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    FORWARD(c, getFMUstate(guard->engine, FMUstate));
+    GUARDED(c);
+    REFUSE_NULL("fmi2GetFMUstate", 1, FMUstate, FMUstate);
+    CLOSE(settle(guard, engine.getFMUstate(guard->engine, FMUstate)));
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
-    FORWARD(c, setFMUstate(guard->engine, FMUstate));
+    GUARDED(c);
+    REFUSE_NULL("fmi2SetFMUstate", 1, FMUstate, FMUstate);
+    CLOSE(settle(guard, engine.setFMUstate(guard->engine, FMUstate)));
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    FORWARD(c, freeFMUstate(guard->engine, FMUstate));
+    GUARDED(c);
+    if (FMUstate == NULL || *FMUstate == NULL) CLOSE(fmi2OK);
+    CLOSE(settle(guard, engine.freeFMUstate(guard->engine, FMUstate)));
 }
 
 /* The serialized state is pythonfmu's bytes (the adapter's JSON) in the envelope. */
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
     GUARDED(c);
-    if (size == NULL) CLOSE(guard_error(guard, "fmi2SerializedFMUstateSize: size is NULL"));
+    REFUSE_NULL("fmi2SerializedFMUstateSize", 1, FMUstate, size);
     fmi2Status status = settle(guard, engine.serializedFMUstateSize(guard->engine, FMUstate, size));
     if (status <= fmi2Warning) *size += ENVELOPE_OVERHEAD;
     CLOSE(status);
@@ -350,6 +415,7 @@ fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, si
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[],
                                  size_t size) {
     GUARDED(c);
+    REFUSE_NULL("fmi2SerializeFMUstate", 1, FMUstate, FMUstate);
     size_t length = 0;
     fmi2Status status = settle(guard, engine.serializedFMUstateSize(guard->engine, FMUstate,
                                                                     &length));
@@ -372,6 +438,7 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
                                    fmi2FMUstate *FMUstate) {
     GUARDED(c);
+    REFUSE_NULL("fmi2DeSerializeFMUstate", 1, FMUstate, FMUstate);
     const unsigned char *payload;
     size_t length;
     char problem[MESSAGE_SIZE];

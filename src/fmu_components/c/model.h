@@ -82,6 +82,8 @@ void model_outputs(ModelData *m, const double *state, double x, double v, double
 /* 1, with the reason in message, when the model cannot take deflection x. */
 int model_input_problem(ModelData *m, const double *state, double x, char *message,
                         size_t size);
+/* Rewrite the state for a deflection x that model_input_problem accepted. */
+void model_take_input(ModelData *m, double *state, double x);
 void model_failure_hint(ModelData *m, const double *state, double v, char *message,
                         size_t size);
 

@@ -77,8 +77,21 @@ typedef struct {
 /* The opening of every call on an instance: 1 when the call may go on (and the instance is
    marked busy until call_end), 0 when it is refused: no instance, a logger calling back
    into it (refused silently), or a state where FMI does not allow the call (logged). */
-int call_begin(Instance *instance, int allowed, const char *function);
-fmi2Status call_end(Instance *instance, fmi2Status status);
+int call_refused(Instance *instance, int allowed, const char *function);
+
+static inline int call_begin(Instance *instance, int allowed, const char *function) {
+    if (instance != NULL && instance->magic == INSTANCE_MAGIC && !instance->busy &&
+        (instance->s.mode & allowed)) {
+        instance->busy = 1;
+        return 1;
+    }
+    return call_refused(instance, allowed, function);
+}
+
+static inline fmi2Status call_end(Instance *instance, fmi2Status status) {
+    instance->busy = 0;
+    return status;
+}
 
 /* A message for the host, formatted, under its status's category. */
 void log_status(const Instance *instance, fmi2Status status, const char *format, ...)
@@ -100,6 +113,8 @@ void build_model_data(ModelData *data, const double *values);
 void cosim_start(Instance *instance);
 /* 0, or 1 with a message: the model cannot take the deflection. */
 int cosim_input_problem(Instance *instance, double deflection, char *message, size_t size);
+/* Inputs that cosim_input_problem accepted. */
+void cosim_take_inputs(Instance *instance, double deflection, double rate);
 enum { STEP_DONE, STEP_REFUSED, STEP_FAILED_TO_COMPLETE };
 int cosim_do_step(Instance *instance, double current_time, double step_size, char *message,
                   size_t size);

@@ -14,6 +14,7 @@ here never raises: it logs fmi2Error (or fmi2Warning, fmi2Discard) with a messag
 names the variable and the value, and leaves the instance as it was before the call.
 """
 
+import ctypes
 import functools
 import json
 import math
@@ -32,12 +33,20 @@ from .integrator import DEFAULT_RTOL, Rosenbrock
 # (PyModule_GetDict). Each instantiation so drops a reference it never took: after the
 # first instance the entry module's namespace is freed and the next instantiation crashes
 # the host. The entry module takes one extra reference when it is imported, and every
-# instance gives back the one pythonfmu took (a list entry per instance).
-_NAMESPACE_REFERENCES = []
-
-
+# instance gives back the one pythonfmu took: a reference count, not a stored reference,
+# so that nothing grows with the number of instances.
 def hold_module_namespace(namespace):
-    _NAMESPACE_REFERENCES.append(namespace)
+    ctypes.pythonapi.Py_IncRef(ctypes.py_object(namespace))
+
+
+# It also executes the entry module's source again for each instance, which makes a new
+# class each time, and keeps a reference to the class it instantiates: the entry module
+# binds its name to the first class made, so that no class is left behind per instance.
+_CLASSES = {}
+
+
+def first_class(cls):
+    return _CLASSES.setdefault(f"{cls.__module__}.{cls.__qualname__}", cls)
 
 
 # FMI 2.0 co-simulation states (section 4.2.4) and the calls each allows (the masks the
@@ -261,7 +270,7 @@ class ComponentSlave(Fmi2Slave):
             if refused:
                 return
             if inputs_set and self._cosim is not None:
-                problem = self._cosim.model.check_input(self._cosim.state, inputs[DEFLECTION_VR])
+                problem = self._cosim.input_problem(inputs[DEFLECTION_VR])
                 if problem:
                     self._error(f"fmi2SetReal: {problem}; nothing set")
                     return
@@ -288,7 +297,7 @@ class ComponentSlave(Fmi2Slave):
     def _apply_inputs(self, deflection, rate):
         """Take both inputs (checked), and warn once for each outside its measured range."""
         if self._cosim is not None:
-            self._cosim.set_inputs(deflection, rate)
+            self._cosim.take_inputs(deflection, rate)
         self._values[DEFLECTION_VR], self._values[RATE_VR] = deflection, rate
         if self._range_checks:
             for vr, value in ((DEFLECTION_VR, deflection), (RATE_VR, rate)):

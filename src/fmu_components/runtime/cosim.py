@@ -32,13 +32,21 @@ class CoSimulation:
 
     def set_inputs(self, deflection, rate):
         """Returns an error message (and changes nothing) if the model cannot take them."""
-        problem = self.model.check_input(self.state, deflection)
+        problem = self.input_problem(deflection)
         if problem:
             return problem
+        self.take_inputs(deflection, rate)
+        return None
+
+    def input_problem(self, deflection):
+        return self.model.check_input(self.state, deflection)
+
+    def take_inputs(self, deflection, rate):
+        """Inputs that input_problem has accepted."""
+        self.model.take_input(self.state, deflection)
         self.deflection = deflection
         self.rate = rate
         self._outputs = None
-        return None
 
     def do_step(self, current_time, step_size):
         """Advance to current_time + step_size.

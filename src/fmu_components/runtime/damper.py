@@ -22,6 +22,8 @@ enough. Within a step the arm rate is held, so (z, omega_r) obey an autonomous s
     dz/dt = (omega - omega_r) cosh(z)^2 / C2
     d(omega_r)/dt = (C1 sinh(2z) - Td(omega_r)) / I
 
+with cosh(z)^2 and sinh(2z) taken from one exponential (_hyperbolic).
+
 The integrator keeps |z| < Z_LIMIT (where tanh still differs from 1 in double precision)
 by rejecting and shrinking steps.
 
@@ -30,8 +32,8 @@ theta_z; a host that moves the arm discontinuously shifts z accordingly. The equ
 expression trees over the parameters as symbols (expressions.py).
 """
 
-from .expressions import (Assign, Element, Format, Lookup, Message, Symbol, atanh, cosh,
-                          equal, sinh, tanh, where)
+from .expressions import (Assign, Element, Format, Lookup, Message, Symbol, atanh, copysign,
+                          differs, equal, exp, tanh, where)
 from .model import Equations, InputLimit, Table
 
 Z_LIMIT = 18.0  # tanh(18) = 1 - 4.6e-16: beyond it xd is C2 to the last bit
@@ -50,22 +52,37 @@ def _z_at(C2, state, x):
     return where(equal(x, state[2]), state[0], atanh(_gas_deflection(C2, state, x) / C2))
 
 
+def _hyperbolic(z, prefix):
+    """cosh(z)^2, sinh(2z) and cosh(2z) from one exponential, e = exp(-2|z|) in (0, 1]:
+    cosh^2 = (1 + e)^2 / 4e, sinh 2z = sgn(z) (1 - e)(1 + e) / 2e, cosh 2z = (1 + e^2) / 2e.
+    One call instead of three (cosh, sinh and cosh again), and no overflow for |z| <
+    Z_LIMIT. Near z = 0 the absolute error of sinh 2z is about the double precision, far
+    below a torque that matters."""
+    e = Symbol(f"{prefix}e")
+    lines = [Assign(e, exp(-2.0 * abs(z))),
+             Assign(Symbol(f"{prefix}cosh_squared"), (1.0 + e) * (1.0 + e) / (4.0 * e)),
+             Assign(Symbol(f"{prefix}sinh_2z"), copysign((1.0 - e) * (1.0 + e) / (2.0 * e), z))]
+    return lines, e
+
+
 def damper_equations(C1, C2, I, rates, torques):
     """rates, torques: the parameter names of the Table A6-1 points."""
     C1, C2, I = Symbol(C1), Symbol(C2), Symbol(I)
     Y0, Y1, u, h, x, v = (Symbol(n) for n in ("Y0", "Y1", "u", "h", "x", "v"))
     state = [Element("state", i) for i in range(3)]
-    cosh_z = Symbol("cosh_z")
+    stage_lines, e = _hyperbolic(Y0, "")
+    cosh_squared, sinh_2z = Symbol("cosh_squared"), Symbol("sinh_2z")
     z, deflection = Symbol("z"), Symbol("deflection")
+    output_lines, e_z = _hyperbolic(z, "z_")
     return Equations(
         integrated=2, state_size=3,
-        stage=[Assign(cosh_z, cosh(Y0)),
-               Assign(Symbol("f0"), (u - Y1) * cosh_z * cosh_z / C2),
-               # Eq. A5-16 with xd = C2 tanh(z): Tg = C1 sinh(2z)
-               Assign(Symbol("f1"), (C1 * sinh(2.0 * Y0) - Lookup(DASHPOT, Y1)) / I)],
-        jacobian=[Assign(Symbol("j0_0"), (u - Y1) * sinh(2.0 * Y0) / C2),
-                  Assign(Symbol("j0_1"), -cosh_z * cosh_z / C2),
-                  Assign(Symbol("j1_0"), 2.0 * C1 * cosh(2.0 * Y0) / I),
+        stage=stage_lines + [
+            Assign(Symbol("f0"), (u - Y1) * cosh_squared / C2),
+            # Eq. A5-16 with xd = C2 tanh(z): Tg = C1 sinh(2z)
+            Assign(Symbol("f1"), (C1 * sinh_2z - Lookup(DASHPOT, Y1)) / I)],
+        jacobian=[Assign(Symbol("j0_0"), (u - Y1) * sinh_2z / C2),
+                  Assign(Symbol("j0_1"), -cosh_squared / C2),
+                  Assign(Symbol("j1_0"), C1 * (1.0 + e * e) / (e * I)),  # 2 C1 cosh(2z) / I
                   Assign(Symbol("j1_1"), -Lookup(DASHPOT, Y1, slope=True) / I)],
         region=abs(Y0) < Z_LIMIT,
         start=[Assign(Symbol("y0"), _z_at(C2, state, x)), Assign(Symbol("y1"), state[1])],
@@ -73,15 +90,25 @@ def damper_equations(C1, C2, I, rates, torques):
         # The rotor node moving with the arm: zero gas deflection, tau(0) = 0 (spec 3).
         initial_state=[0.0, v, x],
         # The rotor inertia keeps theta_r from responding instantly, so the instantaneous
-        # tangent d torque/d theta is the gas-spring stiffness.
-        output_lines=[Assign(z, _z_at(C2, state, x)), Assign(cosh_z, cosh(z))],
-        outputs=[C1 * sinh(2.0 * z), C2 * tanh(z), state[1], Lookup(DASHPOT, state[1]),
-                 2.0 * C1 * cosh(2.0 * z) * cosh_z * cosh_z / C2],
+        # tangent d torque/d theta is the gas-spring stiffness, d/dxd of C1 sinh(2z) with
+        # dz/dxd = cosh(z)^2 / C2.
+        output_lines=[Assign(z, _z_at(C2, state, x))] + output_lines,
+        outputs=[C1 * Symbol("z_sinh_2z"), copysign(C2 * (1.0 - e_z) / (1.0 + e_z), z), state[1],
+                 Lookup(DASHPOT, state[1]),
+                 C1 * (1.0 + e_z * e_z) / e_z * Symbol("z_cosh_squared") / C2],
+        # A new arm angle moves the gas spring by the difference (it must stay inside C2),
+        # and is folded into z at once, so that the step and the outputs find z ready
+        # rather than each computing it again. The deflection is left at zero when the arm
+        # has not moved: then it is inside C2 by construction and nothing is folded in.
         input_limit=InputLimit(
-            [Assign(deflection, _gas_deflection(C2, state, x))], abs(deflection) < C2,
+            [Assign(deflection, where(differs(x, state[2]), _gas_deflection(C2, state, x), 0.0))],
+            abs(deflection) < C2,
             Message("angle ", Format(x, ".9g"), " rad puts the gas-spring deflection at ",
                     Format(deflection), " rad, outside its limit |xd| < C2 = ", Format(C2),
-                    " rad")),
+                    " rad"),
+            accept=[Assign(state[0], where(differs(x, state[2]), atanh(deflection / C2),
+                                           state[0])),
+                    Assign(state[2], x)]),
         # Almost always an arm rate that jumped far from the rotor's: the gas spring can
         # only stop that with a torque spike beyond any step size (e.g. 0 -> 100 rad/s in
         # one step gives ~1e14 N.m in the model).

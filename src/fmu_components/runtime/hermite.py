@@ -104,3 +104,20 @@ class MonotoneCubic:
         return self.value_and_slope(x)[1]
 
     __call__ = value
+
+
+_SHARED = {}
+MAX_SHARED = 64
+
+
+def shared_curve(xs, ys):
+    """The curve through these points, one object for every model with the same table: the
+    models then share their compiled step too (integrator.Rosenbrock.compiled), which names
+    the curve's functions."""
+    key = (tuple(xs), tuple(ys))
+    curve = _SHARED.get(key)
+    if curve is None:
+        if len(_SHARED) >= MAX_SHARED:
+            _SHARED.clear()  # a host sweeping tables: do not grow forever
+        curve = _SHARED[key] = MonotoneCubic(xs, ys)
+    return curve

@@ -22,7 +22,7 @@ Names the statements use:
 import math
 
 from .expressions import FUNCTIONS, Assign, Element, PythonPrinter, Symbol, wrap
-from .hermite import MonotoneCubic, check_monotone_table
+from .hermite import check_monotone_table, shared_curve
 from .integrator import compile_python, jacobian_statements
 
 
@@ -58,11 +58,14 @@ class Table:
 
 
 class InputLimit:
-    """The inputs a model cannot take: after ``lines``, ``test`` must hold for the deflection
-    ``x`` at the current ``state``, else ``message`` says why."""
+    """The deflections a model cannot take: after ``lines``, ``test`` must hold for the
+    deflection ``x`` at the current ``state``, else ``message`` says why. A deflection it
+    takes runs ``accept`` (after ``lines``, whose values it may use), which may rewrite
+    the state for it."""
 
-    def __init__(self, lines, test, message):
+    def __init__(self, lines, test, message, accept=()):
         self.lines, self.test, self.message = lines, test, message
+        self.accept = list(accept)
 
 
 class Equations:
@@ -145,7 +148,7 @@ class Model:
         self.equations = equations
         self.integrated_size = equations.integrated
         self.state_size = equations.state_size
-        self.tables = {table.name: MonotoneCubic(*table.points(values))
+        self.tables = {table.name: shared_curve(*table.points(values))
                        for table in equations.tables}
         self.namespace = {name: getattr(math, name) for name in FUNCTIONS}
         for name, curve in self.tables.items():
@@ -174,9 +177,14 @@ class Model:
                                       self._tuple([self._print(e, equations.output_lines, ("state", "x", "v"))
                                                    for e in equations.outputs]))
         limit = equations.input_limit
-        self._input_problem = None if limit is None else self._function(
-            "input_problem(state, x)", limit.lines + [Assign(Symbol("ok"), limit.test)],
-            f"None if ok else {self._message(limit.message, limit.lines)}")
+        self._input_problem = self._take_input = None
+        if limit is not None:
+            self._input_problem = self._function(
+                "input_problem(state, x)", limit.lines + [Assign(Symbol("ok"), limit.test)],
+                f"None if ok else {self._message(limit.message, limit.lines)}")
+            if limit.accept:
+                self._take_input = self._function("take_input(state, x)",
+                                                  limit.lines + limit.accept, "None")
         hint = equations.failure_hint
         self._failure_hint = None if hint is None else self._function(
             "failure_hint(state, v)", [], self._message(hint, (), ("state", "v")))
@@ -224,6 +232,11 @@ class Model:
     def check_input(self, state, x):
         """A message if the model cannot take deflection x in this state, else None."""
         return None if self._input_problem is None else self._input_problem(state, x)
+
+    def take_input(self, state, x):
+        """Rewrite the state for a new deflection x, which check_input has accepted."""
+        if self._take_input is not None:
+            self._take_input(state, x)
 
     def advance(self, state, x, v, h, integrator):
         """Advance the state over a step of length h with rate v held. Returns None, or an
