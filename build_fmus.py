@@ -50,8 +50,9 @@ FLAVOURS = ("native", "python")
 GUID_NAMESPACE = uuid.UUID("6c1f4b7e-4f5e-4a8e-9c71-2f4d8e3b9a10")
 
 # The native runtime, hand-written once for all components, and the FMI headers.
-RUNTIME_SOURCES = ("fmi2_functions.c", "cosimulation.c", "integrator.c", "state.c", "hermite.c",
-                   "text.c", "host_log.c", "state_envelope.c", "instantiation.c")
+RUNTIME_SOURCES = ("fmi2_functions.c", "model_exchange.c", "cosimulation.c", "integrator.c",
+                   "state.c", "hermite.c", "text.c", "host_log.c", "state_envelope.c",
+                   "instantiation.c")
 RUNTIME_HEADERS = ("runtime.h", "model.h", "arithmetic.h", "hermite.h", "text.h", "host_log.h",
                    "state_envelope.h", "instantiation.h")
 FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
@@ -95,6 +96,10 @@ def guid_for(flavour, name, *contents):
     for content in contents:
         digest.update(content.encode() if isinstance(content, str) else content)
     return str(uuid.uuid5(GUID_NAMESPACE, digest.hexdigest()))
+
+
+def state_nominals(definition):
+    return definition.build_model(definition.default_parameters()).nominals
 
 
 def write_fmu(path, files):
@@ -168,7 +173,8 @@ def build_native(names, destination, staging):
                 win64, sources, files, work / f"{name}.dll",
                 ["-D__USE_MINGW_ANSI_STDIO=1", "-static-libgcc"])
         description = model_description(definition, guid=guid, model_identifier=name,
-                                         needs_python=False, source_files=files)
+                                         native=True, source_files=files,
+                                         nominals=state_nominals(definition))
         built[name] = write_fmu(destination / f"{name}.fmu", {
             "modelDescription.xml": description, **binaries,
             **{f"sources/{p.name}": p for p in sorted(sources.iterdir())},
@@ -225,7 +231,7 @@ def build_python(names, destination, staging):
         guid = guid_for("python", name, *runtime)
         guard = compile_guard(staging / "python", name, guid)
         description = model_description(definition, guid=guid, model_identifier=name,
-                                         needs_python=True)
+                                         native=False, nominals=state_nominals(definition))
         files = {"modelDescription.xml": description}
         binary = f"binaries/linux64/{name}.so"
         with zipfile.ZipFile(pythonfmu_fmu) as source:

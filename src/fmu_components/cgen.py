@@ -17,7 +17,7 @@ component.
 import math
 import re
 
-from .runtime.expressions import FUNCTIONS, GenerationError, Printer, Format, Symbol
+from .runtime.expressions import FUNCTIONS, Format, GenerationError, Printer, Symbol, Tangent
 from .runtime import integrator
 from .runtime.integrator import ROS34PW2, factor_statements, step_statements
 
@@ -26,7 +26,7 @@ for goto if inline int long register restrict return short signed sizeof static 
 typedef union unsigned void volatile while""".split())
 
 CAUSALITY = {"input": "CAUSALITY_INPUT", "output": "CAUSALITY_OUTPUT",
-             "parameter": "CAUSALITY_PARAMETER"}
+             "parameter": "CAUSALITY_PARAMETER", "local": "CAUSALITY_LOCAL"}
 CONSTRAINT = {None: "ANY_FINITE", "positive": "POSITIVE", "zero or positive": "NON_NEGATIVE"}
 
 
@@ -173,6 +173,9 @@ class ModelCode:
             f"#define MODEL_CONSTANTS {len(d.variables) + len(e.constants) + e.integrated}",
             f"#define MODEL_TABLES {len(e.tables)}",
             f"#define MODEL_TABLE_POINTS {table_points}",
+            f"#define MODEL_PARAMETERS {len(d.parameters)}",
+            f"#define MODEL_CONTINUOUS {e.continuous.states}",
+            f"#define MODEL_EVENT_INDICATORS {len(e.continuous.event_indicators)}",
             "/* The integrator's constants (runtime/integrator.py) and the controller's power of",
             f"   the squared error norm for the {self.tableau.name} tableau. */",
             f"#define DEFAULT_RTOL {integrator.DEFAULT_RTOL!r}",
@@ -190,7 +193,9 @@ class ModelCode:
         return "\n\n".join([self._preamble(), self._info(), self._derive(),
                             self._initial_state(), self._start(), self._factor(), self._step(),
                             self._exact(), self._outputs(), self._input_problem(),
-                            self._take_input(), self._failure_hint()]) + "\n"
+                            self._take_input(), self._failure_hint(), self._nominals(),
+                            self._rates(), self._continuous_outputs(),
+                            self._event_indicators(), self._outputs_direction()]) + "\n"
 
     def _preamble(self):
         return "\n".join([
@@ -198,7 +203,8 @@ class ModelCode:
             f"   {self.tableau.name} step, printed as C by fmu_components.cgen at build time. Do not",
             "   edit; the runtime that drives these functions is hand-written (c/). */",
             '#include "model.h"', "", "#include <math.h>", "#include <stdio.h>", "",
-            "/* Every stage derivative is computed; the Jacobian reads only some of them. */",
+            "/* Every stage derivative is computed; the Jacobian reads only some of them, and a",
+            "   directional derivative only those along its direction. */",
             "#if defined(__GNUC__)",
             '#pragma GCC diagnostic ignored "-Wunused-variable"',
             "#endif"])
@@ -226,13 +232,11 @@ class ModelCode:
                           f"{c_string(table.ordinate[1])}, {int(table.dissipative)}}}")
         if tables:
             lines.append(f"static const TableInfo TABLES[{len(tables)}] = {{{', '.join(tables)}}};")
-        direct = ", ".join(str(int(o.name in d.direct_outputs)) for o in d.outputs)
-        lines.append(f"static const int DIRECT_OUTPUTS[{len(d.outputs)}] = {{{direct}}};")
         lines.append("\n".join([
             "const ModelInfo MODEL_INFO = {",
             f"    {c_string(d.name)}, {c_string(self.guid)},",
             f"    VARIABLES, {{{', '.join(ranges)}}},",
-            f"    {'TABLES' if tables else 'NULL'}, DIRECT_OUTPUTS, {int(e.unilateral)}",
+            f"    {'TABLES' if tables else 'NULL'}, {int(e.unilateral)}",
             "};"]))
         return "\n".join(lines)
 
@@ -341,3 +345,85 @@ class ModelCode:
             prologue=["(void)state, (void)v;"],
             epilogue=lambda printer: [printer.message(hint)] if hint else
             ["if (size) message[0] = '\\0';"])
+
+    # --- the continuous-time view: Model Exchange and directional derivatives -------------
+
+    def _nominals(self):
+        view = self.equations.continuous
+        return self.function(
+            "void model_nominals(ModelData *m, double *nominal)", [], [],
+            epilogue=lambda printer: [f"nominal[{i}] = {printer.expression(e)};"
+                                      for i, e in enumerate(view.nominals)], fail="return;")
+
+    def _rates(self):
+        """The continuous states' derivatives and, along a direction (dX, dx, dv), their
+        derivatives: forward differentiation of the same statements (expressions.Tangent);
+        0 outside the model's region."""
+        n = self.equations.continuous.states
+        Y = [f"Y{i}" for i in range(n)]
+        tangent = Tangent({**{y: Symbol(f"dY{i}") for i, y in enumerate(Y)},
+                           "x": Symbol("dx"), "v": Symbol("dv")})
+        statements = tangent.statements(self.equations.rate_statements())
+        derivatives = [tangent.derivatives.get(f"f{i}") for i in range(n)]
+
+        def epilogue(printer):
+            lines = [f"f[{i}] = f{i};" for i in range(n)]
+            lines += [f"if (df) df[{i}] = {printer.expression(d) if d is not None else '0.0'};"
+                      for i, d in enumerate(derivatives)]
+            return lines + ["return 1;"]
+
+        return self.function(
+            "int model_rates(ModelData *m, const double *X, double x, double v, double contact, "
+            "const double *dX, double dx, double dv, double *f, double *df)",
+            statements, ["x", "v", "contact", "dx", "dv", *Y, *[f"dY{i}" for i in range(n)]],
+            prologue=[*[f"const double {y} = X[{i}];" for i, y in enumerate(Y)],
+                      *[f"const double dY{i} = dX ? dX[{i}] : 0.0;" for i in range(n)],
+                      "(void)x, (void)v, (void)contact, (void)dx, (void)dv;"],
+            epilogue=epilogue)
+
+    def _direction_function(self, signature, lines, outputs, seeds, known, prologue):
+        tangent = Tangent(seeds)
+        statements = tangent.statements(lines)
+        derivatives = [tangent.of(e) for e in outputs]
+
+        def epilogue(printer):
+            body = [f"outputs[{i}] = {printer.expression(e)};" for i, e in enumerate(outputs)]
+            body += [f"if (doutputs) doutputs[{i}] = "
+                     f"{printer.expression(d) if d is not None else '0.0'};"
+                     for i, d in enumerate(derivatives)]
+            return body + ["return 1;"]
+
+        return self.function(signature, statements, known, prologue=prologue,
+                             epilogue=epilogue)
+
+    def _continuous_outputs(self):
+        """The outputs from the continuous states X as a host's integrator sees them, and
+        their derivatives along (dX, dx, dv); 0 outside the model's region."""
+        n = self.equations.continuous.states
+        lines, outputs = self.equations.continuous_output_statements()
+        seeds = {**{("state", i): Symbol(f"dY{i}") for i in range(n)},
+                 "x": Symbol("dx"), "v": Symbol("dv")}
+        return self._direction_function(
+            "int model_continuous_outputs(ModelData *m, const double *state, double x, double v, "
+            "const double *dX, double dx, double dv, double *outputs, double *doutputs)",
+            lines, outputs, seeds, ["state", "x", "v", "dx", "dv", *[f"dY{i}" for i in range(n)]],
+            [*[f"const double dY{i} = dX ? dX[{i}] : 0.0;" for i in range(n)],
+             "(void)state, (void)x, (void)v, (void)dx, (void)dv;"])
+
+    def _outputs_direction(self):
+        """The co-simulation's outputs and their derivatives along the inputs (dx, dv) at
+        the frozen state."""
+        e = self.equations
+        return self._direction_function(
+            "int model_outputs_direction(ModelData *m, const double *state, double x, double v, "
+            "double dx, double dv, double *outputs, double *doutputs)",
+            e.output_lines, e.outputs, {"x": Symbol("dx"), "v": Symbol("dv")},
+            ["state", "x", "v", "dx", "dv"], ["(void)state, (void)x, (void)v, (void)dx, (void)dv;"])
+
+    def _event_indicators(self):
+        view = self.equations.continuous
+        return self.function(
+            "void model_event_indicators(ModelData *m, double x, double *indicators)", [], ["x"],
+            prologue=["(void)x, (void)indicators;"], fail="return;",
+            epilogue=lambda printer: [f"indicators[{i}] = {printer.expression(e)};"
+                                      for i, e in enumerate(view.event_indicators)])

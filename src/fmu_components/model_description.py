@@ -21,36 +21,48 @@ LOG_CATEGORIES = {
 }
 
 
-def _co_simulation_capabilities(needs_python):
-    """What the FMUs do, claimed in the modelDescription and nothing more."""
-    return {
-        "needsExecutionTool": "true" if needs_python else "false",
-        "canHandleVariableCommunicationStepSize": "true",
-        "canInterpolateInputs": "false",
-        "maxOutputDerivativeOrder": "0",
-        "canRunAsynchronuously": "false",
+def _capabilities(native):
+    """What the FMUs do, claimed in the modelDescription and nothing more: both interfaces
+    and directional derivatives for the native flavour, co-simulation for the Python one."""
+    common = {
+        "needsExecutionTool": "false" if native else "true",  # Python 3 on the host
         "canBeInstantiatedOnlyOncePerProcess": "false",
         "canNotUseMemoryManagementFunctions": "true",
         "canGetAndSetFMUstate": "true",
         "canSerializeFMUstate": "true",
-        "providesDirectionalDerivative": "false",
+        "providesDirectionalDerivative": "true" if native else "false",
     }
+    co_simulation = {
+        **common,
+        "canHandleVariableCommunicationStepSize": "true",
+        "canInterpolateInputs": "false",
+        "maxOutputDerivativeOrder": "0",
+        "canRunAsynchronuously": "false",
+    }
+    model_exchange = {**common, "completedIntegratorStepNotNeeded": "true"}
+    return co_simulation, model_exchange
 
 
-def model_description(definition, *, guid, model_identifier, needs_python, source_files=()):
-    """The modelDescription.xml text of one flavour of one component."""
+def model_description(definition, *, guid, model_identifier, native, source_files=(),
+                      nominals=()):
+    """The modelDescription.xml text of one flavour of one component; `nominals`: of the
+    continuous states, at the thesis parameters."""
+    view = definition.equations.continuous
     root = Element("fmiModelDescription", {
         "fmiVersion": "2.0", "modelName": definition.name, "guid": guid,
         "description": definition.description, "author": "fmu-components",
         "version": __version__, "license": "MIT",
         "generationTool": f"fmu-components {__version__}",
-        "variableNamingConvention": "structured", "numberOfEventIndicators": "0"})
-    co_simulation = SubElement(root, "CoSimulation", {
-        "modelIdentifier": model_identifier, **_co_simulation_capabilities(needs_python)})
-    if source_files:
-        files = SubElement(co_simulation, "SourceFiles")
-        for name in source_files:
-            SubElement(files, "File", name=name)
+        "variableNamingConvention": "structured",
+        "numberOfEventIndicators": str(len(view.event_indicators) if native else 0)})
+    co_simulation, model_exchange = _capabilities(native)
+    interfaces = [("ModelExchange", model_exchange)] if native else []
+    for tag, capabilities in interfaces + [("CoSimulation", co_simulation)]:
+        element = SubElement(root, tag, {"modelIdentifier": model_identifier, **capabilities})
+        if source_files:
+            files = SubElement(element, "SourceFiles")
+            for name in source_files:
+                SubElement(files, "File", name=name)
     root.append(_unit_definitions(definition))
     categories = SubElement(root, "LogCategories")
     for name, description in LOG_CATEGORIES.items():
@@ -58,26 +70,37 @@ def model_description(definition, *, guid, model_identifier, needs_python, sourc
     SubElement(root, "DefaultExperiment",
                {k: repr(float(v)) for k, v in definition.default_experiment.items()})
     variables = SubElement(root, "ModelVariables")
+    index = {v.name: i + 1 for i, v in enumerate(definition.variables)}
+    nominal = dict(zip((v.name for v in definition.states), nominals))
+    derivative_of = {d.name: index[s.name] for s, d in zip(definition.states,
+                                                           definition.derivatives)}
     for vr, variable in enumerate(definition.variables):
-        variables.append(_scalar_variable(variable, vr))
-    root.append(_model_structure(definition))
+        variables.append(_scalar_variable(variable, vr, nominal.get(variable.name),
+                                          derivative_of.get(variable.name)))
+    root.append(_model_structure(definition, index))
     text = minidom.parseString(tostring(root, encoding="unicode")).toprettyxml(indent="  ")
     return text.replace('<?xml version="1.0" ?>', '<?xml version="1.0" encoding="UTF-8"?>', 1)
 
 
-def _scalar_variable(variable, vr):
+def _scalar_variable(variable, vr, nominal, derivative_of):
     causality = variable.causality
     attributes = {"name": variable.name, "valueReference": str(vr),
                   "description": variable.description, "causality": causality,
                   "variability": "fixed" if causality == "parameter" else "continuous"}
     if causality == "parameter":
         attributes["initial"] = "exact"
+    elif causality == "local":  # states and derivatives: from the inputs at initialization
+        attributes["initial"] = "calculated"
     node = Element("ScalarVariable", attributes)
     real = {"unit": variable.unit}
     if variable.display_unit:
         real["displayUnit"] = variable.display_unit
     if variable.start is not None:
         real["start"] = repr(float(variable.start))  # repr round-trips to the last bit
+    if nominal is not None:
+        real["nominal"] = repr(float(nominal))
+    if derivative_of is not None:
+        real["derivative"] = str(derivative_of)
     SubElement(node, "Real", real)
     return node
 
@@ -93,19 +116,22 @@ def _unit_definitions(definition):
     return node
 
 
-def _model_structure(definition):
-    """Outputs, each with its direct dependence on the deflection input, and the initial
-    unknowns (depending on all knowns, so no dependency list is given)."""
+def _model_structure(definition, index):
+    """Outputs and derivatives, each with the inputs and states its equations read
+    (ComponentDefinition.structure), and the initial unknowns (depending on all knowns, so
+    no dependency list is given)."""
+    structure = definition.structure()
     node = Element("ModelStructure")
-    outputs = SubElement(node, "Outputs")
-    first_output = len(definition.inputs)
-    deflection = "1"  # index of the first variable, the deflection input
-    for i, output in enumerate(definition.outputs):
-        direct = output.name in definition.direct_outputs
-        SubElement(outputs, "Unknown", index=str(first_output + i + 1),
-                   dependencies=deflection if direct else "",
-                   dependenciesKind="dependent" if direct else "")
+    for tag, variables in (("Outputs", definition.outputs),
+                           ("Derivatives", definition.derivatives)):
+        group = SubElement(node, tag)
+        for variable in variables:
+            read = sorted(index[name] for name in structure[variable.name])
+            SubElement(group, "Unknown", index=str(index[variable.name]),
+                       dependencies=" ".join(map(str, read)),
+                       dependenciesKind=" ".join(["dependent"] * len(read)))
     initial = SubElement(node, "InitialUnknowns")
-    for i in range(len(definition.outputs)):
-        SubElement(initial, "Unknown", index=str(first_output + i + 1))
+    unknowns = list(definition.outputs) + list(definition.states) + list(definition.derivatives)
+    for i in sorted(index[v.name] for v in unknowns):
+        SubElement(initial, "Unknown", index=str(i))
     return node

@@ -20,7 +20,7 @@
     (INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED |       \
      EVENT_MODE | CONTINUOUS_TIME_MODE)
 #define READABLE (ANY_STATE & ~INSTANTIATED)
-#define SETTABLE (INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE)
+#define SETTABLE (INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | EVENT_MODE | CONTINUOUS_TIME_MODE)
 #define BEFORE_INITIALIZED (INSTANTIATED | INITIALIZATION_MODE)
 
 /* The states by name, in the order runtime/adapter.py lists them (sorted). */
@@ -92,7 +92,7 @@ static void table_points(const TableInfo *table, const double *values, double *x
 /* As ComponentDefinition.check_parameters: each parameter, then each table. */
 int parameter_problem(const double *values, char *message, size_t size) {
     char problem[MESSAGE_SIZE];
-    for (unsigned vr = FIRST_PARAMETER; vr < MODEL_VARIABLES; vr++) {
+    for (unsigned vr = FIRST_PARAMETER; vr < FIRST_STATE; vr++) {
         if (variable_problem(vr, values[vr], problem, sizeof problem)) {
             snprintf(message, size, "parameter %s", problem);
             return 1;
@@ -141,24 +141,59 @@ static void reset_instance(Instance *instance) {
     instance->outputs_fresh = 0;
 }
 
-/* The outputs now: the co-simulation's, or before initialization the relaxed
-   component's at the current inputs, if the parameters make sense (NaN if not), into
-   `relaxed`. */
-static const double *current_outputs(Instance *instance, double *relaxed) {
-    if (instance->s.initialized) return cosim_outputs(instance);
-    const double *values = instance->s.values;
-    char problem[MESSAGE_SIZE];
-    if (parameter_problem(values, problem, sizeof problem)) {
-        for (int i = 0; i < MODEL_OUTPUTS; i++) relaxed[i] = NAN;
-        return relaxed;
+int model_now(Instance *instance, Now *now) {
+    Snapshot *s = &instance->s;
+    if (s->initialized) {
+        now->data = &instance->data;
+        now->state = s->state;
+        now->x = s->deflection;
+        now->v = s->rate;
+        now->contact = s->contact;
+        return 1;
     }
-    ModelData data;
-    double state[SLOTS(MODEL_STATES)];
-    double x = values[INPUT_DEFLECTION], v = values[INPUT_RATE];
-    build_model_data(&data, values);
-    model_initial_state(&data, x, v, state);
-    model_outputs(&data, state, x, v, relaxed);
-    return relaxed;
+    char problem[MESSAGE_SIZE];
+    if (parameter_problem(s->values, problem, sizeof problem)) return 0;
+    now->x = s->values[INPUT_DEFLECTION];
+    now->v = s->values[INPUT_RATE];
+    now->contact = contact_at(now->x);
+    build_model_data(&now->scratch, s->values);
+    model_initial_state(&now->scratch, now->x, now->v, now->relaxed);
+    now->data = &now->scratch;
+    now->state = now->relaxed;
+    return 1;
+}
+
+double contact_at(double x) { return !MODEL_INFO.unilateral || x > 0.0 ? 1.0 : 0.0; }
+
+/* The outputs, states and derivatives now, into outputs and locals (NaN while the
+   parameters make no sense); fmi2Discard where a host's states leave the model's region. */
+static fmi2Status current_values(Instance *instance, int want_outputs, int want_locals,
+                                 double *outputs, double *locals) {
+    Now now;
+    if (!model_now(instance, &now)) {
+        for (int i = 0; i < MODEL_OUTPUTS; i++) outputs[i] = NAN;
+        for (int i = 0; i < 2 * MODEL_CONTINUOUS; i++) locals[i] = NAN;
+        return fmi2OK;
+    }
+    int inside = 1;
+    if (want_outputs) {
+        if (instance->s.initialized && instance->type == fmi2CoSimulation)
+            memcpy(outputs, cosim_outputs(instance), sizeof(double) * MODEL_OUTPUTS);
+        else if (instance->s.initialized)
+            inside = model_continuous_outputs(now.data, now.state, now.x, now.v, NULL, 0.0, 0.0,
+                                              outputs, NULL);
+        else
+            model_outputs(now.data, now.state, now.x, now.v, outputs);
+    }
+    if (want_locals) {
+        for (int i = 0; i < MODEL_CONTINUOUS; i++) locals[i] = now.state[i];
+        inside &= model_rates(now.data, now.state, now.x, now.v, now.contact, NULL, 0.0, 0.0,
+                              locals + MODEL_CONTINUOUS, NULL);
+    }
+    if (inside) return fmi2OK;
+    log_status(instance, fmi2Discard, "fmi2GetReal: the states are outside the region the "
+               "model is defined in; retry with a smaller step");
+    return fmi2Discard;
 }
 
 /* --- life cycle -------------------------------------------------------------------------- */
@@ -174,7 +209,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     HostLog log = instantiation_log(instanceName, functions);
     if (instantiation_problem(&log, instanceName, fmuType, fmuGUID, fmuResourceLocation,
                               functions, MODEL_INFO.name, MODEL_INFO.guid,
-                              1u << fmi2CoSimulation))
+                              1u << fmi2CoSimulation | 1u << fmi2ModelExchange))
         return NULL;
     Instance *instance = calloc(1, sizeof *instance);
     char *name = malloc(strlen(instanceName) + 1);
@@ -256,13 +291,16 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
         return call_end(instance, fmi2Error);
     }
     cosim_start(instance);
-    instance->s.mode = STEP_COMPLETE;
+    instance->s.contact = contact_at(instance->s.deflection);
+    instance->s.mode = instance->type == fmi2CoSimulation ? STEP_COMPLETE : EVENT_MODE;
     return call_end(instance, fmi2OK);
 }
 
 fmi2Status fmi2Terminate(fmi2Component c) {
     Instance *instance = (Instance *)c;
-    if (!call_begin(instance, STEP_COMPLETE | STEP_FAILED, __func__)) return fmi2Error;
+    if (!call_begin(instance, STEP_COMPLETE | STEP_FAILED | EVENT_MODE | CONTINUOUS_TIME_MODE,
+                    __func__))
+        return fmi2Error;
     instance->s.mode = TERMINATED;
     return call_end(instance, fmi2OK);
 }
@@ -304,18 +342,23 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
             return call_end(instance, fmi2Error);
         }
     }
-    double relaxed[MODEL_OUTPUTS];
-    const double *outputs = NULL;
+    int want_outputs = 0, want_locals = 0;
+    for (size_t i = 0; i < nvr; i++) {
+        want_outputs |= vr[i] >= FIRST_OUTPUT && vr[i] < FIRST_PARAMETER;
+        want_locals |= vr[i] >= FIRST_STATE;
+    }
+    double outputs[MODEL_OUTPUTS], locals[SLOTS(2 * MODEL_CONTINUOUS)];
+    fmi2Status status = fmi2OK;
+    if (want_outputs || want_locals)
+        status = current_values(instance, want_outputs, want_locals, outputs, locals);
     for (size_t i = 0; i < nvr; i++) {
         unsigned reference = vr[i];
-        if (reference >= FIRST_OUTPUT && reference < FIRST_PARAMETER) {
-            if (outputs == NULL) outputs = current_outputs(instance, relaxed);
-            value[i] = outputs[reference - FIRST_OUTPUT];
-        } else {
+        if (reference >= FIRST_STATE) value[i] = locals[reference - FIRST_STATE];
+        else if (reference >= FIRST_PARAMETER || reference < FIRST_OUTPUT)
             value[i] = instance->s.values[reference];
-        }
+        else value[i] = outputs[reference - FIRST_OUTPUT];
     }
-    return call_end(instance, fmi2OK);
+    return call_end(instance, status);
 }
 
 /* The range warning, once per input and instance. */
@@ -353,6 +396,9 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
         } else if (MODEL_INFO.variables[reference].causality == CAUSALITY_OUTPUT) {
             snprintf(problem, sizeof problem, "%s is an output",
                      MODEL_INFO.variables[reference].name);
+        } else if (MODEL_INFO.variables[reference].causality == CAUSALITY_LOCAL) {
+            snprintf(problem, sizeof problem, "%s is the model's own (a state or its "
+                     "derivative), not set", MODEL_INFO.variables[reference].name);
         } else if (MODEL_INFO.variables[reference].causality == CAUSALITY_PARAMETER &&
                    !(s->mode & BEFORE_INITIALIZED)) {
             snprintf(problem, sizeof problem, "%s is a fixed parameter, settable only before "
@@ -364,8 +410,9 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
         refused = 1;
     }
     if (refused) return call_end(instance, fmi2Error);
-    if (inputs_set && cosim_input_problem(instance, inputs[INPUT_DEFLECTION], problem,
-                                          sizeof problem)) {
+    int co_simulation = s->initialized && instance->type == fmi2CoSimulation;
+    if (inputs_set && co_simulation && cosim_input_problem(instance, inputs[INPUT_DEFLECTION],
+                                                           problem, sizeof problem)) {
         log_status(instance, fmi2Error, "fmi2SetReal: %s; nothing set", problem);
         return call_end(instance, fmi2Error);
     }
@@ -373,7 +420,12 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
         if (vr[i] != INPUT_DEFLECTION && vr[i] != INPUT_RATE) s->values[vr[i]] = value[i];
     fmi2Status status = fmi2OK;
     if (inputs_set) {
-        if (s->initialized) cosim_take_inputs(instance, inputs[INPUT_DEFLECTION], inputs[INPUT_RATE]);
+        if (co_simulation) {
+            cosim_take_inputs(instance, inputs[INPUT_DEFLECTION], inputs[INPUT_RATE]);
+        } else if (s->initialized) { /* Model Exchange: the inputs at the host's time */
+            s->deflection = inputs[INPUT_DEFLECTION];
+            s->rate = inputs[INPUT_RATE];
+        }
         s->values[INPUT_DEFLECTION] = inputs[INPUT_DEFLECTION];
         s->values[INPUT_RATE] = inputs[INPUT_RATE];
         for (int input = INPUT_DEFLECTION; input <= INPUT_RATE; input++) {
@@ -442,16 +494,6 @@ static fmi2Status not_offered(fmi2Component c, const char *function, const char 
     if (!call_begin(instance, ANY_STATE, function)) return fmi2Error;
     log_status(instance, fmi2Error, "%s: %s", function, why);
     return call_end(instance, fmi2Error);
-}
-
-fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[],
-                                        size_t nUnknown, const fmi2ValueReference vKnown_ref[],
-                                        size_t nKnown, const fmi2Real dvKnown[],
-                                        fmi2Real dvUnknown[]) {
-    (void)vUnknown_ref, (void)nUnknown, (void)vKnown_ref, (void)nKnown, (void)dvKnown;
-    (void)dvUnknown;
-    return not_offered(c, "fmi2GetDirectionalDerivative",
-                       "providesDirectionalDerivative is false");
 }
 
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,

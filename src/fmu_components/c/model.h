@@ -21,7 +21,7 @@
 /* Arrays of at least one entry, whatever the model's sizes. */
 #define SLOTS(n) ((n) > 0 ? (n) : 1)
 
-enum { CAUSALITY_INPUT, CAUSALITY_OUTPUT, CAUSALITY_PARAMETER };
+enum { CAUSALITY_INPUT, CAUSALITY_OUTPUT, CAUSALITY_PARAMETER, CAUSALITY_LOCAL };
 enum { ANY_FINITE, POSITIVE, NON_NEGATIVE };
 
 typedef struct {
@@ -50,7 +50,6 @@ typedef struct {
     const VariableInfo *variables; /* by value reference: inputs, outputs, parameters */
     RangeInfo ranges[2];           /* deflection, rate */
     const TableInfo *tables;
-    const int *direct_outputs;     /* per output: depends directly on the deflection */
     int unilateral;                /* a contact: deformed only while x > 0 */
 } ModelInfo;
 
@@ -58,6 +57,8 @@ typedef struct {
 #define INPUT_RATE 1
 #define FIRST_OUTPUT 2
 #define FIRST_PARAMETER (FIRST_OUTPUT + MODEL_OUTPUTS)
+#define FIRST_STATE (FIRST_PARAMETER + MODEL_PARAMETERS) /* the continuous states */
+#define FIRST_DERIVATIVE (FIRST_STATE + MODEL_CONTINUOUS) /* their derivatives */
 
 extern const ModelInfo MODEL_INFO;
 
@@ -86,6 +87,23 @@ int model_input_problem(ModelData *m, const double *state, double x, char *messa
 void model_take_input(ModelData *m, double *state, double x);
 void model_failure_hint(ModelData *m, const double *state, double v, char *message,
                         size_t size);
+
+/* The continuous-time view (Model Exchange, the state and derivative variables, directional
+   derivatives): X the MODEL_CONTINUOUS continuous states, the leading entries of the
+   state list; `contact` 1 or 0, the mode of a contact as the events set it. The functions
+   that take a direction (dX, dx, dv; dX may be NULL for zero) also give the derivatives
+   along it (into df or doutputs, when not NULL), by forward differentiation of the same
+   equations. 0 where the states leave the model's region. */
+void model_nominals(ModelData *m, double *nominal);
+int model_rates(ModelData *m, const double *X, double x, double v, double contact,
+                const double *dX, double dx, double dv, double *f, double *df);
+int model_continuous_outputs(ModelData *m, const double *state, double x, double v,
+                             const double *dX, double dx, double dv, double *outputs,
+                             double *doutputs);
+void model_event_indicators(ModelData *m, double x, double *indicators);
+/* The co-simulation's outputs and their derivatives along the inputs, at the frozen state. */
+int model_outputs_direction(ModelData *m, const double *state, double x, double v, double dx,
+                            double dv, double *outputs, double *doutputs);
 
 /* Gauss-Jordan inverse of an n x n matrix (row-major) into inverse; 0 when singular
    (integrator.c, as runtime/integrator.py's invert). */

@@ -58,6 +58,8 @@ typedef struct {
     Memory memory;
     unsigned warned; /* bit per input: its range warning has been given */
     double last_successful_time;
+    double contact;  /* Model Exchange: 1 or 0, a contact's mode as the events set it */
+    int warned_states_outside; /* fmi2SetContinuousStates outside its mode: warned once */
 } Snapshot;
 
 typedef struct {
@@ -99,6 +101,20 @@ void log_status(const Instance *instance, fmi2Status status, const char *format,
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
+
+/* What the model is evaluated at now: the running instance's, or before initialization
+   the relaxed component's at the current inputs (built in `scratch` and `relaxed`). */
+typedef struct {
+    ModelData *data;
+    const double *state;
+    double x, v, contact;
+    ModelData scratch;
+    double relaxed[SLOTS(MODEL_STATES)];
+} Now;
+/* 0 while the parameters make no sense. */
+int model_now(Instance *instance, Now *now);
+/* A contact's mode at deflection x: 1 in contact (always, for two-sided components). */
+double contact_at(double x);
 
 /* --- parameters (fmi2_functions.c) -------------------------------------------------- */
 

@@ -39,7 +39,8 @@ static int snapshot_problem(const Snapshot *s, char *message, size_t size) {
     }
     char problem[MESSAGE_SIZE];
     for (unsigned vr = 0; vr < MODEL_VARIABLES; vr++) {
-        if (MODEL_INFO.variables[vr].causality == CAUSALITY_OUTPUT) continue;
+        int causality = MODEL_INFO.variables[vr].causality;
+        if (causality == CAUSALITY_OUTPUT || causality == CAUSALITY_LOCAL) continue;
         if (variable_problem(vr, s->values[vr], problem, sizeof problem)) {
             snprintf(message, size, "the state's %s", problem);
             return 1;

@@ -89,6 +89,7 @@ def _nan_values(self, vrs):
 DEFLECTION_VR, RATE_VR = 0, 1
 
 _CAUSALITY = {"input": (Fmi2Causality.input, Fmi2Variability.continuous),
+              "local": (Fmi2Causality.local, Fmi2Variability.continuous),
               "output": (Fmi2Causality.output, Fmi2Variability.continuous),
               "parameter": (Fmi2Causality.parameter, Fmi2Variability.fixed)}
 
@@ -115,7 +116,9 @@ class ComponentSlave(Fmi2Slave):
                 variable.name, causality=causality, variability=variability,
                 getter=lambda vr=vr: self._values[vr], setter=lambda value: None))
         self._output_vrs = range(2, 2 + len(definition.outputs))
-        self._parameter_vrs = range(2 + len(definition.outputs), len(variables))
+        self._parameter_vrs = range(self._output_vrs.stop,
+                                    self._output_vrs.stop + len(definition.parameters))
+        self._local_vrs = range(self._parameter_vrs.stop, len(variables))  # states, derivatives
         self._mode = INSTANTIATED
         self._start_time = 0.0
         self._tolerance = DEFAULT_RTOL
@@ -212,23 +215,43 @@ class ComponentSlave(Fmi2Slave):
         cosim = self._cosim
         return [cosim.deflection, cosim.rate] if cosim is not None else self._values[:2]
 
-    def _refresh_outputs(self):
+    def _model_now(self):
+        """(model, state, deflection, rate) now: the co-simulation's, or before
+        initialization is complete the relaxed component's at the current inputs; None
+        while the parameters make no sense."""
         cosim = self._cosim
-        if cosim is None:
-            # Before initialization is complete the outputs are those of the relaxed
-            # component at the current inputs, if the parameters make sense.
-            values = self._parameter_values()
-            if self.definition.check_parameters(values):
-                outputs = [math.nan] * len(self._output_vrs)
-            else:
-                model = self.definition.build_model(values)
-                x, v = self._values[DEFLECTION_VR], self._values[RATE_VR]
-                outputs = model.outputs(model.initial_state(x, v), x, v)
+        if cosim is not None:
+            return cosim.model, cosim.state, cosim.deflection, cosim.rate
+        values = self._parameter_values()
+        if self.definition.check_parameters(values):
+            return None
+        model = self.definition.build_model(values)
+        x, v = self._values[DEFLECTION_VR], self._values[RATE_VR]
+        return model, model.initial_state(x, v), x, v
+
+    def _refresh_outputs(self):
+        if self._cosim is not None:
+            outputs = self._cosim.outputs()
         else:
-            outputs = cosim.outputs()
+            now = self._model_now()
+            outputs = [math.nan] * len(self._output_vrs) if now is None else now[0].outputs(*now[1:])
         for vr, value in zip(self._output_vrs, outputs):
             self._values[vr] = value
         self._outputs_stale = False
+
+    def _refresh_locals(self):
+        """The continuous states and their derivatives at the current inputs (the rubber
+        rate the contact allows: x > 0 for the tyre)."""
+        now = self._model_now()
+        n = len(self.definition.states)
+        if now is None:
+            self._values[self._local_vrs.start:] = [math.nan] * (2 * n)
+            return
+        model, state, x, v = now
+        states = list(state[:n])
+        contact = 1.0 if x > 0.0 or not model.equations.unilateral else 0.0
+        rates = model.rates(states, x, v, contact)
+        self._values[self._local_vrs.start:] = states + list(rates or [math.nan] * n)
 
     def get_real(self, vrs):
         # A hot call (every output, every step): fmi_call's checks written inline.
@@ -240,6 +263,8 @@ class ComponentSlave(Fmi2Slave):
                 raise IndexError
             if self._outputs_stale:
                 self._refresh_outputs()
+            if vrs and max(vrs) >= self._local_vrs.start:
+                self._refresh_locals()
             values = self._values
             return [values[vr] for vr in vrs]
         except IndexError:
@@ -289,6 +314,8 @@ class ComponentSlave(Fmi2Slave):
         variable = self._variables[vr]
         if variable.causality == "output":
             return f"{variable.name} is an output"
+        if variable.causality == "local":
+            return f"{variable.name} is the model's own (a state or its derivative), not set"
         if variable.causality == "parameter" and self._mode not in (INSTANTIATED, INITIALIZATION):
             return (f"{variable.name} is a fixed parameter, settable only before "
                     f"fmi2ExitInitializationMode")
@@ -394,7 +421,7 @@ class ComponentSlave(Fmi2Slave):
         if len(values) != len(self._variables) or state["mode"] not in ANY_STATE:
             return "the state's values or FMI state do not fit this FMU"
         for variable, value in zip(self._variables, values):
-            problem = variable.causality != "output" and variable.check(float(value))
+            problem = variable.causality in ("input", "parameter") and variable.check(float(value))
             if problem:
                 return f"the state's {problem}"
         if not (_finite(state["start_time"]) and _positive(state["tolerance"])

@@ -9,7 +9,7 @@ time constant tau = c/(k*xi) = 100, 0.1 and 1.0 s of section 6.4 (spec section 1
 import math
 
 from .damper import damper_equations
-from .expressions import Symbol
+from .expressions import Symbol, dependencies
 from .integrator import DEFAULT_RTOL
 from .model import Model
 from .rubber import Branch, MaxwellElement, rubber_equations
@@ -19,6 +19,7 @@ MM = 1e-3
 
 
 POSITIVE, NON_NEGATIVE = "positive", "zero or positive"
+DERIVATIVE_UNITS = {"m": "m/s", "rad": "rad/s", "1": "1/s", "rad/s": "rad/s2"}
 
 
 class Variable:
@@ -48,22 +49,51 @@ class Variable:
 class ComponentDefinition:
     """Everything the generic FMU adapter needs to know about one component."""
 
-    def __init__(self, name, description, inputs, outputs, parameters, equations,
-                 direct_outputs, measured_ranges, stop_time=2.0):
+    def __init__(self, name, description, inputs, outputs, parameters, states, equations,
+                 measured_ranges, stop_time=2.0):
         self.name = name
         self.description = description
         self.inputs = inputs  # (deflection, rate)
         self.outputs = outputs
         self.parameters = parameters
+        # the continuous states (locals: what a Model Exchange host integrates, and what any
+        # host may read), each with its derivative
+        self.states = states
+        self.derivatives = tuple(
+            Variable(f"der({v.name})", "local", DERIVATIVE_UNITS[v.unit],
+                     f"Time derivative of {v.name}") for v in states)
+        assert len(states) == equations.continuous.states, name
         self.equations = equations  # model.Equations over the parameters' names
-        self.direct_outputs = direct_outputs  # outputs that depend directly on the deflection
         self.measured_ranges = measured_ranges  # input name -> (low, high, what the thesis measured)
         self.default_experiment = {"startTime": 0.0, "stopTime": stop_time,
                                    "stepSize": 1e-3, "tolerance": DEFAULT_RTOL}
 
     @property
     def variables(self):
-        return list(self.inputs) + list(self.outputs) + list(self.parameters)
+        """By value reference: inputs, outputs, parameters, states, their derivatives."""
+        return (list(self.inputs) + list(self.outputs) + list(self.parameters)
+                + list(self.states) + list(self.derivatives))
+
+    def structure(self):
+        """The ModelStructure, read off the equations: {output or derivative name: the
+        inputs and states it depends on}, in either interface (an output of the
+        co-simulation depends on the inputs and states its equations read; in the
+        continuous-time view on those its own equations read)."""
+        e, view = self.equations, self.equations.continuous
+        names = {"x": self.inputs[0].name, "v": self.inputs[1].name}
+        names.update({("state", i): v.name for i, v in enumerate(self.states)})
+        names.update({f"Y{i}": v.name for i, v in enumerate(self.states)})
+        knowns = set(names)
+        co_simulation = dependencies(e.output_lines, e.outputs, knowns)
+        continuous = dependencies(*e.continuous_output_statements(), knowns)
+        rates = dependencies(e.rate_statements(), [Symbol(f"f{i}") for i in range(view.states)],
+                             knowns)
+        structure = {}
+        for variable, *sets in zip(self.outputs, co_simulation, continuous):
+            structure[variable.name] = {names[k] for group in sets for k in group}
+        for variable, read in zip(self.derivatives, rates):
+            structure[variable.name] = {names[k] for k in read}
+        return structure
 
     def build_model(self, values):
         """The Python model with these parameter values (name -> value)."""
@@ -147,6 +177,11 @@ def _rubber_component(name, description, *, deflection, deflection_meaning, load
                  f"geometric multiplier ({geometric_thesis})", x_ref, display),
     ]
 
+    states = tuple(
+        Variable(f"state.{symbol}", "local", length, f"Deformation {symbol} of spring k{i}, "
+                 f"in the {role} (spec section 2)", display_unit=display)
+        for symbol, (i, role) in zip("swr", RUBBER_ELEMENTS))
+
     def element(i):
         return MaxwellElement(Symbol(f"k{i}"), Symbol(f"c{i}"), Symbol(f"xi{i}"))
 
@@ -157,8 +192,7 @@ def _rubber_component(name, description, *, deflection, deflection_meaning, load
         unilateral=unilateral)
 
     return ComponentDefinition(
-        name, description, inputs, outputs, parameters, equations,
-        direct_outputs=[o.name for o in outputs],
+        name, description, inputs, outputs, parameters, states, equations,
         measured_ranges={deflection: measured_range})
 
 
@@ -271,6 +305,12 @@ def _damper_component():
                                    f"{i + 1}: angular rate (Table A6-1)", rate, "deg/s"))
         parameters.append(Variable(_torque_name(i), "parameter", "N.m", f"Dashpot curve point "
                                    f"{i + 1}: torque, smoothed column (Table A6-1)", torque))
+    states = (
+        Variable("state.z", "local", "1", "Gas-spring coordinate z, xd = C2 tanh(z) (runtime/"
+                 "damper.py)"),
+        Variable("state.omega_r", "local", "rad/s", "Rate omega_r of the rotor node",
+                 display_unit="deg/s"),
+    )
     equations = damper_equations("C1", "C2", "I", [_rate_name(i) for i in range(TABLE_SIZE)],
                                  [_torque_name(i) for i in range(TABLE_SIZE)])
 
@@ -279,8 +319,7 @@ def _damper_component():
         "Warrior rotary suspension damper at the wheel-arm pivot: Table A6-1 dashpot "
         "(laminar, turbulent, blow-off) in series with an isothermal entrapped-gas spring, "
         "rotor inertia between them (thesis chapters 9-14, Appendices 5 and 6).",
-        inputs, outputs, parameters, equations,
-        direct_outputs=["torque", "gas_deflection", "stiffness"],
+        inputs, outputs, parameters, states, equations,
         measured_ranges={"angle": (-math.pi / 4, math.pi / 4, "rotation about +/-45 deg, section 9.1"),
                          "angle_rate": (-14.0, 14.0, "Table A6-1 spans +/-14 rad/s")})
 

@@ -33,8 +33,8 @@ expression trees over the parameters as symbols (expressions.py).
 """
 
 from .expressions import (Assign, Element, Format, Lookup, Message, Symbol, atanh, copysign,
-                          differs, equal, exp, tanh, where)
-from .model import Equations, InputLimit, Table
+                          differs, equal, exp, shortcut, tanh, where)
+from .model import ContinuousTime, Equations, InputLimit, Table
 
 Z_LIMIT = 18.0  # tanh(18) = 1 - 4.6e-16: beyond it xd is C2 to the last bit
 DASHPOT = "dashpot"
@@ -49,7 +49,7 @@ def _z_at(C2, state, x):
     """z for arm angle x: the state's own unless the arm has moved away from theta_z, as a
     host's angle and rate from its own integrator always do by round-off, or by a jump:
     then the gas spring takes up the difference."""
-    return where(equal(x, state[2]), state[0], atanh(_gas_deflection(C2, state, x) / C2))
+    return shortcut(equal(x, state[2]), state[0], atanh(_gas_deflection(C2, state, x) / C2))
 
 
 def _hyperbolic(z, prefix):
@@ -72,8 +72,7 @@ def damper_equations(C1, C2, I, rates, torques):
     state = [Element("state", i) for i in range(3)]
     stage_lines, e = _hyperbolic(Y0, "")
     cosh_squared, sinh_2z = Symbol("cosh_squared"), Symbol("sinh_2z")
-    z, deflection = Symbol("z"), Symbol("deflection")
-    output_lines, e_z = _hyperbolic(z, "z_")
+    deflection = Symbol("deflection")
     return Equations(
         integrated=2, state_size=3,
         stage=stage_lines + [
@@ -89,13 +88,8 @@ def damper_equations(C1, C2, I, rates, torques):
         exact=[Assign(state[2], x + u * h)],
         # The rotor node moving with the arm: zero gas deflection, tau(0) = 0 (spec 3).
         initial_state=[0.0, v, x],
-        # The rotor inertia keeps theta_r from responding instantly, so the instantaneous
-        # tangent d torque/d theta is the gas-spring stiffness, d/dxd of C1 sinh(2z) with
-        # dz/dxd = cosh(z)^2 / C2.
-        output_lines=[Assign(z, _z_at(C2, state, x))] + output_lines,
-        outputs=[C1 * Symbol("z_sinh_2z"), copysign(C2 * (1.0 - e_z) / (1.0 + e_z), z), state[1],
-                 Lookup(DASHPOT, state[1]),
-                 C1 * (1.0 + e_z * e_z) / e_z * Symbol("z_cosh_squared") / C2],
+        output_lines=_output_lines(C2, _z_at(C2, state, x)),
+        outputs=_outputs(C1, C2, state),
         # A new arm angle moves the gas spring by the difference (it must stay inside C2),
         # and is folded into z at once, so that the step and the outputs find z ready
         # rather than each computing it again. The deflection is left at zero when the arm
@@ -119,4 +113,25 @@ def damper_equations(C1, C2, I, rates, torques):
         # thesis rig's range, section 11.0).
         state_scale=[1.0, 1.0],
         tables=[Table(DASHPOT, rates, torques, abscissa=("rate", "rad/s"),
-                      ordinate=("torque", "N.m"), dissipative=True)])
+                      ordinate=("torque", "N.m"), dissipative=True)],
+        # For a host's integrator (spec section 7) the states are z and omega_r, z driven by
+        # the arm rate: |xd| < C2 holds by construction at any trial state a stiff
+        # integrator may try, and the arm angle only sets the initial state (the torque
+        # then depends on the angle through the states, not directly). Nominals: z is
+        # dimensionless, the rotor rate 1 rad/s.
+        continuous=ContinuousTime(2, [1.0, 1.0], output_lines=_output_lines(C2, state[0]),
+                                  outputs=_outputs(C1, C2, state)))
+
+
+def _output_lines(C2, z):
+    return [Assign(Symbol("z"), z)] + _hyperbolic(Symbol("z"), "z_")[0]
+
+
+def _outputs(C1, C2, state):
+    """(torque, gas-spring deflection, rotor-node rate, dashpot torque, tangent stiffness
+    d torque/d theta) at z. The rotor inertia keeps theta_r from responding instantly, so
+    the instantaneous tangent is the gas-spring stiffness, d/dxd of C1 sinh(2z) with dz/dxd
+    = cosh(z)^2 / C2."""
+    z, e = Symbol("z"), Symbol("z_e")
+    return [C1 * Symbol("z_sinh_2z"), copysign(C2 * (1.0 - e) / (1.0 + e), z), state[1],
+            Lookup(DASHPOT, state[1]), C1 * (1.0 + e * e) / e * Symbol("z_cosh_squared") / C2]

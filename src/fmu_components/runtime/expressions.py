@@ -156,10 +156,15 @@ class Not(Expr):
 
 
 class Conditional(Expr):
-    __slots__ = ("test", "then", "otherwise")
+    """`then` if `test` holds, else `otherwise`. A shortcut is a conditional whose `then`
+    is a cheaper way to the value `otherwise` gives when `test` holds: its derivative is
+    `otherwise`'s."""
 
-    def __init__(self, test, then, otherwise):
+    __slots__ = ("test", "then", "otherwise", "shortcut")
+
+    def __init__(self, test, then, otherwise, shortcut=False):
         self.test, self.then, self.otherwise = test, then, otherwise
+        self.shortcut = shortcut
 
 
 class Absolute(Expr):
@@ -194,6 +199,11 @@ class Lookup(Expr):
 def where(test, then, otherwise):
     """`then` if `test` holds, else `otherwise`; only the chosen branch is evaluated."""
     return Conditional(test, wrap(then), wrap(otherwise))
+
+
+def shortcut(test, fast, general):
+    """`fast` when `test` holds, which is there the value of `general`, else `general`."""
+    return Conditional(test, wrap(fast), wrap(general), shortcut=True)
 
 
 def equal(left, right):
@@ -302,6 +312,158 @@ class Message:
 def assignments(pairs):
     """[Assign] from (name or node, value) pairs."""
     return [Assign(Symbol(t) if isinstance(t, str) else t, v) for t, v in pairs]
+
+
+# --- what depends on what --------------------------------------------------------------
+
+def dependencies(statements, expressions, knowns):
+    """For each expression, the knowns (names, or (array, index) for elements) it reads,
+    through the statements before it: what a ModelStructure declares."""
+    depends = {}
+
+    def of(node):
+        if isinstance(node, Symbol):
+            return {node.name} if node.name in knowns else depends.get(node.name, set())
+        if isinstance(node, Element):
+            key = (node.array, node.index)
+            return {key} if key in knowns else depends.get(key, set())
+        found = set()
+        for child in _children(node):
+            found |= of(child)
+        return found
+
+    for statement in statements:
+        if isinstance(statement, Assign):
+            target = statement.target
+            key = target.name if isinstance(target, Symbol) else (target.array, target.index)
+            depends[key] = of(statement.value)
+    return [of(wrap(e)) for e in expressions]
+
+
+def _children(node):
+    if isinstance(node, (Negate, Absolute, Not)):
+        return (node.operand,)
+    if isinstance(node, (Binary, Compare, Logical)):
+        return node.left, node.right
+    if isinstance(node, Conditional):
+        return node.test, node.then, node.otherwise
+    if isinstance(node, Call):
+        return node.arguments
+    if isinstance(node, Lookup):
+        return (node.argument,)
+    return ()
+
+
+# --- derivatives -------------------------------------------------------------------------
+
+def tangent_name(name):
+    return f"d_{name}"
+
+
+class Tangent:
+    """Forward-mode differentiation of statements: for every value a statement computes, the
+    statement for its derivative along a direction, given the derivatives of the knowns
+    (``seeds``: name -> derivative expression, ``Element`` seeds by (array, index)).
+    Everything else (parameters, constants) has derivative zero. Derivatives that are zero
+    are not written, so the code stays as small as the dependence."""
+
+    def __init__(self, seeds):
+        self.derivatives = {}
+        for known, derivative in seeds.items():
+            self.derivatives[known] = wrap(derivative)
+
+    def statements(self, statements):
+        """The statements with, before each assignment, the assignment of its derivative."""
+        out = []
+        for statement in statements:
+            if isinstance(statement, Assign):
+                derivative = self.of(statement.value)
+                key = (statement.target.name if isinstance(statement.target, Symbol)
+                       else (statement.target.array, statement.target.index))
+                name = (tangent_name(statement.target.name) if isinstance(statement.target, Symbol)
+                        else f"d_{statement.target.array}{statement.target.index}")
+                if derivative is None:
+                    self.derivatives.pop(key, None)
+                else:
+                    out.append(Assign(Symbol(name), derivative))
+                    self.derivatives[key] = Symbol(name)
+            out.append(statement)
+        return out
+
+    def of(self, node):
+        """d node, or None where it is zero."""
+        method = getattr(self, f"_d_{type(node).__name__}", None)
+        if method is None:
+            raise GenerationError(f"no derivative of {type(node).__name__}")
+        return method(node)
+
+    def _d_Number(self, node):
+        return None
+
+    def _d_Symbol(self, node):
+        return self.derivatives.get(node.name)
+
+    def _d_Element(self, node):
+        return self.derivatives.get((node.array, node.index))
+
+    def _d_Negate(self, node):
+        d = self.of(node.operand)
+        return None if d is None else -d
+
+    def _d_Binary(self, node):
+        a, b = node.left, node.right
+        da, db = self.of(a), self.of(b)
+        if node.op in "+-":
+            if db is None:
+                return da
+            if node.op == "-":
+                db = -db
+            return db if da is None else da + db
+        if node.op == "*":
+            terms = [t for t in (None if da is None else da * b, None if db is None else a * db)
+                     if t is not None]
+        else:  # d(a/b) = da/b - a db/b^2
+            terms = [t for t in (None if da is None else da / b,
+                                 None if db is None else -(a * db / (b * b))) if t is not None]
+        return total(terms) if terms else None
+
+    def _d_Absolute(self, node):
+        d = self.of(node.operand)
+        return None if d is None else where(node.operand >= 0.0, d, -d)
+
+    def _d_Conditional(self, node):
+        if node.shortcut:
+            return self.of(node.otherwise)
+        then, otherwise = self.of(node.then), self.of(node.otherwise)
+        if then is None and otherwise is None:
+            return None
+        return where(node.test, 0.0 if then is None else then,
+                     0.0 if otherwise is None else otherwise)
+
+    def _d_Call(self, node):
+        a = node.arguments[0]
+        d = self.of(a)
+        if d is None:
+            return None
+        if node.function == "exp":
+            return node * d
+        if node.function == "tanh":
+            return (1.0 - node * node) * d
+        if node.function == "sinh":
+            return Call("cosh", (a,)) * d
+        if node.function == "cosh":
+            return Call("sinh", (a,)) * d
+        if node.function == "atanh":
+            return d / (1.0 - a * a)
+        if node.function == "copysign":  # |a| carries the sign of b, a constant
+            return copysign(1.0, a) * copysign(1.0, node.arguments[1]) * d
+        raise GenerationError(f"no derivative of {node.function}()")
+
+    def _d_Lookup(self, node):
+        if node.slope:
+            raise GenerationError(f"no derivative of the slope of {node.table}")
+        d = self.of(node.argument)
+        return None if d is None else Lookup(node.table, node.argument, slope=True) * d
 
 
 # --- printers -----------------------------------------------------------------------------

@@ -21,7 +21,7 @@ Names the statements use:
 
 import math
 
-from .expressions import FUNCTIONS, Assign, Element, PythonPrinter, Symbol, wrap
+from .expressions import FUNCTIONS, Assign, Element, PythonPrinter, Require, Symbol, wrap
 from .hermite import check_monotone_table, shared_curve
 from .integrator import compile_python, jacobian_statements
 
@@ -68,6 +68,30 @@ class InputLimit:
         self.accept = list(accept)
 
 
+class ContinuousTime:
+    """The equations as a host's integrator sees them (Model Exchange, and the states and
+    derivatives any host may read): the first ``states`` entries of the state list are the
+    continuous states, driven by the input rate itself rather than a held one.
+
+    * ``rates``: statements setting ``f{i}`` for the continuous states beyond the integrated
+      ones (reading ``Y{i}``, ``u`` and the ``held`` values);
+    * ``nominals``: each state's typical magnitude (over the parameters);
+    * ``output_lines`` and ``outputs``: the outputs from ``state``, ``x``, ``v`` where they
+      differ from the co-simulation's (None: the same);
+    * ``event_indicators``: expressions over ``x`` whose sign changes are events (a contact:
+      the rubber rate is ``contact * v``, ``contact`` being 1 or 0 as the events set it).
+    """
+
+    def __init__(self, states, nominals, rates=(), output_lines=None, outputs=None,
+                 event_indicators=()):
+        self.states = states
+        self.nominals = [wrap(e) for e in nominals]
+        self.rates = list(rates)
+        self.output_lines = output_lines
+        self.outputs = None if outputs is None else [wrap(e) for e in outputs]
+        self.event_indicators = [wrap(e) for e in event_indicators]
+
+
 class Equations:
     """A component's equations (see the module docstring for the names).
 
@@ -88,13 +112,14 @@ class Equations:
     * ``state_scale``: the typical magnitude of each integrated state (over the parameters);
     * ``tables``: the ``Table`` curves ``Lookup`` nodes name;
     * ``unilateral``: a contact whose rubber is deformed only while ``x > 0``: a step that
-      crosses ``x = 0`` is two segments, the rate ``u`` being 0 on the part out of contact.
+      crosses ``x = 0`` is two segments, the rate ``u`` being 0 on the part out of contact;
+    * ``continuous``: the ``ContinuousTime`` view.
     """
 
     def __init__(self, *, integrated, state_size, stage, jacobian, initial_state, outputs,
                  state_scale, constants=(), held=(), region=None, start=None, exact=(),
                  output_lines=(), input_limit=None, failure_hint=None, tables=(),
-                 unilateral=False):
+                 unilateral=False, continuous=None):
         self.integrated = integrated
         self.state_size = state_size
         self.constants = list(constants)
@@ -112,6 +137,7 @@ class Equations:
         self.state_scale = [wrap(e) for e in state_scale]
         self.tables = list(tables)
         self.unilateral = unilateral
+        self.continuous = continuous
 
     def start_statements(self):
         if self.start is not None:
@@ -120,6 +146,26 @@ class Equations:
 
     def constant_names(self):
         return [statement.target.name for statement in self.constants]
+
+    # --- the continuous-time view: what Model Exchange and directional derivatives print ---
+
+    def rate_statements(self):
+        """f0 .. of every continuous state at Y0 .., inputs x, v and the contact mode; they
+        fail outside the model's region."""
+        u = Symbol("contact") * Symbol("v") if self.unilateral else Symbol("v")
+        region = [] if self.region is None else [Require(self.region)]
+        return ([Assign(Symbol("u"), u)] + self.held + region + self.stage
+                + self.continuous.rates)
+
+    def continuous_output_statements(self):
+        """(statements, outputs) from the continuous states `state[i]`, x and v; they fail
+        outside the model's region."""
+        view = self.continuous
+        lines = [Assign(Symbol(f"Y{i}"), Element("state", i)) for i in range(self.integrated)]
+        lines += [] if self.region is None else [Require(self.region)]
+        if view.outputs is None:
+            return lines + self.output_lines, self.outputs
+        return lines + view.output_lines, view.outputs
 
 
 def rate_segments(x, v, h, unilateral):
@@ -159,6 +205,13 @@ class Model:
                                  "(" + "".join(f"{n}, " for n in equations.constant_names()) + ")")
         self.literals = {**values, **dict(zip(equations.constant_names(), derived()))}
         self.state_scale = [float(s) for s in self._values((), equations.state_scale)]
+        view = equations.continuous
+        self.nominals = [float(s) for s in self._values((), view.nominals)]
+        Ys = [f"Y{i}" for i in range(view.states)]
+        self.rates = self._function(
+            "rates(X, x, v, contact)", equations.rate_statements(),
+            self._tuple([f"f{i}" for i in range(view.states)]),
+            [f"({''.join(name + ', ' for name in Ys)}) = X"], extra=Ys)
         n = equations.integrated
         Y = [f"Y{i}" for i in range(n)]
         unpack = [f"({''.join(name + ', ' for name in Y)}) = y"] if n else []
@@ -204,11 +257,13 @@ class Model:
         printer.statements(lines, "pass")
         return printer.message(message)
 
-    def _function(self, signature, statements, result, prologue=()):
-        """A generated function: the prologue, the statements printed, then `result`."""
+    def _function(self, signature, statements, result, prologue=(), extra=None):
+        """A generated function: the prologue, the statements printed, then `result`;
+        `extra`: the names the prologue sets (default: the integrated states Y0 ..)."""
         arguments = signature[signature.index("(") + 1:-1]
         names = [a.strip() for a in arguments.split(",") if a.strip()]
-        names += [f"Y{i}" for i in range(self.equations.integrated)] if prologue else []
+        if prologue:
+            names += extra if extra is not None else [f"Y{i}" for i in range(self.equations.integrated)]
         body = list(prologue) + self.printer(names).statements(statements, "return None")
         text = "\n".join([f"def {signature}:", *[f"    {line}" for line in body],
                           f"    return {result}"]) + "\n"

@@ -32,7 +32,7 @@ same trees become the Python of the pythonfmu flavour and the C of the native on
 
 from .expressions import (Assign, Element, Symbol, all_of, copysign, differs, equal, exp,
                           total, where, wrap)
-from .model import Equations
+from .model import ContinuousTime, Equations
 
 
 class MaxwellElement:
@@ -88,20 +88,28 @@ def rubber_equations(branches, elastic, geometric_slope, geometric_reference, un
         state_scale += [outer.c / outer.k, inner.c / inner.k]
     # The plain branches' exact update: with a = k(|v| + xi)/c, dr/dt = v - a*r gives
     # r(h) = v/a + (r(0) - v/a) exp(-a h) for constant v.
-    exact = []
+    exact, rates, nominals = [], [], list(state_scale)
     for i, branch in enumerate(plain, start=n):
         element = branch.outer
         decay, steady, r = Symbol("decay"), Symbol("r_steady"), Element("state", i)
         exact += [Assign(decay, element.k * (speed + element.xi) / element.c),
                   Assign(steady, u / decay),
                   Assign(r, steady + (r - steady) * exp(-decay * h))]
+        # the same branch for a host's integrator: dr/dt = v - k r (|v| + xi)/c
+        rates.append(Assign(Symbol(f"f{i}"), u - element.k * Symbol(f"Y{i}")
+                            * (speed + element.xi) / element.c))
+        nominals.append(element.c / element.k)
+    # A contact's event: x crossing 0, scaled by a millimetre (spec section 7).
+    events = [Symbol("x") / 1e-3] if unilateral else []
     output_lines, outputs = _outputs(nested, plain, elastic, geometric_slope,
                                      geometric_reference, unilateral)
     return Equations(integrated=n, state_size=n + len(plain), constants=constants, held=held,
                      stage=stage, jacobian=jacobian, exact=exact,
                      initial_state=[0.0] * (n + len(plain)),  # relaxed (spec section 2)
                      output_lines=output_lines, outputs=outputs, state_scale=state_scale,
-                     unilateral=unilateral)
+                     unilateral=unilateral,
+                     continuous=ContinuousTime(n + len(plain), nominals, rates,
+                                               event_indicators=events))
 
 
 def _branch_stiffness(nested, plain, direction):
