@@ -101,14 +101,16 @@ def test_statements_declare_locals_once_in_c_and_guard_with_the_failure_line():
 
 @pytest.mark.parametrize("name", sorted(COMPONENTS))
 def test_generated_c_uses_only_the_whitelisted_functions(name):
-    source = ModelCode(COMPONENTS[name], "guid").source()
+    source = re.sub(r'"[^"]*"', '""', ModelCode(COMPONENTS[name], "guid").source())  # no strings
     called = set(re.findall(r"\b([a-z_][a-z0-9_]*)\(", source))
     allowed = {"exp", "copysign", "tanh", "sinh", "cosh", "atanh", "fabs", "hermite_value",
                "hermite_slope", "invert", "snprintf",
                # the signatures of the generated functions themselves
                "model_derive", "model_initial_state", "model_start", "model_factor",
                "model_step", "model_exact", "model_outputs", "model_input_problem",
-               "model_take_input", "model_failure_hint", "if", "defined"}
+               "model_take_input", "model_failure_hint", "model_nominals", "model_rates",
+               "model_continuous_outputs", "model_event_indicators", "model_outputs_direction",
+               "if", "defined"}
     assert called <= allowed, called - allowed
 
 

@@ -1,5 +1,6 @@
 /*
- * A minimal FMI 2.0 co-simulation host in C: loads an FMU's linux64 binary, runs a sine
+ * A minimal FMI 2.0 co-simulation host in C: loads an FMU's linux64 binary (or, built
+ * with mingw-w64, its win64 DLL), runs a sine
  * through it and prints "time,output" per step. Used by the tests to show that the FMUs
  * load and run in a host that is not Python (no LD_PRELOAD, no Python of its own).
  *
@@ -11,13 +12,22 @@
  * is 0 only if every call returned what it should.
  */
 
+#ifdef _WIN32
+#include <windows.h>
+#define dlsym(library, name) ((void *)GetProcAddress(library, name))
+#else
 #include <dlfcn.h>
+#endif
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 
 #include "fmi2Functions.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
 
 static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
                    fmi2String category, fmi2String message, ...) {
@@ -49,11 +59,19 @@ int main(int argc, char **argv) {
                         "MEAN AMPLITUDE FREQUENCY STEP STOP [bad-input]\n", argv[0]);
         return 1;
     }
+#ifdef _WIN32
+    HMODULE library = LoadLibraryA(argv[1]);
+    if (!library) {
+        fprintf(stderr, "LoadLibraryA failed: error %lu\n", (unsigned long)GetLastError());
+        return 2;
+    }
+#else
     void *library = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
     if (!library) {
         fprintf(stderr, "dlopen failed: %s\n", dlerror());
         return 2;
     }
+#endif
     LOOKUP(fmi2InstantiateTYPE, fmi2Instantiate)
     LOOKUP(fmi2SetupExperimentTYPE, fmi2SetupExperiment)
     LOOKUP(fmi2EnterInitializationModeTYPE, fmi2EnterInitializationMode)
@@ -102,6 +120,10 @@ int main(int argc, char **argv) {
     }
     EXPECT(fmi2Terminate(c), fmi2OK);
     fmi2FreeInstance(c);
+#ifdef _WIN32
+    FreeLibrary(library);
+#else
     dlclose(library);
+#endif
     return 0;
 }

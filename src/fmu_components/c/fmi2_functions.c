@@ -155,7 +155,7 @@ int model_now(Instance *instance, Now *now) {
     if (parameter_problem(s->values, problem, sizeof problem)) return 0;
     now->x = s->values[INPUT_DEFLECTION];
     now->v = s->values[INPUT_RATE];
-    now->contact = contact_at(now->x);
+    now->contact = contact_at(now->x, now->v);
     build_model_data(&now->scratch, s->values);
     model_initial_state(&now->scratch, now->x, now->v, now->relaxed);
     now->data = &now->scratch;
@@ -163,7 +163,9 @@ int model_now(Instance *instance, Now *now) {
     return 1;
 }
 
-double contact_at(double x) { return !MODEL_INFO.unilateral || x > 0.0 ? 1.0 : 0.0; }
+double contact_at(double x, double v) {
+    return !MODEL_INFO.unilateral || x > 0.0 || (x == 0.0 && v > 0.0) ? 1.0 : 0.0;
+}
 
 /* The outputs, states and derivatives now, into outputs and locals (NaN while the
    parameters make no sense); fmi2Discard where a host's states leave the model's region. */
@@ -291,7 +293,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
         return call_end(instance, fmi2Error);
     }
     cosim_start(instance);
-    instance->s.contact = contact_at(instance->s.deflection);
+    instance->s.contact = contact_at(instance->s.deflection, instance->s.rate);
     instance->s.mode = instance->type == fmi2CoSimulation ? STEP_COMPLETE : EVENT_MODE;
     return call_end(instance, fmi2OK);
 }

@@ -48,7 +48,7 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
     if (!call_begin(instance, EVENT_MODE, __func__)) return fmi2Error;
     if (!model_exchange(instance, "fmi2NewDiscreteStates") || eventInfo == NULL)
         return call_end(instance, fmi2Error);
-    instance->s.contact = contact_at(instance->s.deflection);
+    instance->s.contact = contact_at(instance->s.deflection, instance->s.rate);
     eventInfo->newDiscreteStatesNeeded = fmi2False;
     eventInfo->terminateSimulation = fmi2False;
     eventInfo->nominalsOfContinuousStatesChanged = fmi2False;

@@ -206,12 +206,14 @@ class Model:
         self.literals = {**values, **dict(zip(equations.constant_names(), derived()))}
         self.state_scale = [float(s) for s in self._values((), equations.state_scale)]
         view = equations.continuous
-        self.nominals = [float(s) for s in self._values((), view.nominals)]
-        Ys = [f"Y{i}" for i in range(view.states)]
-        self.rates = self._function(
-            "rates(X, x, v, contact)", equations.rate_statements(),
-            self._tuple([f"f{i}" for i in range(view.states)]),
-            [f"({''.join(name + ', ' for name in Ys)}) = X"], extra=Ys)
+        self.nominals = self.rates = None
+        if view is not None:  # the continuous-time view: nominals and rates of the states
+            self.nominals = [float(s) for s in self._values((), view.nominals)]
+            Ys = [f"Y{i}" for i in range(view.states)]
+            self.rates = self._function(
+                "rates(X, x, v, contact)", equations.rate_statements(),
+                self._tuple([f"f{i}" for i in range(view.states)]),
+                [f"({''.join(name + ', ' for name in Ys)}) = X"], extra=Ys)
         n = equations.integrated
         Y = [f"Y{i}" for i in range(n)]
         unpack = [f"({''.join(name + ', ' for name in Y)}) = y"] if n else []
