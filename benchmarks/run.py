@@ -30,7 +30,6 @@ within a repetition, so a busy machine slows numerator and denominator alike.
 import argparse
 import json
 import math
-import shutil
 import statistics
 import subprocess
 import sys

@@ -8,12 +8,16 @@ interpolates back, so there a time-varying input is held, and held late, over CV
 steps; its errors are that host's, not the model's (README, Model Exchange).
 """
 
+import math
 from ctypes import c_double
 
 import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Model
 from fmpy.sundials import CVodeSolver
+
+from fmu_components.runtime.catalog import COMPONENTS
+from fmu_runner import FmuRunner
 
 
 class ModelExchangeRun:
@@ -97,3 +101,82 @@ class _NoInput:
 
     def apply(self, *args, **kwargs):
         pass
+
+
+# --- directional derivatives against finite differences ------------------------------
+
+class Instance:
+    """A native FMU through fmpy, in either interface: what its directional derivatives
+    take (knowns) and give (unknowns)."""
+
+    def __init__(self, path, interface):
+        self.description = read_model_description(str(path))
+        self.definition = COMPONENTS[self.description.modelName]
+        self.vr = {v.name: v.valueReference for v in self.description.modelVariables}
+        self.interface = interface
+        self.n = len(self.definition.states)
+        if interface == "ModelExchange":
+            self.fmu = FMU2Model(guid=self.description.guid, unzipDirectory=extract(str(path)),
+                                 modelIdentifier=self.description.modelExchange.modelIdentifier,
+                                 instanceName="derivatives")
+            self.fmu.instantiate()
+        else:
+            self.runner = FmuRunner(path, "derivatives")
+            self.fmu = self.runner.fmu
+
+    def knowns(self):
+        inputs = [self.vr[v.name] for v in self.definition.inputs]
+        states = [self.vr[v.name] for v in self.definition.states]
+        return inputs + (states if self.interface == "ModelExchange" else [])
+
+    def unknowns(self):
+        outputs = [self.vr[v.name] for v in self.definition.outputs]
+        derivatives = [self.vr[v.name] for v in self.definition.derivatives]
+        return outputs + (derivatives if self.interface == "ModelExchange" else [])
+
+
+def evaluate(instance, point, knowns, unknowns):
+    """The unknowns at a point {known vr: value} (ME: states set directly; CS: inputs)."""
+    fmu = instance.fmu
+    inputs = [vr for vr in knowns if vr in point and vr < 2]
+    fmu.setReal(inputs, [point[vr] for vr in inputs])
+    if instance.interface == "ModelExchange":
+        states = (c_double * instance.n)(*[point[vr] for vr in knowns[2:]])
+        fmu.setContinuousStates(states, instance.n)
+    return np.array(fmu.getReal(unknowns))
+
+
+def random_points(name, count, rng):
+    """Points in the range the thesis measured, states on the scale of their nominals, rates
+    of both signs, and (for the tyre) both sides of contact."""
+    mean, amplitude, frequency = {"RoadWheelTyre": (3.5e-3, 2e-3, 1.0),
+                                  "TrackBushRadial": (0.3e-3, 0.3e-3, 1.0),
+                                  "TrackBushTorsion": (math.radians(10), math.radians(20), 1.0),
+                                  "RotaryDamper": (0.0, 0.2, 1.0)}[name]
+    model = COMPONENTS[name].build_model(COMPONENTS[name].default_parameters())
+    for _ in range(count):
+        x = mean + amplitude * rng.uniform(-1.0, 1.0)
+        v = rng.choice([-1.0, 1.0]) * 10 ** rng.uniform(-4.0, -1.0 if name != "RotaryDamper" else 1.0)
+        states = [nominal * rng.uniform(-1.0, 1.0) for nominal in model.nominals]
+        yield x, v, states
+
+
+def central_differences(instance, point, knowns, unknowns, direction):
+    values = []
+    for sign in (1.0, -1.0):
+        shifted = {vr: point[vr] + sign * instance.steps[vr] * direction.get(vr, 0.0)
+                   for vr in point}
+        values.append(evaluate(instance, shifted, knowns, unknowns))
+    return values
+
+
+def continuous_input(case):
+    """x(t) of a case and its rate, by a central difference of the path."""
+    def x_of(t):
+        return float(case.path(np.array([t]))[0])
+
+    def v_of(t, dt=1e-6):
+        return (x_of(t + dt) - x_of(t - dt)) / (2 * dt)
+    return x_of, v_of
+
+

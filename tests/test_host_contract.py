@@ -18,7 +18,6 @@ from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 
 from fmu_components.signals import thesis_sine
 
-from conftest import FMU_NAMES
 from fmu_runner import ERROR, OK, FmuRunner
 
 CO_SIMULATION, MODEL_EXCHANGE = 1, 0

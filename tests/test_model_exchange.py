@@ -18,26 +18,18 @@ import numpy as np
 import pytest
 from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import FMU2Model
+from fmpy import calloc, free
+from fmpy.fmi2 import (FMU2Model, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 
 from fmu_components import cases, reference
 from fmu_components.runtime.catalog import COMPONENTS
 
 from conftest import FMU_NAMES
-from fmu_runner import FmuRunner
-from me_host import ModelExchangeRun
+from me_host import (Instance, ModelExchangeRun, central_differences, continuous_input,
+                     evaluate, random_points)
 
 LIMIT = 0.5  # % of the output's peak-to-peak range
-
-
-def continuous_input(case):
-    """x(t) of a case and its rate, by a central difference of the path."""
-    def x_of(t):
-        return float(case.path(np.array([t]))[0])
-
-    def v_of(t, dt=1e-6):
-        return (x_of(t + dt) - x_of(t - dt)) / (2 * dt)
-    return x_of, v_of
 
 
 @pytest.mark.parametrize("case", [c for c in cases.CASES if c.test not in ("IV", "sweep")],
@@ -65,71 +57,6 @@ def test_the_tyre_leaves_and_regains_contact_through_events(native_fmus):
     assert run.events >= 4  # two lift-offs and two touch-downs
     assert np.all(force >= 0.0) and np.all(force[np.array([x_of(t) for t in times]) <= 0] == 0.0)
     assert np.max(np.abs(force - expected)) <= LIMIT / 100 * np.ptp(expected)
-
-
-class Instance:
-    """A native FMU through fmpy, in either interface: what its directional derivatives
-    take (knowns) and give (unknowns)."""
-
-    def __init__(self, path, interface):
-        self.description = read_model_description(str(path))
-        self.definition = COMPONENTS[self.description.modelName]
-        self.vr = {v.name: v.valueReference for v in self.description.modelVariables}
-        self.interface = interface
-        self.n = len(self.definition.states)
-        if interface == "ModelExchange":
-            self.fmu = FMU2Model(guid=self.description.guid, unzipDirectory=extract(str(path)),
-                                 modelIdentifier=self.description.modelExchange.modelIdentifier,
-                                 instanceName="derivatives")
-            self.fmu.instantiate()
-        else:
-            self.runner = FmuRunner(path, "derivatives")
-            self.fmu = self.runner.fmu
-
-    def knowns(self):
-        inputs = [self.vr[v.name] for v in self.definition.inputs]
-        states = [self.vr[v.name] for v in self.definition.states]
-        return inputs + (states if self.interface == "ModelExchange" else [])
-
-    def unknowns(self):
-        outputs = [self.vr[v.name] for v in self.definition.outputs]
-        derivatives = [self.vr[v.name] for v in self.definition.derivatives]
-        return outputs + (derivatives if self.interface == "ModelExchange" else [])
-
-
-def evaluate(instance, point, knowns, unknowns):
-    """The unknowns at a point {known vr: value} (ME: states set directly; CS: inputs)."""
-    fmu = instance.fmu
-    inputs = [vr for vr in knowns if vr in point and vr < 2]
-    fmu.setReal(inputs, [point[vr] for vr in inputs])
-    if instance.interface == "ModelExchange":
-        states = (c_double * instance.n)(*[point[vr] for vr in knowns[2:]])
-        fmu.setContinuousStates(states, instance.n)
-    return np.array(fmu.getReal(unknowns))
-
-
-def random_points(name, count, rng):
-    """Points in the range the thesis measured, states on the scale of their nominals, rates
-    of both signs, and (for the tyre) both sides of contact."""
-    mean, amplitude, frequency = {"RoadWheelTyre": (3.5e-3, 2e-3, 1.0),
-                                  "TrackBushRadial": (0.3e-3, 0.3e-3, 1.0),
-                                  "TrackBushTorsion": (math.radians(10), math.radians(20), 1.0),
-                                  "RotaryDamper": (0.0, 0.2, 1.0)}[name]
-    model = COMPONENTS[name].build_model(COMPONENTS[name].default_parameters())
-    for _ in range(count):
-        x = mean + amplitude * rng.uniform(-1.0, 1.0)
-        v = rng.choice([-1.0, 1.0]) * 10 ** rng.uniform(-4.0, -1.0 if name != "RotaryDamper" else 1.0)
-        states = [nominal * rng.uniform(-1.0, 1.0) for nominal in model.nominals]
-        yield x, v, states
-
-
-def central_differences(instance, point, knowns, unknowns, direction):
-    values = []
-    for sign in (1.0, -1.0):
-        shifted = {vr: point[vr] + sign * instance.steps[vr] * direction.get(vr, 0.0)
-                   for vr in point}
-        values.append(evaluate(instance, shifted, knowns, unknowns))
-    return values
 
 
 @pytest.mark.parametrize("interface", ["ModelExchange", "CoSimulation"])
@@ -190,7 +117,12 @@ def test_a_host_setting_states_straight_after_event_mode_is_served_with_one_warn
     fmu = FMU2Model(guid=description.guid, unzipDirectory=extract(str(path)),
                     modelIdentifier=description.modelExchange.modelIdentifier,
                     instanceName="importer")
-    fmu.instantiate(callbacks=None)
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(
+        lambda env, name, status, category, message: messages.append((status, message.decode())))
+    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    fmu.instantiate(callbacks=callbacks)
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
     fmu.setReal([0, 1], [math.radians(10), 0.1])
@@ -205,6 +137,8 @@ def test_a_host_setting_states_straight_after_event_mode_is_served_with_one_warn
     back = (c_double * 3)()
     fmu.getContinuousStates(back, 3)
     assert list(back) == list(states) and all(math.isfinite(d) for d in derivatives)
+    warnings = [text for status, text in messages if status == 1]
+    assert len(warnings) == 1 and "fmi2SetContinuousStates in EventMode" in warnings[0]
     model = COMPONENTS["TrackBushTorsion"].build_model(
         COMPONENTS["TrackBushTorsion"].default_parameters())
     assert list(derivatives) == list(model.rates(list(states), math.radians(10), 0.1, 1.0))

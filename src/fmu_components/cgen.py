@@ -244,7 +244,7 @@ class ModelCode:
         """The parameter values into m->K, then the derived constants and state scales."""
         e = self.equations
         printer = self.printer(derive=True)
-        lines = [f"for (int i = 0; i < MODEL_VARIABLES; i++) m->K[i] = values[i];"]
+        lines = ["for (int i = 0; i < MODEL_VARIABLES; i++) m->K[i] = values[i];"]
         body = printer.statements(e.constants, "return;")
         for name in e.constant_names():
             body.append(f"m->K[{self.constants[name]}] = {name};")

@@ -62,7 +62,7 @@ def rubber_equations(branches, elastic, geometric_slope, geometric_reference, un
     nested = [b for b in branches if b.nested is not None]
     plain = [b for b in branches if b.nested is None]
     n = 2 * len(nested)
-    u, h, v, x = Symbol("u"), Symbol("h"), Symbol("v"), Symbol("x")
+    u, h = Symbol("u"), Symbol("h")
     speed = Symbol("speed")
     held = [Assign(speed, abs(u))]
     constants, stage, jacobian, state_scale = [], [], [], []
