@@ -235,6 +235,12 @@ static fmi2Status settle(Guard *guard, fmi2Status status) {
     CLOSE(guard_error(guard, "%s: %u values announced but an array is NULL; call ignored",  \
                       function, (unsigned)(n)))
 
+/* Forward a get or set of values to pythonfmu, its arrays checked. */
+#define FORWARD_VALUES(function, call)                                                      \
+    GUARDED(c);                                                                             \
+    REFUSE_NULL(function, nvr, vr, value);                                                  \
+    CLOSE(settle(guard, engine.call(guard->engine, vr, nvr, value)))
+
 /* Forward one call to pythonfmu and report the worst status seen during it. */
 #define FORWARD(c, call)                                                                    \
     do {                                                                                    \
@@ -331,58 +337,42 @@ fmi2Status fmi2Reset(fmi2Component c) { FORWARD(c, reset(guard->engine)); }
 
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        fmi2Real value[]) {
-    GUARDED(c);
-    REFUSE_NULL("fmi2GetReal", nvr, vr, value);
-    CLOSE(settle(guard, engine.getReal(guard->engine, vr, nvr, value)));
+    FORWARD_VALUES("fmi2GetReal", getReal);
 }
 
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           fmi2Integer value[]) {
-    GUARDED(c);
-    REFUSE_NULL("fmi2GetInteger", nvr, vr, value);
-    CLOSE(settle(guard, engine.getInteger(guard->engine, vr, nvr, value)));
+    FORWARD_VALUES("fmi2GetInteger", getInteger);
 }
 
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           fmi2Boolean value[]) {
-    GUARDED(c);
-    REFUSE_NULL("fmi2GetBoolean", nvr, vr, value);
-    CLOSE(settle(guard, engine.getBoolean(guard->engine, vr, nvr, value)));
+    FORWARD_VALUES("fmi2GetBoolean", getBoolean);
 }
 
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                          fmi2String value[]) {
-    GUARDED(c);
-    REFUSE_NULL("fmi2GetString", nvr, vr, value);
-    CLOSE(settle(guard, engine.getString(guard->engine, vr, nvr, value)));
+    FORWARD_VALUES("fmi2GetString", getString);
 }
 
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        const fmi2Real value[]) {
-    GUARDED(c);
-    REFUSE_NULL("fmi2SetReal", nvr, vr, value);
-    CLOSE(settle(guard, engine.setReal(guard->engine, vr, nvr, value)));
+    FORWARD_VALUES("fmi2SetReal", setReal);
 }
 
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           const fmi2Integer value[]) {
-    GUARDED(c);
-    REFUSE_NULL("fmi2SetInteger", nvr, vr, value);
-    CLOSE(settle(guard, engine.setInteger(guard->engine, vr, nvr, value)));
+    FORWARD_VALUES("fmi2SetInteger", setInteger);
 }
 
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           const fmi2Boolean value[]) {
-    GUARDED(c);
-    REFUSE_NULL("fmi2SetBoolean", nvr, vr, value);
-    CLOSE(settle(guard, engine.setBoolean(guard->engine, vr, nvr, value)));
+    FORWARD_VALUES("fmi2SetBoolean", setBoolean);
 }
 
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                          const fmi2String value[]) {
-    GUARDED(c);
-    REFUSE_NULL("fmi2SetString", nvr, vr, value);
-    CLOSE(settle(guard, engine.setString(guard->engine, vr, nvr, value)));
+    FORWARD_VALUES("fmi2SetString", setString);
 }
 
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
