@@ -150,7 +150,7 @@ def evaluate(instance, point, knowns, unknowns):
 def random_points(name, count, rng):
     """Points in the range the thesis measured, states on the scale of their nominals, rates
     of both signs, and (for the tyre) both sides of contact."""
-    mean, amplitude, frequency = {"RoadWheelTyre": (3.5e-3, 2e-3, 1.0),
+    mean, amplitude, frequency = {"RoadWheelTyre": (2.5e-3, 3.5e-3, 1.0),  # in and out of contact
                                   "TrackBushRadial": (0.3e-3, 0.3e-3, 1.0),
                                   "TrackBushTorsion": (math.radians(10), math.radians(20), 1.0),
                                   "RotaryDamper": (0.0, 0.2, 1.0)}[name]

@@ -20,8 +20,11 @@ def test_quick_benchmark_runs_and_reports_finite_figures(all_fmus, tmp_path):
     assert set(data["costs"]["fmpy"]) == {"Floor", "Floor (pythonfmu)", *flavoured}
     assert set(data["costs"]["c_host"]) == {"Floor", *flavoured}
     for host in data["costs"].values():
-        for result in host.values():
-            assert all(math.isfinite(v) and v > 0 for v in result["do_step"] + result["cycle"])
+        for name, result in host.items():
+            assert all(math.isfinite(v) for v in result["do_step"])
+            assert all(math.isfinite(v) and v > 0 for v in result["cycle"])
+            # a floor's doStep is a few ns, the size of the clock's own cost taken off it
+            assert name.startswith("Floor") or all(v > 0 for v in result["do_step"])
     for flavour in ("native", "python"):
         assert set(data["model_alone"][flavour]) == set(all_fmus["native"])
         assert all(math.isfinite(v) and v > 0
