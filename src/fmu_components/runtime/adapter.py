@@ -2,14 +2,14 @@
 
 This is the only module that knows pythonfmu. Each FMU's entry script subclasses
 ``ComponentSlave`` and names its definition from the catalog; everything else (variables,
-units, parameter checks, the FMI call sequence, the co-simulation step, state save and
-restore, the modelDescription's units and structure) is done here once for all four
-components.
+parameter checks, the FMI call sequence, the co-simulation step, state save and restore)
+is done here once for all four components. The modelDescription is the project's own
+(fmu_components.model_description), the same writer as the native flavour's.
 
 How a call reports its outcome: the status it logs. pythonfmu itself can only return
 fmi2OK, fmi2Discard (do_step returned False) or fmi2Fatal (a Python exception, after which
 pythonfmu drops the instance and the next call crashes the host). The FMU's binary
-(native/fmi2_guard.c) returns the worst status logged during a call instead. So a method
+(c/fmi2_guard.c) returns the worst status logged during a call instead. So a method
 here never raises: it logs fmi2Error (or fmi2Warning, fmi2Discard) with a message that
 names the variable and the value, and leaves the instance as it was before the call.
 """
