@@ -228,10 +228,6 @@ def any_of(*tests):
     return result
 
 
-def negation(test):
-    return Not(test)
-
-
 def call(function, *arguments):
     return Call(function, arguments)
 
@@ -269,10 +265,6 @@ def total(terms):
     return result
 
 
-def symbols(*names):
-    return tuple(Symbol(name) for name in names)
-
-
 class Assign:
     __slots__ = ("target", "value")
 
@@ -307,11 +299,6 @@ class Message:
 
     def __init__(self, *parts):
         self.parts = parts
-
-
-def assignments(pairs):
-    """[Assign] from (name or node, value) pairs."""
-    return [Assign(Symbol(t) if isinstance(t, str) else t, v) for t, v in pairs]
 
 
 # --- what depends on what --------------------------------------------------------------
