@@ -1,9 +1,9 @@
-import importlib.util
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from fmu_components.build import build
 from fmu_components.runtime.catalog import COMPONENTS
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -11,19 +11,12 @@ FMU_NAMES = sorted(COMPONENTS)
 FLAVOURS = ("native", "python")
 
 
-def _load_build_script():
-    spec = importlib.util.spec_from_file_location("build_fmus", ROOT / "build_fmus.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 @pytest.fixture(scope="session")
 def all_fmus(tmp_path_factory):
     """Both flavours of the four FMUs, {flavour: {name: path}}, built once per test session
     from the current source."""
     destination = tmp_path_factory.mktemp("fmus")
-    return _load_build_script().build(FMU_NAMES, destination)
+    return build(FMU_NAMES, destination)
 
 
 class Flavour(dict):

@@ -100,8 +100,13 @@ def write_csv(table, file):
         writer.writerow([float(value) for value in row])
 
 
-def main(argv=None):
-    parser = argparse.ArgumentParser(description="Write an FMU input CSV (SI units).")
+EXAMPLES = """examples:
+  fmu-components signal RoadWheelTyre sine --mean 3.5e-3 --amplitude 1e-3 --frequency 1 > in.csv
+  fmu-components signal TrackBushTorsion ramp --mean 0.1745 --amplitude 0.2618 --stop-time 200
+"""
+
+
+def configure(parser):
     parser.add_argument("fmu", choices=sorted(COMPONENTS))
     parser.add_argument("shape", choices=["sine", "ramp"])
     parser.add_argument("--mean", type=float, default=0.0, help="sine mean, or ramp start")
@@ -110,14 +115,22 @@ def main(argv=None):
     parser.add_argument("--ramp-time", type=float, default=0.1, help="ramp duration (s)")
     parser.add_argument("--stop-time", type=float, default=2.0)
     parser.add_argument("--step", type=float, default=1e-3)
-    args = parser.parse_args(argv)
+
+
+def run_command(args):
     t = time_grid(args.stop_time, args.step)
     if args.shape == "sine":
         x = sine(t, args.mean, args.amplitude, args.frequency)
     else:
         x = ramp_and_hold(t, args.mean, args.mean + args.amplitude, args.ramp_time)
     write_csv(input_table(args.fmu, t, x), sys.stdout)
+    return 0
+
+
+def main(argv=None):
+    from .cli import standalone
+    return standalone("signal", argv)
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

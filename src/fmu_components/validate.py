@@ -34,7 +34,6 @@ from tqdm import tqdm
 from . import cases as programme
 from .runtime.catalog import COMPONENTS
 
-ROOT = Path(__file__).resolve().parents[2]
 STRICT_LIMIT = 0.5  # % of the reference's peak-to-peak range
 CROSS_CHECK_LIMIT = 0.1  # share of samples outside the band
 
@@ -115,28 +114,35 @@ def table(outcomes):
                      for row in lines)
 
 
-def main(argv=None):
-    parser = argparse.ArgumentParser(
-        description="Run the thesis test programme through the built FMUs with fmpy and "
-                    "compare with the independent reference; non-zero exit on any failure.")
+EXAMPLES = """examples:
+  fmu-components validate                                   every case, report in reports/validation
+  fmu-components validate --fmu TrackBushTorsion --case 'II_*'
+  fmu-components validate --fmus fmus/python --report reports/validation-python
+"""
+
+
+def configure(parser):
     parser.add_argument("--fmu", action="append", choices=sorted(COMPONENTS),
                         help="only this FMU (repeatable)")
     parser.add_argument("--case", action="append", metavar="GLOB",
                         help="only cases whose name or FMU/name matches (repeatable)")
-    parser.add_argument("--report", type=Path, default=ROOT / "reports" / "validation",
+    parser.add_argument("--report", type=Path, default=Path("reports") / "validation",
                         help="folder for the plots and summary.md (default reports/validation)")
-    parser.add_argument("--fmus", type=Path, default=ROOT / "fmus",
+    parser.add_argument("--fmus", type=Path, default=Path("fmus"),
                         help="folder holding the built <FMU>.fmu files (default fmus/)")
     parser.add_argument("--reference-data", type=Path, default=programme.REFERENCE_DATA)
-    args = parser.parse_args(argv)
+
+
+def run_command(args):
+    from .cli import UsageError
 
     selected = programme.select(args.fmu, args.case)
     if not selected:
-        parser.error("no case matches")
+        raise UsageError("no case matches: see the case names in reference_data/<FMU>/")
     missing = sorted({str(args.fmus / f"{c.fmu}.fmu") for c in selected
                       if not (args.fmus / f"{c.fmu}.fmu").exists()})
     if missing:
-        parser.error(f"not built: {', '.join(missing)} (run build_fmus.py)")
+        raise UsageError(f"not built: {', '.join(missing)} (run fmu-components build first)")
 
     outcomes = []
     # The bar draws on a terminal; in a CI log (no terminal) it stays out of the way.
@@ -157,6 +163,11 @@ def main(argv=None):
           f"{STRICT_LIMIT:g} %, cross-check <= {100 * CROSS_CHECK_LIMIT:g} % outside the band); "
           f"report: {summary}")
     return 1 if failed else 0
+
+
+def main(argv=None):
+    from .cli import standalone
+    return standalone("validate", argv)
 
 
 if __name__ == "__main__":

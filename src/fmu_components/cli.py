@@ -1,0 +1,71 @@
+"""fmu-components: the project's command-line tool.
+
+    fmu-components build | validate | signal | ... --help
+
+Each subcommand lives in its own module, which provides ``configure(parser)`` (its
+arguments, with an example in ``EXAMPLES``) and ``run_command(args)`` (returns the exit
+status). A module's own ``main`` runs the same subcommand on its own
+(``python -m fmu_components.validate``). A mistake the user can fix raises ``UsageError``:
+one line that says what to do, exit status 2, no traceback.
+"""
+
+import argparse
+import importlib
+import sys
+
+# name -> (module, one line of help). Modules are imported only when their command runs.
+COMMANDS = {
+    "build": ("fmu_components.build", "build the FMUs of both flavours and run each once"),
+    "validate": ("fmu_components.validate",
+                 "run the thesis test programme through the built FMUs against the references"),
+    "signal": ("fmu_components.signals", "write an input CSV for an FMU (SI units)"),
+}
+
+
+class UsageError(Exception):
+    """A mistake on the user's side, said in one line with what to do about it."""
+
+
+def _add_command(subparsers, name):
+    module_name, summary = COMMANDS[name]
+    module = importlib.import_module(module_name)
+    parser = subparsers.add_parser(
+        name, help=summary, description=(module.__doc__ or summary).strip().splitlines()[0],
+        epilog=getattr(module, "EXAMPLES", None),
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    module.configure(parser)
+    parser.set_defaults(run_command=module.run_command)
+    return parser
+
+
+def _parser(names):
+    parser = argparse.ArgumentParser(
+        prog="fmu-components",
+        description="Tracked-vehicle running-gear components as FMI 2.0 FMUs: build, "
+                    "validate and drive them.")
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    return parser, {name: _add_command(subparsers, name) for name in names}
+
+
+def _run(parser, args):
+    try:
+        return args.run_command(args)
+    except UsageError as error:
+        parser.exit(2, f"{parser.prog}: error: {error}\n")
+
+
+def main(argv=None):
+    argv = sys.argv[1:] if argv is None else argv
+    # Build only the subcommand asked for, so that one command's imports never slow another.
+    wanted = [a for a in argv[:1] if a in COMMANDS]
+    parser, subparsers = _parser(wanted or list(COMMANDS))
+    args = parser.parse_args(argv)
+    return _run(subparsers[args.command], args)
+
+
+def standalone(name, argv=None):
+    """The subcommand `name` as a program of its own (a module's ``main``)."""
+    _, subparsers = _parser([name])
+    parser = subparsers[name]
+    parser.prog = f"fmu-components {name}"
+    return _run(parser, parser.parse_args(argv))
