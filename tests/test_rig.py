@@ -181,3 +181,18 @@ def test_wrong_requests_are_one_line(tmp_path, capsys, arguments, message):
     assert stop.value.code == 2
     error = capsys.readouterr().err
     assert message in error and len(error.strip().splitlines()) == 1
+
+
+def test_structure_comparison_shows_what_the_thesis_saw(tmp_path):
+    """Section 6.3-6.4: the four-element model encloses the dual sine's small loops and
+    relaxes fast at first; the final model less so; the simplified Haupt and Sedlan model
+    least."""
+    assert cli.main(["rig", "--component", "TrackBushTorsion", "--compare-structures",
+                     "--out", str(tmp_path)]) == 0
+    assert (tmp_path / "structures.png").stat().st_size > 1000
+    assert "| four-element | Figs. 6.3-4, 6.3-5 |" in (tmp_path / "structures.md").read_text()
+    table = {row["structure"]: row for row in rig.compare_structures(tmp_path, processes=1)}
+    loops = {s: row["small_loop_area_mean"] for s, row in table.items()}
+    assert loops["four-element"] > loops["final"] > loops["haupt-sedlan"]
+    early = {s: row["relaxed_0.1s"] for s, row in table.items()}
+    assert early["four-element"] > early["final"] > early["haupt-sedlan"]

@@ -253,8 +253,12 @@ def relaxation_record(setup, preload, step, rise=RISE_TIME, hold=HOLD_TIME, per_
     decades = math.log10(hold / first)
     after = first * 10.0 ** (np.arange(int(math.ceil(decades * per_decade)) + 1) / per_decade)
     after = after[after < hold]
-    # beyond LONGEST_STEP the hold goes on in steps of LONGEST_STEP
-    spaced = [t for t in after if t <= LONGEST_STEP or t == after[0]]
+    # once the log spacing would exceed LONGEST_STEP the hold goes on in steps of it
+    spaced = [after[0]]
+    for t in after[1:]:
+        if t - spaced[-1] > LONGEST_STEP:
+            break
+        spaced.append(t)
     spaced += list(np.arange(spaced[-1] + LONGEST_STEP, hold, LONGEST_STEP))
     times = np.concatenate([ramp, rise + np.array(spaced + [hold])])
     deflection = np.where(times < rise, preload + ramp_rate * times, preload + step)
@@ -353,6 +357,14 @@ def _extract_fmu(path, component, structure):
     return extract(str(path), folder)
 
 
+def _cores():
+    """The cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
 def _point_task(arguments):
     setup, point, options = arguments
     return run_point(setup, *point, **options)
@@ -372,7 +384,7 @@ def run_rig(component, preloads, amplitudes, frequencies, params=None, structure
     points = [(p, a, f) for p in preloads for a in amplitudes for f in frequencies]
     options = dict(samples_per_cycle=samples_per_cycle, steady=steady, max_cycles=max_cycles)
     tasks = [(setup, point, options) for point in points]
-    processes = min(processes or os.cpu_count() or 1, len(tasks))
+    processes = min(processes or _cores(), len(tasks))
     if processes <= 1:
         return [_point_task(task) for task in tasks]
     with get_context("fork").Pool(processes) as pool:
@@ -438,7 +450,9 @@ def plot_rows(rows, out, component, relaxation=None, dpi=200):
                                key=lambda r: getattr(r, against))
                 if not curve:
                     continue
-                name = f"{by} {level:g}" + (f", preload {preload:g}" if len(preloads) > 1 else "")
+                unit = "Hz" if by == "frequency" else length
+                name = f"{by} {level:g} {unit}" + (
+                    f", preload {preload:g} {length}" if len(preloads) > 1 else "")
                 style = "o-" if len(curve) > 1 else "o"
                 for axis, (quantity, _) in zip(axes[:, 0], quantities):
                     axis.plot([getattr(r, against) for r in curve],
@@ -462,18 +476,18 @@ def plot_rows(rows, out, component, relaxation=None, dpi=200):
 
 
 def plot_relaxation(records, path, component, dpi=200, title=None):
-    """records: {label: (times, deflection, force, rise)}; the force against the time since
-    the ramp began, log axis."""
+    """records: {label: (times, deflection, force, rise)}; the force over the hold against
+    the time since the ramp ended, log axis (as the thesis plots relaxation, Fig. 5.6-1)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     _, load, _ = units(component)
     figure, axis = plt.subplots(figsize=(6.5, 3.6))
-    for label, (times, _, force, _) in records.items():
-        shown = times > 0.0
-        axis.semilogx(times[shown], force[shown], label=label)
-    axis.set_xlabel("time since the step began (s)")
+    for label, (times, _, force, rise) in records.items():
+        shown = times > rise
+        axis.semilogx(times[shown] - rise, force[shown], label=label)
+    axis.set_xlabel("time since the ramp ended (s)")
     axis.set_ylabel(f"{COMPONENTS[component].outputs[0].name} ({load})")
     axis.grid(True, which="both", alpha=0.3)
     axis.legend(fontsize=8)
@@ -523,16 +537,18 @@ def dual_sine_record(setup):
     return times, deflection, force
 
 
-def secondary_loop_areas(times, deflection, force, start=DUAL_SINE_SHOWN):
-    """The loop area (integral of T dx) of each 1.5 Hz cycle of the dual sine from `start`:
-    positive where the small cycles enclose loops that dissipate, as the measured ones do
-    (Fig. 5.8-1)."""
-    frequency = DUAL_SINE[1][1][1]
+def secondary_loop_areas(times, force, start=DUAL_SINE_SHOWN):
+    """The energy the 1.5 Hz motion of the dual sine dissipates in each of its cycles from
+    `start`: the integral of T dx2 over the cycle, x2 the 1.5 Hz component alone (it closes
+    each cycle; the 0.1 Hz motion does not). It is the area of the small loops the measured
+    response encloses (Fig. 5.8-1): near zero where the small motion meets a stiffness alone."""
+    amplitude, frequency = DUAL_SINE[1][1]
     per_cycle = int(round(1.0 / (frequency * DUAL_SINE_STEP)))
+    small = amplitude * np.sin(2 * math.pi * frequency * times)
     first = int(np.searchsorted(times, start))
     areas = []
     while first + per_cycle <= len(times) - 1:
-        x, f = deflection[first:first + per_cycle + 1], force[first:first + per_cycle + 1]
+        x, f = small[first:first + per_cycle + 1], force[first:first + per_cycle + 1]
         areas.append(float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(x))))
         first += per_cycle
     return np.array(areas)
@@ -556,7 +572,7 @@ def compare_structures(out, processes=None, dpi=200):
 
     out.mkdir(parents=True, exist_ok=True)
     structures = [s for s in STRUCTURES if s in structures_of("TrackBushTorsion")]
-    processes = min(processes or os.cpu_count() or 1, len(structures))
+    processes = min(processes or _cores(), len(structures))
     if processes > 1:
         with get_context("fork").Pool(processes) as pool:
             results = pool.map(_structure_task, structures, chunksize=1)
@@ -569,9 +585,9 @@ def compare_structures(out, processes=None, dpi=200):
     for structure, (t, x, f), (tr, xr, fr) in results:
         shown = t >= DUAL_SINE_SHOWN
         loops.plot(np.degrees(x[shown]), f[shown], lw=0.8, label=structure)
-        held = tr >= RISE_TIME
-        relaxation.semilogx(tr[held] - RISE_TIME + 1e-4, fr[held], label=structure)
-        areas = secondary_loop_areas(t, x, f)
+        held = tr > RISE_TIME
+        relaxation.semilogx(tr[held] - RISE_TIME, fr[held], label=structure)
+        areas = secondary_loop_areas(t, f)
         peak = fr[np.argmin(np.abs(tr - RISE_TIME))]
         final = fr[-1]
         row = {"structure": structure, "thesis": figures[structure],
@@ -602,7 +618,8 @@ def compare_structures(out, processes=None, dpi=200):
 
 
 def structures_table(table):
-    head = ("| structure | thesis | dual sine range (N.m) | 1.5 Hz loop area, mean / min (N.m.rad) "
+    head = ("| structure | thesis | dual sine range (N.m) | 1.5 Hz loops: energy per cycle, mean / "
+            "min (J) "
             "| torque at the end of the ramp (N.m) | "
             + " | ".join(f"{t:g} s" for t in RELAXATION_TIMES) + " |")
     lines = [head, "|" + "---|" * (5 + len(RELAXATION_TIMES))]
@@ -702,7 +719,8 @@ def _run(args):
     record = relaxation_record(setup, args.preload[0], step, args.rise, args.hold)
     files = write_rows(rows, args.out, args.component)
     files.append(write_relaxation(record, args.out / "relaxation.csv", args.component))
-    label = f"{args.preload[0]:g} to {args.preload[0] + step:g}"
+    length = units(args.component)[0]
+    label = f"{args.preload[0]:g} to {args.preload[0] + step:g} {length} in {args.rise:g} s"
     files += plot_rows(rows, args.out, args.component, {label: (*record, args.rise)})
     _print_rows(rows, args.component)
     unsteady = [r for r in rows if not r.steady]
