@@ -21,10 +21,10 @@ from fmu_components import reference
 from fmu_components.build import build
 from fmu_components.runtime.catalog import (COMPONENTS, STRUCTURES, component_definition,
                                              structures_of)
-from fmu_components.runtime.cosim import CoSimulation
 from fmu_components.signals import THESIS_SINES, input_table, secant_rates, sine, time_grid
 
 from conftest import peak_to_peak
+from test_maxwell_closed_forms import drive
 
 RUBBER = ["RoadWheelTyre", "TrackBushRadial", "TrackBushTorsion"]
 OTHER_STRUCTURES = [(name, s) for s in STRUCTURES if s != "final" for name in RUBBER
@@ -80,18 +80,6 @@ def test_parameter_and_state_names():
     assert [v.name for v in final.states] == ["state.s", "state.w", "state.r"]
 
 
-def drive(model, times, deflection, rates):
-    """The load after each step, read at the deflection the step moved to."""
-    cosimulation = CoSimulation(model, start_time=times[0], deflection=deflection[0],
-                                rate=rates[0])
-    loads = [cosimulation.outputs()[0]]
-    for k in range(len(times) - 1):
-        assert cosimulation.set_inputs(deflection[k], rates[k]) is None
-        assert cosimulation.do_step(times[k], times[k + 1] - times[k]) is None
-        loads.append(cosimulation.outputs()[0])
-    return np.array(loads)
-
-
 @pytest.mark.parametrize("name, structure", [(n, "final") for n in RUBBER] + OTHER_STRUCTURES)
 def test_python_model_matches_the_reference(name, structure):
     mean, amplitude, frequency = THESIS_SINES[name]
@@ -99,7 +87,8 @@ def test_python_model_matches_the_reference(name, structure):
     x = sine(t, mean, amplitude, frequency)
     rates = secant_rates(t, x)
     definition = component_definition(name, structure)
-    loads = drive(definition.build_model(definition.default_parameters()), t, x, rates)
+    loads = drive(definition.build_model(definition.default_parameters()), t, x,
+                  rtol=definition.default_experiment["tolerance"])
     expected = reference.solve_held_rate(name, t, x, rates, structure=structure)
     load = reference.LOAD_NAMES[name]
     error = np.max(np.abs(loads - expected[load])) / peak_to_peak(expected[load])

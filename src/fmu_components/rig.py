@@ -159,6 +159,22 @@ def _driver(setup, deflection, rate):
     return DRIVERS[setup.engine](setup, deflection, rate)
 
 
+def drive(setup, times, deflection, rates):
+    """The load at every sample of any input history, from the relaxed state at its start:
+    at each sample the deflection and rate are set and the load read, then the step to the
+    next sample holds the rate (spec section 4)."""
+    driver = _driver(setup, deflection[0], rates[0])
+    force = np.empty(len(times))
+    try:
+        for k in range(len(times)):
+            force[k] = driver.force(deflection[k], rates[k])
+            if k + 1 < len(times):
+                driver.step(times[k], times[k + 1] - times[k])
+    finally:
+        driver.close()
+    return force
+
+
 # --- the sine test -------------------------------------------------------------------------
 
 def sine_record(setup, preload, amplitude, frequency, cycles, samples_per_cycle=SAMPLES_PER_CYCLE):
@@ -263,16 +279,7 @@ def relaxation_record(setup, preload, step, rise=RISE_TIME, hold=HOLD_TIME, per_
     times = np.concatenate([ramp, rise + np.array(spaced + [hold])])
     deflection = np.where(times < rise, preload + ramp_rate * times, preload + step)
     rates = np.where(times < rise, ramp_rate, 0.0)
-    driver = _driver(setup, preload, ramp_rate)
-    force = np.empty(len(times))
-    try:
-        for k in range(len(times)):
-            force[k] = driver.force(deflection[k], rates[k])
-            if k + 1 < len(times):
-                driver.step(times[k], times[k + 1] - times[k])
-    finally:
-        driver.close()
-    return times, deflection, force
+    return times, deflection, drive(setup, times, deflection, rates)
 
 
 # --- parameters ----------------------------------------------------------------------------
@@ -525,16 +532,7 @@ def dual_sine_record(setup):
     times = np.arange(int(round(DUAL_SINE_STOP / DUAL_SINE_STEP)) + 1) * DUAL_SINE_STEP
     deflection = mean + sum(a * np.sin(2 * math.pi * f * times) for a, f in components)
     rates = sum(a * 2 * math.pi * f * np.cos(2 * math.pi * f * times) for a, f in components)
-    driver = _driver(setup, deflection[0], rates[0])
-    force = np.empty(len(times))
-    try:
-        for k in range(len(times)):
-            force[k] = driver.force(deflection[k], rates[k])
-            if k + 1 < len(times):
-                driver.step(times[k], DUAL_SINE_STEP)
-    finally:
-        driver.close()
-    return times, deflection, force
+    return times, deflection, drive(setup, times, deflection, rates)
 
 
 def secondary_loop_areas(times, force, start=DUAL_SINE_SHOWN):
