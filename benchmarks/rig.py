@@ -38,9 +38,10 @@ def timed(label, **options):
     rows = rig.run_rig("TrackBushRadial", SWEEP["preloads"], SWEEP["amplitudes"],
                        SWEEP["frequencies"], **options)
     wall = time.perf_counter() - started
-    cycles = sum(r.cycles for r in rows)
-    print(f"{label:34s} {wall:7.2f} s  {len(rows)} points, {cycles} cycles, "
-          f"{wall / (cycles * rig.SAMPLES_PER_CYCLE) * 1e6:6.1f} us per step")
+    setup = rig.make_setup("TrackBushRadial")
+    steps = sum(r.cycles * rig.cycle_samples(setup, r.frequency) for r in rows)
+    print(f"{label:34s} {wall:7.2f} s  {len(rows)} points, {steps} steps, "
+          f"{wall / steps * 1e6:6.1f} us per step")
     return wall, rows
 
 

@@ -84,7 +84,8 @@ def test_secant_rates_follow_the_continuous_sine(name, preload, amplitude, frequ
 
 
 def test_steady_state_is_where_a_long_run_settles():
-    """TrackBushRadial at 20 Hz, the slowest point of the documented sweep to settle."""
+    """TrackBushRadial at 0.3 mm and 20 Hz, among the slowest points of the documented sweep
+    to settle (docs/rig.md)."""
     setup = rig.make_setup("TrackBushRadial")
     row = rig.run_point(setup, 3e-4, 3e-4, 20.0)
     assert row.steady and row.cycles > rig.MIN_CYCLES
