@@ -20,7 +20,6 @@ import argparse
 import math
 import time
 
-import numpy as np
 
 from fmu_components import reference, rig
 from fmu_components.harmonics import first_harmonic
