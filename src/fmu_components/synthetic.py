@@ -1,0 +1,84 @@
+"""Synthetic measurements for checking the fit: a rubber component with parameter values
+other than the thesis's, driven through the thesis's test programme (``cases``), solved by
+the independent reference solver (``reference.solve_smooth``: the continuous input, scipy
+Radau at rtol 1e-10, no code shared with the FMUs) and sampled with Gaussian noise.
+"""
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from . import reference
+from .fit import History
+from .runtime.catalog import COMPONENTS
+
+SAMPLES_PER_CYCLE = 200
+DIFFERENCE_STEP = 1e-7  # s, central difference of the programme's path for its rate
+
+
+def reference_spec(component, values):
+    """The reference solver's RubberSpec for FMU parameter values (name -> SI); names left
+    out keep the thesis values."""
+    v = dict(COMPONENTS[component].default_parameters(), **values)
+    return reference.RubberSpec(
+        elements=[(v[f"k{i}"], v[f"c{i}"], v[f"xi{i}"]) for i in (1, 2, 3)],
+        elastic=tuple(v[f"elastic.a{p}"] for p in range(4)), h=v["geometric.h"],
+        x_ref=v["geometric.x_ref"], unilateral=reference.rubber_spec(component).unilateral)
+
+
+def scaled(component, factors):
+    """The thesis values with each name's factor applied; a factor for 'k', 'c' or 'xi'
+    scales that quantity in every Maxwell element."""
+    values = dict(COMPONENTS[component].default_parameters())
+    for name, factor in factors.items():
+        targets = [f"{name}{i}" for i in (1, 2, 3)] if name in ("k", "c", "xi") else [name]
+        for target in targets:
+            values[target] *= factor
+    return values
+
+
+def case_times(case):
+    """The case's time grid, refined to SAMPLES_PER_CYCLE samples per cycle of a sine."""
+    frequency = _frequency(case)
+    step = case.step if frequency is None else min(case.step, 1.0 / frequency / SAMPLES_PER_CYCLE)
+    n = int(round(case.stop_time / step))
+    return np.arange(n + 1) * step
+
+
+def _frequency(case):
+    if case.test == "III":
+        return float(case.name.split("_")[-1].rstrip("Hz"))
+    if case.test in ("I", "II"):
+        return 1.0
+    return None
+
+
+def measure(case, values, noise=0.005, seed=0):
+    """A History of the case under these parameter values: the reference solution, plus
+    Gaussian noise of standard deviation `noise` times its peak-to-peak force."""
+    times = case_times(case)
+
+    def rate(t):
+        return (case.path(t + DIFFERENCE_STEP) - case.path(t - DIFFERENCE_STEP)) / (
+            2 * DIFFERENCE_STEP)
+
+    solution = reference.solve_smooth(case.fmu, times, case.path, rate,
+                                      spec=reference_spec(case.fmu, values))
+    force = solution[reference.LOAD_NAMES[case.fmu]]
+    generator = np.random.default_rng(seed)
+    noisy = force + generator.normal(0.0, noise * np.ptp(force), len(force))
+    return History(Path(f"{case.name}.csv"), times, case.path(times), noisy), force
+
+
+def write_history(path, history):
+    """A DATA.csv (time,deflection,force)."""
+    np.savetxt(path, np.column_stack([history.times, history.deflection, history.force]),
+               delimiter=",", header="time,deflection,force", comments="", fmt="%.17g")
+    return path
+
+
+def peak_to_peak_error(predicted, truth):
+    """Max |predicted - truth| in % of the truth's peak-to-peak."""
+    return float(np.max(np.abs(np.asarray(predicted) - truth)) / np.ptp(truth) * 100.0)
+
