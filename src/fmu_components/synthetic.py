@@ -4,7 +4,6 @@ the independent reference solver (``reference.solve_smooth``: the continuous inp
 Radau at rtol 1e-10, no code shared with the FMUs) and sampled with Gaussian noise.
 """
 
-import math
 from pathlib import Path
 
 import numpy as np
@@ -55,20 +54,25 @@ def _frequency(case):
 
 
 def measure(case, values, noise=0.005, seed=0):
-    """A History of the case under these parameter values: the reference solution, plus
-    Gaussian noise of standard deviation `noise` times its peak-to-peak force."""
-    times = case_times(case)
+    """A History of a programme case under these parameter values (see measure_path) and
+    its noise-free force."""
+    return measure_path(case.fmu, f"{case.name}.csv", case_times(case), case.path, values,
+                        noise, seed)
 
+
+def measure_path(component, label, times, path, values, noise=0.005, seed=0):
+    """A History of the deflection path(t) sampled at `times`: the reference solution plus
+    Gaussian noise of standard deviation `noise` times its peak-to-peak force; and the
+    noise-free force."""
     def rate(t):
-        return (case.path(t + DIFFERENCE_STEP) - case.path(t - DIFFERENCE_STEP)) / (
-            2 * DIFFERENCE_STEP)
+        return (path(t + DIFFERENCE_STEP) - path(t - DIFFERENCE_STEP)) / (2 * DIFFERENCE_STEP)
 
-    solution = reference.solve_smooth(case.fmu, times, case.path, rate,
-                                      spec=reference_spec(case.fmu, values))
-    force = solution[reference.LOAD_NAMES[case.fmu]]
+    solution = reference.solve_smooth(component, times, path, rate,
+                                      spec=reference_spec(component, values))
+    force = solution[reference.LOAD_NAMES[component]]
     generator = np.random.default_rng(seed)
     noisy = force + generator.normal(0.0, noise * np.ptp(force), len(force))
-    return History(Path(f"{case.name}.csv"), times, case.path(times), noisy), force
+    return History(Path(label), times, path(times), noisy), force
 
 
 def write_history(path, history):
