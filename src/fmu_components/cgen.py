@@ -265,7 +265,8 @@ class ModelCode:
         return self.function(
             "void model_start(ModelData *m, const double *state, double x, double *y)",
             self.equations.start_statements(), ["state", "x"], fail="return;",
-            prologue=["(void)x;"], epilogue=[f"y[{i}] = y{i};" for i in range(n)])
+            prologue=["(void)x;"] + _unused(n, "state", "y"),
+            epilogue=[f"y[{i}] = y{i};" for i in range(n)])
 
     def _factor(self):
         n = self.equations.integrated
@@ -281,8 +282,8 @@ class ModelCode:
         return self.function(
             "int model_factor(ModelData *m, const double *y, double u, double h, double *w)",
             statements, ["u", "h", *Y],
-            prologue=[f"const double {name} = y[{i}];" for i, name in enumerate(Y)] + ["(void)u;"],
-            epilogue=epilogue)
+            prologue=[f"const double {name} = y[{i}];" for i, name in enumerate(Y)] + ["(void)u;"]
+            + _unused(n, "y"), epilogue=epilogue)
 
     def _step(self):
         n = self.equations.integrated
@@ -291,7 +292,8 @@ class ModelCode:
         statements = step_statements(self.tableau, self.equations,
                                      [Symbol(name) for name in self.scale_names])
         prologue = ([f"const double {name} = y[{i}];" for i, name in enumerate(y)]
-                    + [f"const double {name} = w[{i}];" for i, name in enumerate(inverse)])
+                    + [f"const double {name} = w[{i}];" for i, name in enumerate(inverse)]
+                    + _unused(n, "y", "u", "h", "rtol", "w", "y_new"))
         epilogue = ([f"y_new[{i}] = Y{i};" for i in range(n)]
                     + ["*error_norm = error;", "return 1;"])
         return self.function(
@@ -427,3 +429,9 @@ class ModelCode:
             prologue=["(void)x, (void)indicators;"], fail="return;",
             epilogue=lambda printer: [f"indicators[{i}] = {printer.expression(e)};"
                                       for i, e in enumerate(view.event_indicators)])
+
+
+def _unused(integrated, *names):
+    """A model that integrates nothing (every state in closed form) still prints the
+    integrator's functions, which the runtime never calls: their arguments go unread."""
+    return [f"(void){', (void)'.join(names)};"] if integrated == 0 else []

@@ -1,6 +1,6 @@
 """fmu-components: the project's command-line tool.
 
-    fmu-components build | validate | signal | ... --help
+    fmu-components build | validate | signal | rig | ... --help
 
 Each subcommand lives in its own module, which provides ``configure(parser)`` (its
 arguments, with an example in ``EXAMPLES``) and ``run_command(args)`` (returns the exit
@@ -20,6 +20,9 @@ COMMANDS = {
                  "run the thesis test programme through the built FMUs against the references"),
     "signal": ("fmu_components.signals", "write an input CSV for an FMU (SI units)"),
     "fit": ("fmu_components.fit", "identify a rubber component's parameters from measured data"),
+    "rig": ("fmu_components.rig", "virtual test rig: dynamic stiffness, loss angle, energy per "
+                                  "cycle and secant stiffness of a component at periodic steady "
+                                  "state, and its step-and-hold relaxation"),
 }
 
 

@@ -54,9 +54,9 @@ UNIT_FACTOR = 30.0  # a magnitude this far from the component's scale is a unit 
 FAILED_RESIDUAL = 10.0  # per sample, for a simulation the FMU refused (10 x peak-to-peak)
 
 # What is fitted, and how each parameter is scaled.
-MAXWELL = tuple(f"{q}{i}" for i in (1, 2, 3) for q in ("k", "c", "xi"))
+MAXWELL = ("k", "c", "xi")  # k{K}, c{K}, xi{K} of each Maxwell element K of the structure
 ELASTIC = tuple(f"elastic.a{p}" for p in range(4))
-FITTED = MAXWELL + ELASTIC + ("geometric.h",)
+GEOMETRIC = ("geometric.h",)
 LOG_SPAN = {"k": math.log(100.0), "c": math.log(100.0), "xi": math.log(1000.0)}
 SYMLOG_RESOLUTION = 1e-3  # asinh scaling: linear below this fraction of a coefficient's scale
 SYMLOG_SPAN = 100.0  # bound: this many times a coefficient's scale
@@ -248,11 +248,23 @@ class Scaling:
         return self.reference * (math.exp(u) if self.kind == "log" else math.cosh(u))
 
 
+def maxwell_quantity(name):
+    """'k', 'c' or 'xi' for a Maxwell element's parameter (k1, xi3, ...), else None."""
+    quantity = name.rstrip("0123456789")
+    return quantity if quantity in MAXWELL and quantity != name else None
+
+
+def fitted_names(definition):
+    """The parameters the fit identifies, in the catalog's order."""
+    return [p.name for p in definition.parameters
+            if maxwell_quantity(p.name) or p.name in ELASTIC + GEOMETRIC]
+
+
 def scalings(names, thesis, deflection_scale, force_scale):
     result = []
     for name in names:
-        if name in MAXWELL:
-            span = LOG_SPAN[name.rstrip("123")]
+        if maxwell_quantity(name):
+            span = LOG_SPAN[maxwell_quantity(name)]
             result.append(Scaling(name, "log", thesis[name], -span, span))
         else:
             power = int(name[-1]) if name in ELASTIC else -1  # h: per deflection
@@ -432,7 +444,7 @@ def fit(component, tests, fix=(), structure="final", starts=4, jobs=None, seed=0
     definition = component_definition(component, structure)
     thesis = definition.default_parameters()
     start = dict(thesis, **(start_values or {}))
-    free_names = [n for n in FITTED if n in thesis and n not in set(fix)]
+    free_names = [n for n in fitted_names(definition) if n not in set(fix)]
     if not free_names:
         raise UsageError("every fitted parameter is fixed; leave at least one free")
     deflection_scale, force_scale = data_scales(tests, definition)
@@ -498,8 +510,8 @@ def configure(parser):
     parser.add_argument("--component", required=True, metavar="NAME",
                         help=f"the FMU's name: {', '.join(RUBBER)}")
     parser.add_argument("--fix", nargs="+", default=[], metavar="NAME",
-                        help=f"parameters kept at their thesis values (fitted: "
-                             f"{' '.join(FITTED)})")
+                        help="parameters kept at their thesis values (fitted: k1 c1 xi1 ... "
+                             "of each Maxwell element, elastic.a0..a3, geometric.h)")
     parser.add_argument("--structure", default="final", choices=STRUCTURES,
                         help="the thesis's model structure (default: final)")
     parser.add_argument("--out", required=True, type=Path, metavar="PARAMS.json",
@@ -515,13 +527,16 @@ def run_command(args):
     if args.component not in RUBBER:
         raise UsageError(f"--component {args.component}: the fit identifies a rubber "
                          f"component's parameters; give one of {', '.join(RUBBER)}")
-    unknown = [n for n in args.fix if n not in FITTED]
+    try:
+        definition = component_definition(args.component, args.structure)
+    except KeyError as error:
+        raise UsageError(f"--structure {args.structure}: {error.args[0]}") from None
+    unknown = [n for n in args.fix if n not in fitted_names(definition)]
     if unknown:
-        raise UsageError(f"--fix {unknown[0]}: not a fitted parameter; give any of "
-                         f"{' '.join(FITTED)}")
+        raise UsageError(f"--fix {unknown[0]}: not a fitted parameter of {args.component} "
+                         f"({args.structure}); give any of {' '.join(fitted_names(definition))}")
     if args.starts < 1:
         raise UsageError("--starts must be 1 or more")
-    definition = component_definition(args.component, args.structure)
     tests = [read_data(path, definition) for path in args.data]
     result = fit(args.component, tests, args.fix, args.structure, args.starts, args.jobs)
     args.out.parent.mkdir(parents=True, exist_ok=True)

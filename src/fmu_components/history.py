@@ -26,24 +26,16 @@ from pathlib import Path
 
 import numpy as np
 
-from .runtime.catalog import COMPONENTS
+from .runtime import catalog
+from .runtime.catalog import component_definition
 from .signals import secant_rates
 
 DRIVER = "history.c"
-STRUCTURES = ("final",)
+STRUCTURES = tuple(catalog.STRUCTURES)
 
 
 class HistoryError(RuntimeError):
     """A history the FMU refused (its message says why)."""
-
-
-def component_definition(name, structure="final"):
-    """The catalog definition of a component in one of the thesis's model structures."""
-    if name not in COMPONENTS:
-        raise KeyError(f"unknown component {name!r}: one of {', '.join(sorted(COMPONENTS))}")
-    if structure != "final":
-        raise KeyError(f"unknown structure {structure!r}: one of {', '.join(STRUCTURES)}")
-    return COMPONENTS[name]
 
 
 def cache_folder():

@@ -50,21 +50,35 @@ _TO_SI = {"N/mm": 1e3, "N.m/deg": 180.0 / math.pi, "N": 1.0, "N.m": 1.0,
 
 @dataclass
 class RubberSpec:
-    elements: list  # [(k, c, xi)] for elements 1 (outer A), 2 (nested in A), 3 (B), SI
+    elements: list  # [(k, c, xi)] of the structure's elements, SI
     elastic: tuple  # a0..a3 in SI
     h: float
     x_ref: float
     unilateral: bool
+    # (outer, nested or None) indices into elements: the parallel branches
+    branches: tuple = ((0, 1), (2, None))
 
 
-def rubber_spec(fmu_name):
+# The thesis's model structures (sections 6.1-6.4): which table, which of its elements (by
+# number), and how they form branches (indices into that selection). The simplified Haupt and
+# Sedlan model's two elements are not printed (section 6.2); the final model is it with a
+# stiffening element nested in element 1 (section 6.4), so they are its elements 1 and 3.
+STRUCTURE_TABLES = {
+    "final": ("appendix_4b.csv", ("1", "2", "3"), ((0, 1), (2, None))),
+    "four-element": ("appendix_4a.csv", ("1", "2", "3", "4"), ((0, 1), (2, 3))),
+    "haupt-sedlan": ("appendix_4b.csv", ("1", "3"), ((0, None), (1, None))),
+}
+
+
+def rubber_spec(fmu_name, structure="final"):
     key = RUBBER_KEYS[fmu_name]
-    elements = []
-    for row in thesis_rows("appendix_4b.csv"):
-        if row["component"] == key:
-            elements.append((float(row["k"]) * _TO_SI[row["k_unit"]],
-                             float(row["c"]) * _TO_SI[row["c_unit"]],
-                             float(row["xi"]) * _TO_SI[row["xi_unit"]]))
+    table, numbers, branches = STRUCTURE_TABLES[structure]
+    rows = {row["element"]: row for row in thesis_rows(table) if row["component"] == key}
+    if not rows:
+        raise KeyError(f"the thesis gives no {structure} values for {fmu_name} ({table})")
+    elements = [(float(rows[n]["k"]) * _TO_SI[rows[n]["k_unit"]],
+                 float(rows[n]["c"]) * _TO_SI[rows[n]["c_unit"]],
+                 float(rows[n]["xi"]) * _TO_SI[rows[n]["xi_unit"]]) for n in numbers]
     (elastic,) = [r for r in thesis_rows("elastic_functions.csv") if r["component"] == key]
     (geometric,) = [r for r in thesis_rows("geometric_multipliers.csv") if r["component"] == key]
     a = [float(elastic[f"a{p}"]) for p in range(4)]
@@ -73,7 +87,8 @@ def rubber_spec(fmu_name):
         a = [coefficient * (180.0 / math.pi) ** p for p, coefficient in enumerate(a)]
     if geometric["deflection_unit"] == "deg":
         h, x_ref = h * 180.0 / math.pi, math.radians(x_ref)
-    return RubberSpec(elements, tuple(a), h, x_ref, unilateral=(key == "tyre"))
+    return RubberSpec(elements, tuple(a), h, x_ref, unilateral=(key == "tyre"),
+                      branches=branches)
 
 
 @dataclass
@@ -97,40 +112,57 @@ def damper_spec():
 # --- right-hand sides and outputs --------------------------------------------------------
 
 class RubberEquations:
-    state_size = 3
+    """State: the spring deformation of each element, in the order of spec.elements (for
+    the final model s, w, r); y[i] belongs to element i."""
 
     def __init__(self, spec, load_name):
         self.spec = spec
+        self.state_size = len(spec.elements)
         self.names = (load_name, f"{load_name}_elastic", f"{load_name}_viscoelastic")
         # Spring deformations reach about c/k, where each dashpot saturates.
         self.atol = np.array([c / k for k, c, _ in spec.elements]) * ATOL_FRACTION
 
     def initial_state(self, x0, v0):
-        return np.zeros(3)
+        return np.zeros(self.state_size)
 
     def rhs(self, t, y, x_of_t, rate):
-        (k1, c1, xi1), (k2, c2, xi2), (k3, c3, xi3) = self.spec.elements
+        elements = self.spec.elements
         if self.spec.unilateral and x_of_t(t) <= 0.0:
             rate = 0.0
-        s, w, r = y
-        branch_a = k1 * s + k2 * w
-        sdot = rate - branch_a * (abs(rate) + xi1) / c1
-        wdot = sdot - k2 * w * (abs(sdot) + xi2) / c2
-        rdot = rate - k3 * r * (abs(rate) + xi3) / c3
-        return [sdot, wdot, rdot]
+        dydt = [0.0] * self.state_size
+        for outer, nested in self.spec.branches:
+            k1, c1, xi1 = elements[outer]
+            s = y[outer]
+            if nested is None:
+                dydt[outer] = rate - k1 * s * (abs(rate) + xi1) / c1
+                continue
+            k2, c2, xi2 = elements[nested]
+            w = y[nested]
+            branch = k1 * s + k2 * w
+            sdot = rate - branch * (abs(rate) + xi1) / c1
+            # the nested element spans spring k1: its rate is ds/dt
+            dydt[outer], dydt[nested] = sdot, sdot - k2 * w * (abs(sdot) + xi2) / c2
+        return dydt
 
     def jac(self, t, y, x_of_t, rate):
-        (k1, c1, xi1), (k2, c2, xi2), (k3, c3, xi3) = self.spec.elements
+        elements = self.spec.elements
         if self.spec.unilateral and x_of_t(t) <= 0.0:
             rate = 0.0
-        s, w, r = y
-        b1 = (abs(rate) + xi1) / c1
-        sdot = rate - (k1 * s + k2 * w) * b1
-        d_sdot = np.array([-k1 * b1, -k2 * b1, 0.0])
-        d_wdot = d_sdot * (1.0 - k2 * w * np.sign(sdot) / c2)
-        d_wdot[1] -= k2 * (abs(sdot) + xi2) / c2
-        d_rdot = np.array([0.0, 0.0, -k3 * (abs(rate) + xi3) / c3])
-        return np.array([d_sdot, d_wdot, d_rdot])
+        jacobian = np.zeros((self.state_size, self.state_size))
+        for outer, nested in self.spec.branches:
+            k1, c1, xi1 = elements[outer]
+            b1 = (abs(rate) + xi1) / c1
+            if nested is None:
+                jacobian[outer, outer] = -k1 * b1
+                continue
+            k2, c2, xi2 = elements[nested]
+            s, w = y[outer], y[nested]
+            sdot = rate - (k1 * s + k2 * w) * b1
+            jacobian[outer, outer], jacobian[outer, nested] = -k1 * b1, -k2 * b1
+            factor = 1.0 - k2 * w * np.sign(sdot) / c2
+            jacobian[nested, outer] = -k1 * b1 * factor
+            jacobian[nested, nested] = -k2 * b1 * factor - k2 * (abs(sdot) + xi2) / c2
+        return jacobian
 
     def breakpoints(self, t0, t1, x0, rate):
         """Times inside (t0, t1) where the right-hand side switches (contact)."""
@@ -142,12 +174,14 @@ class RubberEquations:
 
     def outputs(self, y, x):
         spec = self.spec
-        (k1, _, _), (k2, _, _), (k3, _, _) = spec.elements
         if spec.unilateral and x <= 0.0:
             return dict.fromkeys(self.names, 0.0)
         a0, a1, a2, a3 = spec.elastic
         elastic = a0 + a1 * x + a2 * x ** 2 + a3 * x ** 3
-        viscoelastic = (1.0 + spec.h * abs(x - spec.x_ref)) * (k1 * y[0] + k2 * y[1] + k3 * y[2])
+        springs = 0.0
+        for (k, _, _), deformation in zip(spec.elements, y):
+            springs += k * deformation
+        viscoelastic = (1.0 + spec.h * abs(x - spec.x_ref)) * springs
         force = elastic + viscoelastic
         if spec.unilateral:
             force = max(0.0, force)
@@ -216,12 +250,12 @@ class DamperEquations:
                 "rotor_rate": y[1], "dashpot_torque": self.dashpot(y[1])}
 
 
-def equations_for(fmu_name, spec=None):
-    """The equations of a component with the thesis's values, or with `spec` (a RubberSpec
-    or DamperSpec of other values)."""
+def equations_for(fmu_name, structure="final", spec=None):
+    """The equations of a component in one of the thesis's structures with the thesis's
+    values, or with `spec` (a RubberSpec or DamperSpec of other values)."""
     if fmu_name == "RotaryDamper":
         return DamperEquations(spec or damper_spec())
-    return RubberEquations(spec or rubber_spec(fmu_name), LOAD_NAMES[fmu_name])
+    return RubberEquations(spec or rubber_spec(fmu_name, structure), LOAD_NAMES[fmu_name])
 
 
 # --- solvers ---------------------------------------------------------------------------
@@ -243,15 +277,17 @@ def _integrate(equations, y, t_points, x_of_t, rate):
     return states
 
 
-def solve_held_rate(fmu_name, times, deflection, rate):
+def solve_held_rate(fmu_name, times, deflection, rate, structure="final", read_after_set=False):
     """Outputs at every sample time under the co-simulation input convention.
 
     Row 0 is the initial output (inputs at t_0, relaxed state); row k+1 the output after
-    the step [t_k, t_k+1]. Consecutive steps that share the same rate along a continuous
-    path (a hold, a ramp) are one interval of the held-rate input, so they are integrated
-    in one call, which changes nothing but cost.
+    the step [t_k, t_k+1], at the deflection the step moved to, or with read_after_set at
+    the sample deflection x_k+1 set before reading (what a host reads after fmi2SetReal).
+    Consecutive steps that share the same rate along a continuous path (a hold, a ramp) are
+    one interval of the held-rate input, so they are integrated in one call, which changes
+    nothing but cost.
     """
-    equations = equations_for(fmu_name)
+    equations = equations_for(fmu_name, structure)
     times = np.asarray(times, dtype=float)
     deflection = np.asarray(deflection, dtype=float)
     rate = np.asarray(rate, dtype=float)
@@ -270,16 +306,18 @@ def solve_held_rate(fmu_name, times, deflection, rate):
                 deflection[j], x_of_t(times[j]), rel_tol=1e-12, abs_tol=1e-15):
             j += 1
         states = _integrate(equations, y, times[k:j + 1], x_of_t, v0)
-        rows += [equations.outputs(state, x_of_t(t)) for state, t in zip(states, times[k + 1:j + 1])]
+        read_at = deflection[k + 1:j + 1] if read_after_set else \
+            [x_of_t(t) for t in times[k + 1:j + 1]]
+        rows += [equations.outputs(state, x) for state, x in zip(states, read_at)]
         y = states[-1]
         k = j
     return {key: np.array([row[key] for row in rows]) for key in rows[0]}
 
 
-def solve_smooth(fmu_name, t_eval, x_of_t, v_of_t, spec=None):
+def solve_smooth(fmu_name, t_eval, x_of_t, v_of_t, structure="final", spec=None):
     """Outputs at t_eval for a continuous input x(t) with rate v(t); spec: other values
     than the thesis's (see equations_for)."""
-    equations = equations_for(fmu_name, spec)
+    equations = equations_for(fmu_name, structure, spec)
     t_eval = np.asarray(t_eval, dtype=float)
     y0 = equations.initial_state(x_of_t(t_eval[0]), v_of_t(t_eval[0]))
 

@@ -9,29 +9,33 @@ from pathlib import Path
 import numpy as np
 
 from . import reference
-from .fit import History
-from .runtime.catalog import COMPONENTS
+from .fit import MAXWELL, History, maxwell_quantity
+from .runtime.catalog import STRUCTURES, component_definition
 
 SAMPLES_PER_CYCLE = 200
 DIFFERENCE_STEP = 1e-7  # s, central difference of the programme's path for its rate
 
 
-def reference_spec(component, values):
-    """The reference solver's RubberSpec for FMU parameter values (name -> SI); names left
-    out keep the thesis values."""
-    v = dict(COMPONENTS[component].default_parameters(), **values)
+def reference_spec(component, values, structure="final"):
+    """The reference solver's RubberSpec for FMU parameter values (name -> SI) of a
+    component in one of the thesis's structures; names left out keep the thesis values."""
+    v = dict(component_definition(component, structure).default_parameters(), **values)
+    numbers = [number for number, _ in STRUCTURES[structure].elements]
+    index = {number: i for i, number in enumerate(numbers)}
     return reference.RubberSpec(
-        elements=[(v[f"k{i}"], v[f"c{i}"], v[f"xi{i}"]) for i in (1, 2, 3)],
+        elements=[(v[f"k{i}"], v[f"c{i}"], v[f"xi{i}"]) for i in numbers],
         elastic=tuple(v[f"elastic.a{p}"] for p in range(4)), h=v["geometric.h"],
-        x_ref=v["geometric.x_ref"], unilateral=reference.rubber_spec(component).unilateral)
+        x_ref=v["geometric.x_ref"], unilateral=reference.rubber_spec(component).unilateral,
+        branches=tuple((index[outer], None if inner is None else index[inner])
+                       for outer, inner in STRUCTURES[structure].branches))
 
 
-def scaled(component, factors):
+def scaled(component, factors, structure="final"):
     """The thesis values with each name's factor applied; a factor for 'k', 'c' or 'xi'
     scales that quantity in every Maxwell element."""
-    values = dict(COMPONENTS[component].default_parameters())
+    values = dict(component_definition(component, structure).default_parameters())
     for name, factor in factors.items():
-        targets = [f"{name}{i}" for i in (1, 2, 3)] if name in ("k", "c", "xi") else [name]
+        targets = [n for n in values if maxwell_quantity(n) == name] if name in MAXWELL else [name]
         for target in targets:
             values[target] *= factor
     return values
@@ -53,22 +57,23 @@ def _frequency(case):
     return None
 
 
-def measure(case, values, noise=0.005, seed=0):
+def measure(case, values, noise=0.005, seed=0, structure="final"):
     """A History of a programme case under these parameter values (see measure_path) and
     its noise-free force."""
     return measure_path(case.fmu, f"{case.name}.csv", case_times(case), case.path, values,
-                        noise, seed)
+                        noise, seed, structure)
 
 
-def measure_path(component, label, times, path, values, noise=0.005, seed=0):
+def measure_path(component, label, times, path, values, noise=0.005, seed=0,
+                 structure="final"):
     """A History of the deflection path(t) sampled at `times`: the reference solution plus
     Gaussian noise of standard deviation `noise` times its peak-to-peak force; and the
     noise-free force."""
     def rate(t):
         return (path(t + DIFFERENCE_STEP) - path(t - DIFFERENCE_STEP)) / (2 * DIFFERENCE_STEP)
 
-    solution = reference.solve_smooth(component, times, path, rate,
-                                      spec=reference_spec(component, values))
+    solution = reference.solve_smooth(component, times, path, rate, structure,
+                                      spec=reference_spec(component, values, structure))
     force = solution[reference.LOAD_NAMES[component]]
     generator = np.random.default_rng(seed)
     noisy = force + generator.normal(0.0, noise * np.ptp(force), len(force))

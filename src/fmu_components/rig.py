@@ -1,0 +1,729 @@
+"""A virtual test rig: the sine and step-and-hold tests of an elastomer test machine, run on
+a component model or its FMU.
+
+    fmu-components rig --component NAME [--params PARAMS.json] [--structure S]
+                       --preload P... --amplitude A... --frequency F... --out DIR
+
+Each point (preload P, amplitude A, frequency f; SI) drives the deflection
+x(t) = P + A sin(2 pi f t) from rest at the preload, with the component relaxed there, and
+runs whole cycles until it is periodic: until the first-harmonic result of a cycle changes
+from the last one's, and by the trend of those changes will change in all, by less than
+--steady (relative), within --max-cycles. The last cycle gives (fmu_components.harmonics)
+the dynamic stiffness |K*|, the loss angle, the energy per cycle and the secant stiffness:
+one row of DIR/rig.csv. For the damper (RotaryDamper, arm angle in) DIR/equivalent.csv adds
+the equivalent stiffness K' = |K*| cos(delta) and damping c_eq = |K*| sin(delta) / omega.
+
+The drive follows the FMUs' co-simulation semantics (spec section 4; runtime/cosim.py):
+every sample sets the exact sine deflection and its exact rate, the force is read for that
+deflection, and the step holds the rate. A cycle is --samples-per-cycle steps (a multiple
+of 4, so that the loop's tips are samples). The step-and-hold test ramps from the preload
+by --relaxation STEP (default: the largest amplitude) in --rise seconds, then holds for
+--hold seconds, sampled evenly in log time.
+
+Engines: ``model`` (the Python model of catalog.component_definition, stepped through
+runtime.cosim.CoSimulation, as the Python flavour's adapter does) or ``fmu`` (a built FMU
+of either flavour through fmpy's FMU2Slave). Points run in parallel over --processes.
+"""
+
+import csv
+import json
+import math
+import os
+import sys
+import time
+from dataclasses import dataclass
+from multiprocessing import get_context
+from pathlib import Path
+
+import numpy as np
+
+from .harmonics import first_harmonic
+from .runtime.catalog import COMPONENTS, STRUCTURES, component_definition, structures_of
+from .runtime.cosim import CoSimulation
+from .runtime.integrator import DEFAULT_RTOL
+
+CSV_COLUMNS = ("preload", "amplitude", "frequency", "dynamic_stiffness", "loss_angle_deg",
+               "energy_per_cycle", "secant_stiffness")
+EQUIVALENT_COLUMNS = ("preload", "amplitude", "frequency", "equivalent_stiffness",
+                      "equivalent_damping")
+SAMPLES_PER_CYCLE = 200
+STEADY = 1e-5  # relative change of the harmonic result still to come, at periodic steady state
+MAX_CYCLES = 300
+MIN_CYCLES = 3
+RISE_TIME = 0.1  # s, the step-and-hold ramp (a rig cannot step instantly; section 5.6)
+HOLD_TIME = 200.0  # s, as Measurement IV (section 5.6)
+LONGEST_STEP = 1.0  # s, the longest communication step the hold takes
+
+
+class RigError(Exception):
+    """A rig run that cannot be done as asked: said in one line."""
+
+
+@dataclass(frozen=True)
+class RigRow:
+    preload: float
+    amplitude: float
+    frequency: float
+    dynamic_stiffness: float
+    loss_angle_deg: float
+    energy_per_cycle: float
+    secant_stiffness: float
+    equivalent_stiffness: float
+    equivalent_damping: float
+    cycles: int  # cycles run
+    steady: bool  # reached periodic steady state within the cycle cap
+    change: float  # the last cycle-to-cycle change of the harmonic result
+
+
+@dataclass(frozen=True)
+class Setup:
+    """What a worker needs to drive one instance: picklable."""
+    component: str
+    structure: str
+    parameters: dict  # the full parameter set, name -> SI value
+    engine: str  # "model" or "fmu"
+    fmu: str = None  # the extracted FMU's folder (engine "fmu")
+    rtol: float = DEFAULT_RTOL
+
+
+# --- drivers: one instance of the component, stepped with the co-simulation semantics -----
+
+class ModelDriver:
+    """The Python model through the co-simulation class the Python flavour wraps."""
+
+    def __init__(self, setup, deflection, rate):
+        definition = component_definition(setup.component, setup.structure)
+        model = definition.build_model(setup.parameters)
+        self.cosimulation = CoSimulation(model, setup.rtol, 0.0, deflection, rate)
+
+    def force(self, deflection, rate):
+        """Set the inputs at the current time; the force for them."""
+        problem = self.cosimulation.set_inputs(deflection, rate)
+        if problem:
+            raise RigError(problem)
+        return self.cosimulation.outputs()[0]
+
+    def step(self, current_time, step_size):
+        problem = self.cosimulation.do_step(current_time, step_size)
+        if problem:
+            raise RigError(problem[1])
+
+    def close(self):
+        pass
+
+
+class FmuDriver:
+    """A built FMU (either flavour) through fmpy's FMU2Slave."""
+
+    def __init__(self, setup, deflection, rate):
+        from fmpy import read_model_description
+        from fmpy.fmi2 import FMU2Slave
+
+        description = read_model_description(setup.fmu)
+        references = {v.name: v.valueReference for v in description.modelVariables}
+        definition = component_definition(setup.component, setup.structure)
+        inputs = [references[v.name] for v in definition.inputs]
+        self.inputs, self.load = inputs, [references[definition.outputs[0].name]]
+        self.fmu = FMU2Slave(guid=description.guid, unzipDirectory=setup.fmu,
+                             modelIdentifier=description.coSimulation.modelIdentifier,
+                             instanceName="rig")
+        self.fmu.instantiate()
+        self.fmu.setupExperiment(tolerance=setup.rtol, startTime=0.0)
+        self.fmu.enterInitializationMode()
+        names = list(setup.parameters)
+        self.fmu.setReal([references[n] for n in names], [setup.parameters[n] for n in names])
+        self.fmu.setReal(inputs, [deflection, rate])
+        self.fmu.exitInitializationMode()
+
+    def force(self, deflection, rate):
+        self.fmu.setReal(self.inputs, [deflection, rate])
+        return self.fmu.getReal(self.load)[0]
+
+    def step(self, current_time, step_size):
+        self.fmu.doStep(currentCommunicationPoint=current_time, communicationStepSize=step_size)
+
+    def close(self):
+        self.fmu.terminate()
+        self.fmu.freeInstance()
+
+
+DRIVERS = {"model": ModelDriver, "fmu": FmuDriver}
+
+
+def _driver(setup, deflection, rate):
+    return DRIVERS[setup.engine](setup, deflection, rate)
+
+
+# --- the sine test -------------------------------------------------------------------------
+
+def sine_record(setup, preload, amplitude, frequency, cycles, samples_per_cycle=SAMPLES_PER_CYCLE):
+    """(times, deflection, force) of `cycles` whole cycles from the relaxed preload, every
+    sample: the exact deflection and rate set, the force read, a step with the rate held."""
+    records = []
+    for record in _sine_cycles(setup, preload, amplitude, frequency, samples_per_cycle):
+        records.append(record)
+        if len(records) == cycles:
+            break
+    # each cycle's last sample is the next one's first
+    return tuple(np.concatenate([r[i][:-1] for r in records] + [records[-1][i][-1:]])
+                 for i in range(3))
+
+
+def _sine_cycles(setup, preload, amplitude, frequency, samples_per_cycle):
+    """Yields each cycle as (times, deflection, force) with both ends: its N + 1 samples,
+    the last of which is the next cycle's first."""
+    omega = 2.0 * math.pi * frequency
+    n = samples_per_cycle
+    h = 1.0 / (frequency * n)
+    phase = 2.0 * math.pi * np.arange(n + 1) / n
+    shape, slope = np.sin(phase), np.cos(phase)
+    driver = _driver(setup, preload, amplitude * omega)
+    try:
+        cycle = 0
+        force_at_start = driver.force(preload, amplitude * omega)
+        while True:
+            times = (cycle * n + np.arange(n + 1)) * h
+            deflection = preload + amplitude * shape
+            rates = amplitude * omega * slope
+            force = np.empty(n + 1)
+            force[0] = force_at_start
+            for k in range(n):
+                driver.step(times[k], h)
+                force[k + 1] = driver.force(deflection[k + 1], rates[k + 1])
+            force_at_start = force[n]
+            yield times, deflection, force
+            cycle += 1
+    finally:
+        driver.close()
+
+
+def run_point(setup, preload, amplitude, frequency, samples_per_cycle=SAMPLES_PER_CYCLE,
+              steady=STEADY, max_cycles=MAX_CYCLES):
+    """One rig point run to periodic steady state: a RigRow."""
+    if samples_per_cycle % 4 or samples_per_cycle < 16:
+        raise RigError(f"samples per cycle {samples_per_cycle} must be a multiple of 4, "
+                       f"at least 16 (the loop's tips are samples)")
+    results, changes = [], []
+    for cycle, record in enumerate(_sine_cycles(setup, preload, amplitude, frequency,
+                                                samples_per_cycle), start=1):
+        results.append(first_harmonic(*record, frequency))
+        if len(results) > 1:
+            changes.append(results[-1].change_from(results[-2]))
+        if cycle >= MIN_CYCLES and _settled(changes, steady):
+            done = True
+            break
+        if cycle >= max_cycles:
+            done = False
+            break
+    result = results[-1]
+    return RigRow(preload, amplitude, frequency, result.dynamic_stiffness,
+                  result.loss_angle_deg, result.energy_per_cycle, result.secant_stiffness,
+                  result.equivalent_stiffness, result.equivalent_damping, cycle, done,
+                  changes[-1] if changes else math.inf)
+
+
+def _settled(changes, steady):
+    """Periodic steady state: the last change is below `steady`, and so is all the change
+    still to come if the last two shrink geometrically (d r / (1 - r), r = d_n / d_n-1)."""
+    if len(changes) < 2 or not changes[-1] < steady:
+        return False
+    last, before = changes[-1], changes[-2]
+    if last == 0.0:
+        return True
+    ratio = last / before if before > 0.0 else 1.0
+    return ratio < 1.0 and last * ratio / (1.0 - ratio) < steady
+
+
+# --- step and hold -------------------------------------------------------------------------
+
+def relaxation_record(setup, preload, step, rise=RISE_TIME, hold=HOLD_TIME, per_decade=50):
+    """(times, deflection, force) of a ramp from the relaxed preload by `step` in `rise`
+    seconds, then a hold of `hold` seconds sampled evenly in log time from 1e-4 s on."""
+    if not (rise > 0.0 and hold > 0.0):
+        raise RigError(f"the ramp ({rise:g} s) and the hold ({hold:g} s) must be positive")
+    ramp_steps = 100
+    ramp_rate = step / rise
+    ramp = np.arange(ramp_steps + 1) * (rise / ramp_steps)
+    first = min(1e-4, rise / ramp_steps)
+    decades = math.log10(hold / first)
+    after = first * 10.0 ** (np.arange(int(math.ceil(decades * per_decade)) + 1) / per_decade)
+    after = after[after < hold]
+    # beyond LONGEST_STEP the hold goes on in steps of LONGEST_STEP
+    spaced = [t for t in after if t <= LONGEST_STEP or t == after[0]]
+    spaced += list(np.arange(spaced[-1] + LONGEST_STEP, hold, LONGEST_STEP))
+    times = np.concatenate([ramp, rise + np.array(spaced + [hold])])
+    deflection = np.where(times < rise, preload + ramp_rate * times, preload + step)
+    rates = np.where(times < rise, ramp_rate, 0.0)
+    driver = _driver(setup, preload, ramp_rate)
+    force = np.empty(len(times))
+    try:
+        for k in range(len(times)):
+            force[k] = driver.force(deflection[k], rates[k])
+            if k + 1 < len(times):
+                driver.step(times[k], times[k + 1] - times[k])
+    finally:
+        driver.close()
+    return times, deflection, force
+
+
+# --- parameters ----------------------------------------------------------------------------
+
+def parameter_set(component, structure="final", params=None):
+    """The full parameter set: the thesis values, with those of `params` (a dict, or a
+    JSON file name, of FMU parameter names -> SI values) in their place."""
+    definition = component_definition(component, structure)
+    values = definition.default_parameters()
+    if params is None:
+        return values
+    if not isinstance(params, dict):
+        params = _read_params(params)
+    unknown = sorted(set(params) - set(values))
+    if unknown:
+        raise RigError(f"{component} ({structure}) has no parameter {', '.join(map(repr, unknown))}; "
+                       f"its parameters are: {', '.join(values)}")
+    for name, value in params.items():
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise RigError(f"parameter {name!r} = {value!r} must be a number (SI units)")
+        values[name] = float(value)
+    problem = definition.check_parameters(values)
+    if problem:
+        raise RigError(f"{problem}; correct it in the parameters file")
+    return values
+
+
+def _read_params(path):
+    try:
+        with open(path) as f:
+            params = json.load(f)
+    except OSError as error:
+        raise RigError(f"cannot read the parameters file {path}: {error.strerror}") from None
+    except json.JSONDecodeError as error:
+        raise RigError(f"{path} is not JSON ({error.msg}, line {error.lineno}); write an "
+                       f"object of parameter names to SI values") from None
+    if not isinstance(params, dict):
+        raise RigError(f"{path} must hold a JSON object of parameter names to SI values")
+    return params
+
+
+# --- the rig -------------------------------------------------------------------------------
+
+def make_setup(component, structure="final", params=None, engine="model", fmu=None,
+               rtol=DEFAULT_RTOL):
+    """Check the request and gather what each worker needs."""
+    if component not in COMPONENTS:
+        raise RigError(f"no component {component!r}; choose one of {', '.join(sorted(COMPONENTS))}")
+    if structure not in structures_of(component):
+        raise RigError(f"{component} comes in no {structure!r} structure; it has "
+                       f"{', '.join(structures_of(component))}")
+    values = parameter_set(component, structure, params)
+    folder = None
+    if engine == "fmu":
+        folder = _extract_fmu(fmu, component, structure)
+    elif engine != "model":
+        raise RigError(f"engine {engine!r}: choose model or fmu")
+    return Setup(component, structure, values, engine, folder, rtol)
+
+
+def _extract_fmu(path, component, structure):
+    import atexit
+    import shutil
+    import tempfile
+
+    from fmpy import extract, read_model_description
+
+    if path is None:
+        raise RigError("--engine fmu needs --fmu PATH, the built FMU to drive")
+    if not Path(path).is_file():
+        raise RigError(f"no FMU at {path}; build one with `fmu-components build`")
+    description = read_model_description(str(path))
+    if description.modelName != component:
+        raise RigError(f"{path} is {description.modelName}, not {component}")
+    names = {v.name for v in description.modelVariables if v.causality == "parameter"}
+    wanted = set(component_definition(component, structure).default_parameters())
+    if names != wanted:
+        raise RigError(f"{path} is not {component} in the {structure!r} structure; build it "
+                       f"with `fmu-components build --structure {structure}`")
+    folder = tempfile.mkdtemp(prefix="fmu_components_rig_")
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
+    return extract(str(path), folder)
+
+
+def _point_task(arguments):
+    setup, point, options = arguments
+    return run_point(setup, *point, **options)
+
+
+def run_rig(component, preloads, amplitudes, frequencies, params=None, structure="final",
+            engine="model", fmu=None, rtol=DEFAULT_RTOL, samples_per_cycle=SAMPLES_PER_CYCLE,
+            steady=STEADY, max_cycles=MAX_CYCLES, processes=None):
+    """Every (preload, amplitude, frequency) point to periodic steady state: RigRows in
+    that order (preload, then amplitude, then frequency)."""
+    for label, values in (("amplitude", amplitudes), ("frequency", frequencies)):
+        if not values or any(not (v > 0.0 and math.isfinite(v)) for v in values):
+            raise RigError(f"each {label} must be a positive number (SI units)")
+    if not preloads or any(not math.isfinite(p) for p in preloads):
+        raise RigError("each preload must be a finite number (SI units)")
+    setup = make_setup(component, structure, params, engine, fmu, rtol)
+    points = [(p, a, f) for p in preloads for a in amplitudes for f in frequencies]
+    options = dict(samples_per_cycle=samples_per_cycle, steady=steady, max_cycles=max_cycles)
+    tasks = [(setup, point, options) for point in points]
+    processes = min(processes or os.cpu_count() or 1, len(tasks))
+    if processes <= 1:
+        return [_point_task(task) for task in tasks]
+    with get_context("fork").Pool(processes) as pool:
+        return pool.map(_point_task, tasks, chunksize=1)
+
+
+def write_rows(rows, out, component):
+    """DIR/rig.csv, and for the damper DIR/equivalent.csv."""
+    out.mkdir(parents=True, exist_ok=True)
+    paths = [out / "rig.csv"]
+    with open(paths[0], "w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(CSV_COLUMNS)
+        for row in rows:
+            writer.writerow([repr(float(getattr(row, c))) for c in CSV_COLUMNS])
+    if component == "RotaryDamper":
+        paths.append(out / "equivalent.csv")
+        with open(paths[1], "w", newline="") as f:
+            writer = csv.writer(f)
+            writer.writerow(EQUIVALENT_COLUMNS)
+            for row in rows:
+                writer.writerow([repr(float(getattr(row, c))) for c in EQUIVALENT_COLUMNS])
+    return paths
+
+
+def read_rows(path):
+    """The rows of a rig.csv, as dicts of floats."""
+    with open(path, newline="") as f:
+        return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
+
+
+# --- plots ---------------------------------------------------------------------------------
+
+def units(component):
+    definition = COMPONENTS[component]
+    length, load = definition.inputs[0].unit, definition.outputs[0].unit
+    return length, load, f"{load}/{length}"
+
+
+def plot_rows(rows, out, component, relaxation=None, dpi=200):
+    """|K*| and loss angle against frequency (a curve per amplitude) and against amplitude
+    (a curve per frequency), per preload; for the damper its equivalent stiffness and
+    damping likewise; the relaxation record on a log time axis. Returns the files."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    length, load, stiffness = units(component)
+    quantities = [("dynamic_stiffness", f"|K*| ({stiffness})"),
+                  ("loss_angle_deg", "loss angle (deg)")]
+    if component == "RotaryDamper":
+        quantities += [("equivalent_stiffness", f"equivalent stiffness K' ({stiffness})"),
+                       ("equivalent_damping", f"equivalent damping c_eq ({load}.s/{length})")]
+    preloads = sorted({r.preload for r in rows})
+    files = []
+    for against, by, label, log in (("frequency", "amplitude", "frequency (Hz)", True),
+                                    ("amplitude", "frequency", f"amplitude ({length})", False)):
+        figure, axes = plt.subplots(len(quantities), 1, figsize=(6.5, 2.6 * len(quantities)),
+                                    sharex=True, squeeze=False)
+        for preload in preloads:
+            for level in sorted({getattr(r, by) for r in rows}):
+                curve = sorted((r for r in rows if r.preload == preload and getattr(r, by) == level),
+                               key=lambda r: getattr(r, against))
+                if not curve:
+                    continue
+                name = f"{by} {level:g}" + (f", preload {preload:g}" if len(preloads) > 1 else "")
+                style = "o-" if len(curve) > 1 else "o"
+                for axis, (quantity, _) in zip(axes[:, 0], quantities):
+                    axis.plot([getattr(r, against) for r in curve],
+                              [getattr(r, quantity) for r in curve], style, ms=3, label=name)
+        for axis, (_, title) in zip(axes[:, 0], quantities):
+            axis.set_ylabel(title)
+            axis.grid(True, which="both", alpha=0.3)
+            if log:
+                axis.set_xscale("log")
+        axes[-1, 0].set_xlabel(label)
+        axes[0, 0].legend(fontsize=7, ncol=2)
+        axes[0, 0].set_title(f"{component}: first harmonic at periodic steady state")
+        figure.tight_layout()
+        path = out / f"rig_{against}.png"
+        figure.savefig(path, dpi=dpi)
+        plt.close(figure)
+        files.append(path)
+    if relaxation is not None:
+        files.append(plot_relaxation(relaxation, out / "rig_relaxation.png", component, dpi))
+    return files
+
+
+def plot_relaxation(records, path, component, dpi=200, title=None):
+    """records: {label: (times, deflection, force, rise)}; the force against the time since
+    the ramp began, log axis."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    _, load, _ = units(component)
+    figure, axis = plt.subplots(figsize=(6.5, 3.6))
+    for label, (times, _, force, _) in records.items():
+        shown = times > 0.0
+        axis.semilogx(times[shown], force[shown], label=label)
+    axis.set_xlabel("time since the step began (s)")
+    axis.set_ylabel(f"{COMPONENTS[component].outputs[0].name} ({load})")
+    axis.grid(True, which="both", alpha=0.3)
+    axis.legend(fontsize=8)
+    axis.set_title(title or f"{component}: step and hold")
+    figure.tight_layout()
+    figure.savefig(path, dpi=dpi)
+    plt.close(figure)
+    return path
+
+
+def write_relaxation(record, path, component):
+    times, deflection, force = record[:3]
+    definition = COMPONENTS[component]
+    with open(path, "w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(["time", definition.inputs[0].name, definition.outputs[0].name])
+        for row in zip(times, deflection, force):
+            writer.writerow([repr(float(v)) for v in row])
+    return path
+
+
+# --- structure comparison (thesis Figs. 6.1-1/6.3-2, 6.3-4, 6.3-5, 6.4-2, 6.4-3) ------------
+
+RAD_PER_DEG = math.pi / 180.0
+DUAL_SINE = (10.0 * RAD_PER_DEG, [(7.5 * RAD_PER_DEG, 0.1), (0.75 * RAD_PER_DEG, 1.5)])
+DUAL_SINE_STEP, DUAL_SINE_STOP, DUAL_SINE_SHOWN = 5e-3, 20.0, 10.0  # as cases.py, section 5.8
+RELAXATION_FROM, RELAXATION_TO = 10.0 * RAD_PER_DEG, 25.0 * RAD_PER_DEG  # section 5.6, Fig. 5.6-1
+RELAXATION_TIMES = (0.1, 1.0, 10.0, 100.0)  # s after the ramp, the table's columns
+
+
+def dual_sine_record(setup):
+    """The torsion dual sine of section 5.8 (10 deg + 7.5 deg at 0.1 Hz + 0.75 deg at
+    1.5 Hz), exact rates at each sample, from rest at its start."""
+    mean, components = DUAL_SINE
+    times = np.arange(int(round(DUAL_SINE_STOP / DUAL_SINE_STEP)) + 1) * DUAL_SINE_STEP
+    deflection = mean + sum(a * np.sin(2 * math.pi * f * times) for a, f in components)
+    rates = sum(a * 2 * math.pi * f * np.cos(2 * math.pi * f * times) for a, f in components)
+    driver = _driver(setup, deflection[0], rates[0])
+    force = np.empty(len(times))
+    try:
+        for k in range(len(times)):
+            force[k] = driver.force(deflection[k], rates[k])
+            if k + 1 < len(times):
+                driver.step(times[k], DUAL_SINE_STEP)
+    finally:
+        driver.close()
+    return times, deflection, force
+
+
+def secondary_loop_areas(times, deflection, force, start=DUAL_SINE_SHOWN):
+    """The loop area (integral of T dx) of each 1.5 Hz cycle of the dual sine from `start`:
+    positive where the small cycles enclose loops that dissipate, as the measured ones do
+    (Fig. 5.8-1)."""
+    frequency = DUAL_SINE[1][1][1]
+    per_cycle = int(round(1.0 / (frequency * DUAL_SINE_STEP)))
+    first = int(np.searchsorted(times, start))
+    areas = []
+    while first + per_cycle <= len(times) - 1:
+        x, f = deflection[first:first + per_cycle + 1], force[first:first + per_cycle + 1]
+        areas.append(float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(x))))
+        first += per_cycle
+    return np.array(areas)
+
+
+def _structure_task(structure):
+    setup = make_setup("TrackBushTorsion", structure)
+    dual = dual_sine_record(setup)
+    relax = relaxation_record(setup, RELAXATION_FROM, RELAXATION_TO - RELAXATION_FROM,
+                              RISE_TIME, HOLD_TIME)
+    return structure, dual, relax
+
+
+def compare_structures(out, processes=None, dpi=200):
+    """The three structures of the torsion bush on the dual sine and the step-and-hold test:
+    a figure (DIR/structures.png) and a Markdown table (DIR/structures.md). Returns the
+    table's rows as dicts."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out.mkdir(parents=True, exist_ok=True)
+    structures = [s for s in STRUCTURES if s in structures_of("TrackBushTorsion")]
+    processes = min(processes or os.cpu_count() or 1, len(structures))
+    if processes > 1:
+        with get_context("fork").Pool(processes) as pool:
+            results = pool.map(_structure_task, structures, chunksize=1)
+    else:
+        results = [_structure_task(s) for s in structures]
+    figure, (loops, relaxation) = plt.subplots(1, 2, figsize=(11, 4.2))
+    table = []
+    figures = {"final": "Fig. 6.4-2, 6.4-3", "four-element": "Figs. 6.3-4, 6.3-5",
+               "haupt-sedlan": "Fig. 6.3-2"}
+    for structure, (t, x, f), (tr, xr, fr) in results:
+        shown = t >= DUAL_SINE_SHOWN
+        loops.plot(np.degrees(x[shown]), f[shown], lw=0.8, label=structure)
+        held = tr >= RISE_TIME
+        relaxation.semilogx(tr[held] - RISE_TIME + 1e-4, fr[held], label=structure)
+        areas = secondary_loop_areas(t, x, f)
+        peak = fr[np.argmin(np.abs(tr - RISE_TIME))]
+        final = fr[-1]
+        row = {"structure": structure, "thesis": figures[structure],
+               "dual_sine_range": float(np.ptp(f[shown])),
+               "small_loop_area_mean": float(np.mean(areas)),
+               "small_loop_area_min": float(np.min(areas)),
+               "relaxation_peak": float(peak)}
+        for after in RELAXATION_TIMES:
+            value = float(np.interp(RISE_TIME + after, tr, fr))
+            row[f"relaxed_{after:g}s"] = (peak - value) / (peak - final) if peak != final else 0.0
+            row[f"torque_{after:g}s"] = value
+        table.append(row)
+    loops.set_xlabel("angle (deg)")
+    loops.set_ylabel("torque (N.m)")
+    loops.set_title("dual sine, 10 + 7.5 sin(0.1 Hz) + 0.75 sin(1.5 Hz) deg")
+    relaxation.set_xlabel("time since the ramp ended (s)")
+    relaxation.set_ylabel("torque (N.m)")
+    relaxation.set_title("step 10 to 25 deg in 0.1 s, hold")
+    for axis in (loops, relaxation):
+        axis.grid(True, which="both", alpha=0.3)
+        axis.legend(fontsize=8)
+    figure.suptitle("TrackBushTorsion: the thesis's three model structures")
+    figure.tight_layout()
+    figure.savefig(out / "structures.png", dpi=dpi)
+    plt.close(figure)
+    (out / "structures.md").write_text(structures_table(table))
+    return table
+
+
+def structures_table(table):
+    head = ("| structure | thesis | dual sine range (N.m) | 1.5 Hz loop area, mean / min (N.m.rad) "
+            "| torque at the end of the ramp (N.m) | "
+            + " | ".join(f"{t:g} s" for t in RELAXATION_TIMES) + " |")
+    lines = [head, "|" + "---|" * (5 + len(RELAXATION_TIMES))]
+    for row in table:
+        relaxed = " | ".join(f"{row[f'torque_{t:g}s']:.1f} ({100 * row[f'relaxed_{t:g}s']:.0f} %)"
+                             for t in RELAXATION_TIMES)
+        lines.append(f"| {row['structure']} | {row['thesis']} | {row['dual_sine_range']:.1f} | "
+                     f"{row['small_loop_area_mean']:.3g} / {row['small_loop_area_min']:.3g} | "
+                     f"{row['relaxation_peak']:.1f} | {relaxed} |")
+    return ("Torque after the step (in brackets: the share of the relaxation over the whole "
+            "hold that has happened by then)\n\n" + "\n".join(lines) + "\n")
+
+
+# --- command line --------------------------------------------------------------------------
+
+EXAMPLES = """examples:
+  fmu-components rig --component TrackBushRadial --preload 3e-4 --amplitude 2e-5 1e-4 3e-4 \\
+      --frequency 0.1 1 10 --out rig_radial
+  fmu-components rig --component TrackBushTorsion --params fitted.json --preload 0.1745 \\
+      --amplitude 0.0873 --frequency 1 --engine fmu --fmu fmus/TrackBushTorsion.fmu --out rig_fmu
+  fmu-components rig --component RotaryDamper --preload 0 --amplitude 0.05 0.21 \\
+      --frequency 0.1 0.5 1 3 --out rig_damper     (adds equivalent.csv: K' and c_eq)
+  fmu-components rig --component TrackBushTorsion --compare-structures --out structures
+"""
+
+
+def configure(parser):
+    parser.add_argument("--component", required=True, metavar="NAME",
+                        help=f"the FMU's name: {', '.join(sorted(COMPONENTS))}")
+    parser.add_argument("--params", metavar="PARAMS.json",
+                        help="FMU parameter names to SI values; the rest keep the thesis values")
+    parser.add_argument("--structure", default="final", choices=list(STRUCTURES),
+                        help="the thesis's model structure (default final, section 6.4)")
+    parser.add_argument("--preload", type=float, nargs="+", metavar="P",
+                        help="mean deflections (m or rad)")
+    parser.add_argument("--amplitude", type=float, nargs="+", metavar="A",
+                        help="sine amplitudes (m or rad)")
+    parser.add_argument("--frequency", type=float, nargs="+", metavar="F", help="Hz")
+    parser.add_argument("--out", type=Path, required=True, metavar="DIR")
+    parser.add_argument("--engine", choices=sorted(DRIVERS), default="model",
+                        help="the Python model (default) or a built FMU (--fmu)")
+    parser.add_argument("--fmu", metavar="PATH", help="the FMU for --engine fmu (either flavour)")
+    parser.add_argument("--relaxation", type=float, metavar="STEP",
+                        help="the step-and-hold test's step from the first preload (default: "
+                             "the largest amplitude)")
+    parser.add_argument("--hold", type=float, default=HOLD_TIME, metavar="SECONDS",
+                        help=f"how long the step is held (default {HOLD_TIME:g} s)")
+    parser.add_argument("--rise", type=float, default=RISE_TIME, metavar="SECONDS",
+                        help=f"the step's ramp time (default {RISE_TIME:g} s)")
+    parser.add_argument("--samples-per-cycle", type=int, default=SAMPLES_PER_CYCLE)
+    parser.add_argument("--steady", type=float, default=STEADY,
+                        help=f"periodic steady state: the relative change still to come of "
+                             f"the harmonic result (default {STEADY:g})")
+    parser.add_argument("--max-cycles", type=int, default=MAX_CYCLES)
+    parser.add_argument("--rtol", type=float, default=DEFAULT_RTOL,
+                        help=f"the integrator's relative tolerance (default {DEFAULT_RTOL:g}, "
+                             f"the FMUs')")
+    parser.add_argument("--processes", type=int, default=None,
+                        help="worker processes (default: one per core)")
+    parser.add_argument("--compare-structures", action="store_true",
+                        help="run the torsion bush's three structures on the dual sine and "
+                             "step-and-hold tests instead (structures.png, structures.md)")
+
+
+def run_command(args):
+    from .cli import UsageError
+
+    try:
+        return _run(args)
+    except RigError as error:
+        raise UsageError(str(error)) from None
+
+
+def _run(args):
+    if args.compare_structures:
+        if args.component != "TrackBushTorsion":
+            raise RigError("--compare-structures runs the torsion bush (the thesis compares "
+                           "the structures on it): use --component TrackBushTorsion")
+        started = time.perf_counter()
+        table = compare_structures(args.out, args.processes)
+        print(structures_table(table))
+        print(f"wrote {args.out / 'structures.png'} and {args.out / 'structures.md'} "
+              f"({time.perf_counter() - started:.1f} s)")
+        return 0
+    for option in ("preload", "amplitude", "frequency"):
+        if not getattr(args, option):
+            raise RigError(f"give --{option} (one or more values, SI units)")
+    started = time.perf_counter()
+    rows = run_rig(args.component, args.preload, args.amplitude, args.frequency,
+                   params=args.params, structure=args.structure, engine=args.engine,
+                   fmu=args.fmu, rtol=args.rtol, samples_per_cycle=args.samples_per_cycle,
+                   steady=args.steady, max_cycles=args.max_cycles, processes=args.processes)
+    sweep_time = time.perf_counter() - started
+    setup = make_setup(args.component, args.structure, args.params, args.engine, args.fmu,
+                       args.rtol)
+    step = args.relaxation if args.relaxation is not None else max(args.amplitude)
+    record = relaxation_record(setup, args.preload[0], step, args.rise, args.hold)
+    files = write_rows(rows, args.out, args.component)
+    files.append(write_relaxation(record, args.out / "relaxation.csv", args.component))
+    label = f"{args.preload[0]:g} to {args.preload[0] + step:g}"
+    files += plot_rows(rows, args.out, args.component, {label: (*record, args.rise)})
+    _print_rows(rows, args.component)
+    unsteady = [r for r in rows if not r.steady]
+    for row in unsteady:
+        print(f"warning: preload {row.preload:g}, amplitude {row.amplitude:g}, frequency "
+              f"{row.frequency:g} Hz not periodic after {row.cycles} cycles (last change "
+              f"{row.change:.2g}); raise --max-cycles", file=sys.stderr)
+    print(f"{len(rows)} points in {sweep_time:.1f} s ({args.engine}); wrote "
+          + ", ".join(str(f) for f in files))
+    return 0
+
+
+def _print_rows(rows, component):
+    length, load, stiffness = units(component)
+    print(f"{'preload':>10s} {'amplitude':>10s} {'f Hz':>7s} {'|K*| ' + stiffness:>16s} "
+          f"{'delta deg':>9s} {'E/cycle':>11s} {'secant':>11s} {'cycles':>6s}")
+    for r in rows:
+        print(f"{r.preload:10.4g} {r.amplitude:10.4g} {r.frequency:7.3g} "
+              f"{r.dynamic_stiffness:16.6g} {r.loss_angle_deg:9.4f} {r.energy_per_cycle:11.5g} "
+              f"{r.secant_stiffness:11.5g} {r.cycles:6d}")
+
+
+def main(argv=None):
+    from .cli import standalone
+    return standalone("rig", argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
