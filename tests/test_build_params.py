@@ -52,7 +52,7 @@ def test_guids_differ_from_the_shipped_build(own):
 @pytest.mark.parametrize("argv, words", [
     (["--name", "MyBush", "--component", "TrackBushRadial"], "go together"),
     (["--name", "my bush", "--component", "TrackBushRadial", "--params", "{p}"], "--name my bush"),
-    (["--name", "MyBush", "--component", "TrackBushRadial", "--params", "{bad}"], "k9 is no parameter"),
+    (["--name", "MyBush", "--component", "TrackBushRadial", "--params", "{bad}"], "no parameter 'k9'"),
     (["--name", "MyBush", "--component", "TrackBushRadial", "--params", "{negative}"], "k1"),
 ])
 def test_own_build_mistakes_are_one_line(tmp_path, capsys, argv, words):

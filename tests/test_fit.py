@@ -144,3 +144,50 @@ def test_rig_table_in_n_per_mm_is_caught(capsys, tmp_path):
     message = one_line_error(capsys, tmp_path, "preload,amplitude,frequency,dynamic_stiffness,"
                              f"loss_angle_deg\n{rows}\n")
     assert "dynamic_stiffness" in message and "give N/m" in message
+
+
+# --- the rig-table format ---------------------------------------------------------------
+
+def test_a_rig_table_point_is_the_reference_steady_state():
+    """The fit's simulation of a table row against the reference solver's steady sine."""
+    from fmu_components.fit import rig_point
+    from fmu_components.history import native_history
+
+    for preload, amplitude, frequency in ((0.3 * MM, 0.05 * MM, 0.5), (0.1 * MM, 0.2 * MM, 10.0)):
+        *_, stiffness, loss = steady_reference_row(preload, amplitude, frequency)
+        ours = rig_point(native_history(COMPONENT), TRUTH, preload, amplitude, frequency)
+        assert ours[0] == pytest.approx(stiffness, rel=2e-4)
+        assert ours[1] == pytest.approx(loss, abs=0.01)
+
+
+def steady_reference_row(preload, amplitude, frequency, cycles=10, per_cycle=200):
+    """|K*| and loss angle of the reference solution's last cycle (independent of the FMUs)."""
+    from fmu_components.harmonics import first_harmonic
+
+    times = sine_times(frequency, cycles, per_cycle)
+    history, force = synthetic.measure_path(COMPONENT, "row", times,
+                                            sine_path(preload, amplitude, frequency), TRUTH, 0.0)
+    result = first_harmonic(times, history.deflection, force, frequency, cycles=1)
+    return preload, amplitude, frequency, result.dynamic_stiffness, result.loss_angle_deg
+
+
+def test_rig_table_round_trip(tmp_path):
+    """|K*| and loss angle of four steady sines of the reference solution: k1, k3 and c3
+    recovered from the thesis's values as the start, the others held at the truth."""
+    from fmu_components.fit import RigTable, fit, read_data
+    from fmu_components.history import component_definition
+
+    rows = [steady_reference_row(0.3 * MM, amplitude, frequency)
+            for amplitude in (0.05 * MM, 0.2 * MM) for frequency in (0.5, 5.0)]
+    path = tmp_path / "table.csv"
+    path.write_text("preload,amplitude,frequency,dynamic_stiffness,loss_angle_deg\n" + "".join(
+        ",".join(repr(float(v)) for v in row) + "\n" for row in rows))
+    table = read_data(path, component_definition(COMPONENT))
+    assert isinstance(table, RigTable)
+    free = ("k1", "k3", "c3")
+    thesis = synthetic.scaled(COMPONENT, {})
+    start = dict(TRUTH, **{name: thesis[name] for name in free})
+    result = fit(COMPONENT, [table], fix=[n for n in TRUTH if n not in free], starts=2,
+                 start_values=start)
+    for name in free:
+        assert result.values[name] == pytest.approx(TRUTH[name], rel=0.03), name

@@ -391,11 +391,12 @@ def run_command(args):
 
 
 def read_own(path, name, component, structure):
-    """An Own from a PARAMS.json, every mistake said in one line."""
-    import json
+    """An Own from a PARAMS.json (read and checked as the rig reads it), every mistake said
+    in one line."""
     import re
 
     from .cli import UsageError
+    from .rig import RigError, parameter_set
 
     if not (path and name and component):
         raise UsageError("--params, --name and --component go together: give all three")
@@ -406,24 +407,9 @@ def read_own(path, name, component, structure):
         raise UsageError(f"{component} comes in no {structure!r} structure (it has: "
                          f"{', '.join(structures_of(component))})")
     try:
-        values = json.loads(Path(path).read_text())
-    except OSError as error:
-        raise UsageError(f"cannot read {path}: {error.strerror}") from None
-    except ValueError:
-        raise UsageError(f"{path} is not JSON: give an object of parameter names and SI "
-                         f"values") from None
-    definition = component_definition(component, structure)
-    known = {p.name for p in definition.parameters}
-    if not isinstance(values, dict) or not all(
-            isinstance(v, (int, float)) and not isinstance(v, bool) for v in values.values()):
-        raise UsageError(f"{path}: give an object of parameter names and SI values")
-    unknown = sorted(set(values) - known)
-    if unknown:
-        raise UsageError(f"{path}: {unknown[0]} is no parameter of {component} ({structure}); "
-                         f"its parameters: {', '.join(sorted(known))}")
-    problem = definition.check_parameters(dict(definition.default_parameters(), **values))
-    if problem:
-        raise UsageError(f"{path}: {problem}")
+        values = parameter_set(component, structure, path)
+    except RigError as error:
+        raise UsageError(f"{path}: {error}") from None
     return Own(name, component, structure, values)
 
 

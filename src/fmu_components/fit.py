@@ -48,8 +48,15 @@ from .history import STRUCTURES, component_definition, native_history
 HISTORY_COLUMNS = ("time", "deflection", "force")
 TABLE_COLUMNS = ("preload", "amplitude", "frequency", "dynamic_stiffness", "loss_angle_deg")
 MIN_SAMPLES = 50
-SAMPLES_PER_CYCLE = 200  # a rig-table sine, simulated
-STEADY_CYCLES = 5  # a rig-table sine from the relaxed preload: the last one is analysed
+# A rig-table row is a measured steady sine, so it is simulated as close to the continuous
+# sine as the FMU's semantics allow: from the relaxed preload (as the rig starts), rig.py's
+# samples per cycle, forward-difference rates (the path runs through the samples). Holding
+# the exact rate of each sample instead lags half a step: measured on TrackBushRadial at
+# 0.3 +- 0.05 mm, 0.5 Hz, 200 samples per cycle, 0.4 deg of loss angle off the reference
+# solver's steady state, against 0.002 deg with the forward difference. The 10th cycle is
+# analysed: for the thesis's parameters at 0.1-20 Hz its |K*| and loss angle are within
+# 4e-5 of the periodic steady state (measured against the 40th).
+STEADY_CYCLES = 10
 UNIT_FACTOR = 30.0  # a magnitude this far from the component's scale is a unit mistake
 FAILED_RESIDUAL = 10.0  # per sample, for a simulation the FMU refused (10 x peak-to-peak)
 
@@ -313,10 +320,11 @@ def simulate_test(component, structure, test, values):
 def rig_point(history, values, preload, amplitude, frequency):
     """(|K*|, loss angle deg) of a steady sine from the relaxed preload."""
     from .harmonics import HarmonicError, first_harmonic
+    from .rig import SAMPLES_PER_CYCLE
 
-    period = 1.0 / frequency
-    t = np.arange(STEADY_CYCLES * SAMPLES_PER_CYCLE + 1) * (period / SAMPLES_PER_CYCLE)
-    x = preload + amplitude * np.sin(2.0 * math.pi * frequency * t)
+    omega = 2.0 * math.pi * frequency
+    t = np.arange(STEADY_CYCLES * SAMPLES_PER_CYCLE + 1) * (1.0 / (frequency * SAMPLES_PER_CYCLE))
+    x = preload + amplitude * np.sin(omega * t)
     force = history.run(values, t, x, check=False)
     try:
         result = first_harmonic(t, x, force, frequency, cycles=1)

@@ -110,7 +110,7 @@ class ComponentDefinition:
         by ``fmu-components fit``."""
         twin = copy.copy(self)
         twin.name = name
-        twin.description = f"{name}: {self.description} With {len(values)} parameter values of its own."
+        twin.description = f"{name}: {self.description} Parameter values of its own."
         twin.parameters = []
         for parameter in self.parameters:
             if parameter.name in values:
