@@ -306,7 +306,7 @@ class Problem:
 
     def residuals(self, u):
         values = self.parameters(u)
-        return np.concatenate([test_residuals(test, response)
+        return np.concatenate([residuals_of(test, response)
                                for test, response in zip(self.tests, self.responses(values))])
 
 
@@ -333,7 +333,7 @@ def rig_point(history, values, preload, amplitude, frequency):
     return (result.dynamic_stiffness, result.loss_angle_deg)
 
 
-def test_residuals(test, response):
+def residuals_of(test, response):
     if isinstance(test, History):
         r = (response - test.force) / (test.scale * math.sqrt(len(test.force)))
     else:
