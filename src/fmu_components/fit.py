@@ -413,8 +413,12 @@ class FitResult:
         if condition > CONDITION_LIMIT:
             notes.append(f"the Jacobian is near-singular (condition number {condition:.2g}): "
                          f"some combination of parameters is not determined by these data")
-        for name, (_, _, relative) in self.confidence().items():
-            if relative > RELATIVE_CI_LIMIT:
+        for name, (low, high, relative) in self.confidence().items():
+            if name in ELASTIC + GEOMETRIC and low <= 0.0 <= high:
+                notes.append(f"{name} is not told apart from 0 by these data (95 % interval "
+                             f"{low:.3g} .. {high:.3g}); --fix keeps the thesis value, "
+                             f"{self.thesis[name]:g}")
+            elif relative > RELATIVE_CI_LIMIT:
                 notes.append(f"{name} is not identifiable from these data: its 95 % interval "
                              f"is +-{relative * 100:.0f} % of its value; fix it (--fix) or "
                              f"add tests that excite it")
@@ -475,6 +479,7 @@ def fit(component, tests, fix=(), structure="final", starts=4, jobs=None, seed=0
     best = min(outcomes, key=lambda o: o[1])
     u = best[0]
     values = problem.parameters(u)
+    values = {name: values[name] for name in thesis}  # in the catalog's order
     return FitResult(component, structure, values, free, u, best[2], problem.residuals(u),
                      [(o[1], o[3], o[4]) for o in outcomes], tests,
                      time.perf_counter() - started, thesis)

@@ -10,7 +10,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .fit import History, simulate_test  # noqa: E402
+from .fit import RELATIVE_CI_LIMIT, History, simulate_test  # noqa: E402
 from .report import DISPLAY  # noqa: E402
 
 DPI = 200
@@ -132,7 +132,7 @@ def write_report(result, out):
     for name, value in result.values.items():
         if name in confidence:
             low, high, relative = confidence[name]
-            flag = " **not identifiable**" if relative > 0.5 else ""
+            flag = " **not identifiable**" if relative > RELATIVE_CI_LIMIT else ""
             lines.append(f"| `{name}` | {result.thesis[name]:.5g} | {value:.5g} | "
                          f"{low:.4g} .. {high:.4g} | {relative * 100:.1f}{flag} |")
         else:
