@@ -67,3 +67,11 @@ def test_own_build_mistakes_are_one_line(tmp_path, capsys, argv, words):
     assert exit_.value.code == 2
     message = capsys.readouterr().err.strip()
     assert words in message and "\n" not in message
+
+
+def test_own_fmu_runs_the_components_sine(own, capsys):
+    from fmu_components.build import run
+
+    run({"native": {"MyBush": own / "MyBush.fmu"}}, "TrackBushRadial")
+    (row,) = [line for line in capsys.readouterr().out.splitlines() if line.startswith("MyBush")]
+    assert row.split()[2] == "force"

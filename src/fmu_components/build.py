@@ -300,9 +300,9 @@ def build(names, destination, flavours=FLAVOURS, structure="final", own=None):
 
 # --- one run each -------------------------------------------------------------------------
 
-def sine_input(name, stop_time, step, component=None):
-    """The thesis sine of `component` (default: name's) with its exact (not secant) rate."""
-    mean, amplitude, frequency = THESIS_SINES[component or name]
+def sine_input(name, stop_time, step):
+    """The thesis sine of component `name` with its exact (not secant) rate."""
+    mean, amplitude, frequency = THESIS_SINES[name]
     omega = 2 * math.pi * frequency
     t = time_grid(stop_time, step)
     return input_table(name, t, sine(t, mean, amplitude, frequency),
@@ -322,7 +322,7 @@ def run(built, component=None):
             stop, step = 2.0, 1e-3
             started = time.perf_counter()
             result = simulate_fmu(str(path), stop_time=stop, output_interval=step,
-                                  input=sine_input(name, stop, step, component),
+                                  input=sine_input(component or name, stop, step),
                                   output=[output.name])
             wall = time.perf_counter() - started
             values = result[output.name]
