@@ -224,8 +224,8 @@ def _table(path, values, definition):
     scale = max(abs(thesis["elastic.a1"]), sum(thesis[f"k{i}"] for i in (1, 2, 3)))
     ratio = float(np.median(stiffness)) / scale
     if not 1.0 / UNIT_FACTOR ** 2 < ratio < UNIT_FACTOR ** 2:
-        raise UsageError(f"{path}: dynamic_stiffness about {np.median(stiffness):.3g}, "
-                         f"{'1/' if ratio < 1 else ''}{max(ratio, 1 / ratio):.0f} times "
+        size = f"1/{1 / ratio:.0f} of" if ratio < 1 else f"{ratio:.0f} times"
+        raise UsageError(f"{path}: dynamic_stiffness about {np.median(stiffness):.3g}, {size} "
                          f"{definition.name}'s scale ({scale:.3g} {load_unit}/{unit}); give "
                          f"{load_unit}/{unit}")
     return RigTable(path, values)
