@@ -75,3 +75,19 @@ def test_own_fmu_runs_the_components_sine(own, capsys):
     run({"native": {"MyBush": own / "MyBush.fmu"}}, "TrackBushRadial")
     (row,) = [line for line in capsys.readouterr().out.splitlines() if line.startswith("MyBush")]
     assert row.split()[2] == "force"
+
+
+def test_own_part_in_another_structure(tmp_path):
+    values = {"k1": 5e7, "c2": 9e4, "xi2": 4e-3}
+    params = tmp_path / "hs.json"
+    params.write_text(json.dumps(values))
+    assert cli.main(["build", "--params", str(params), "--name", "MyHauptSedlan",
+                     "--component", "TrackBushRadial", "--structure", "haupt-sedlan",
+                     "--flavour", "native", "--dest", str(tmp_path), "--no-run"]) == 0
+    t = time_grid(1.0, 1e-3)
+    x = dual_sine(t, 0.2e-3, [(0.1e-3, 3.0)])
+    result = simulate_fmu(str(tmp_path / "MyHauptSedlan.fmu"), stop_time=1.0,
+                          output_interval=1e-3, output=["force"],
+                          input=input_table("TrackBushRadial", t, x, secant_rates(t, x)))
+    np.testing.assert_array_equal(
+        result["force"], simulate("TrackBushRadial", values, t, x, structure="haupt-sedlan"))

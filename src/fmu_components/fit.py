@@ -43,7 +43,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from .cli import UsageError
-from .history import STRUCTURES, component_definition, native_history
+from .history import STRUCTURES, HistoryError, component_definition, native_history
 
 HISTORY_COLUMNS = ("time", "deflection", "force")
 TABLE_COLUMNS = ("preload", "amplitude", "frequency", "dynamic_stiffness", "loss_angle_deg")
@@ -551,7 +551,10 @@ def run_command(args):
     if args.starts < 1:
         raise UsageError("--starts must be 1 or more")
     tests = [read_data(path, definition) for path in args.data]
-    result = fit(args.component, tests, args.fix, args.structure, args.starts, args.jobs)
+    try:
+        result = fit(args.component, tests, args.fix, args.structure, args.starts, args.jobs)
+    except HistoryError as error:
+        raise UsageError(str(error)) from None
     args.out.parent.mkdir(parents=True, exist_ok=True)
     write_parameters(args.out, result.values)
     from .fit_report import write_report

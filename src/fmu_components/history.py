@@ -21,6 +21,7 @@ import ctypes
 import hashlib
 import os
 import shutil
+import subprocess
 import tempfile
 from pathlib import Path
 
@@ -69,8 +70,12 @@ def compiled_library(definition):
             work = Path(tmp) / "work"
             guid, files = native_sources(definition, work / "sources")
             shutil.copy2(C_SOURCE / DRIVER, work / "sources" / DRIVER)
-            compile_native("gcc", work / "sources", [*files, DRIVER], work / "history.so",
-                           ["-fPIC"])
+            try:
+                compile_native("gcc", work / "sources", [*files, DRIVER], work / "history.so",
+                               ["-fPIC"])
+            except (OSError, subprocess.CalledProcessError) as error:
+                raise HistoryError(f"cannot compile {definition.name}'s native model for the "
+                                   f"fast simulation ({error}); install gcc") from None
             (work / "resources").mkdir()
             (work / "resources" / "fmu-guid.txt").write_text(guid + "\n")
             shutil.rmtree(work / "sources")
