@@ -533,7 +533,8 @@ def configure(parser):
                         help="starting points, fitted in parallel (default: 4)")
     parser.add_argument("--jobs", type=int, default=None,
                         help="worker processes (default: one per core)")
-    parser.add_argument("data", nargs="+", type=Path, metavar="DATA.csv")
+    parser.add_argument("data", nargs="+", type=Path, metavar="DATA.csv",
+                        help="one measured test (time,deflection,force) or rig table per file")
 
 
 def run_command(args):
