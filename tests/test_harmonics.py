@@ -26,6 +26,13 @@ def kelvin_record(times, third_harmonic=0.0):
     return x, force + third_harmonic * np.sin(3.0 * OMEGA * times)
 
 
+def assert_kelvin_element(result, rel):
+    """|K*|, loss angle and energy per cycle of the Kelvin element."""
+    assert result.dynamic_stiffness == pytest.approx(math.hypot(K, C * OMEGA), rel=rel)
+    assert math.tan(math.radians(result.loss_angle_deg)) == pytest.approx(C * OMEGA / K, rel=rel)
+    assert result.energy_per_cycle == pytest.approx(math.pi * C * OMEGA * A ** 2, rel=rel)
+
+
 def uniform_times(cycles, per_cycle):
     return np.arange(cycles * per_cycle + 1) / (per_cycle * FREQUENCY)
 
@@ -35,9 +42,7 @@ def test_kelvin_element_on_uniform_cycles(per_cycle):
     times = uniform_times(3, per_cycle)
     result = first_harmonic(times, *kelvin_record(times), FREQUENCY)
     assert result.cycles == 3
-    assert result.dynamic_stiffness == pytest.approx(math.hypot(K, C * OMEGA), rel=1e-12)
-    assert math.tan(math.radians(result.loss_angle_deg)) == pytest.approx(C * OMEGA / K, rel=1e-12)
-    assert result.energy_per_cycle == pytest.approx(math.pi * C * OMEGA * A ** 2, rel=1e-12)
+    assert_kelvin_element(result, rel=1e-12)
     assert result.mean_deflection == pytest.approx(X0, rel=1e-12)
     assert result.mean_force == pytest.approx(K * X0, rel=1e-12)
     # equivalent spring and dashpot of the damper's report: the element itself
@@ -51,8 +56,7 @@ def test_higher_harmonics_change_neither_stiffness_nor_energy_but_the_secant():
     times = uniform_times(2, 400)
     distortion = 0.05 * K * A
     result = first_harmonic(times, *kelvin_record(times, distortion), FREQUENCY)
-    assert result.dynamic_stiffness == pytest.approx(math.hypot(K, C * OMEGA), rel=1e-12)
-    assert result.energy_per_cycle == pytest.approx(math.pi * C * OMEGA * A ** 2, rel=1e-12)
+    assert_kelvin_element(result, rel=1e-12)
     # sin(3wt) is -1 at the top tip and +1 at the bottom one
     assert result.secant_stiffness == pytest.approx(K - distortion / A, rel=1e-12)
 
@@ -62,9 +66,7 @@ def test_kelvin_element_on_scattered_samples():
     times = np.sort(np.random.default_rng(12).uniform(0.0, 3.0 / FREQUENCY, 20000))
     result = first_harmonic(times, *kelvin_record(times), FREQUENCY)
     assert result.cycles == 2
-    assert result.dynamic_stiffness == pytest.approx(math.hypot(K, C * OMEGA), rel=1e-5)
-    assert math.tan(math.radians(result.loss_angle_deg)) == pytest.approx(C * OMEGA / K, rel=1e-4)
-    assert result.energy_per_cycle == pytest.approx(math.pi * C * OMEGA * A ** 2, rel=1e-4)
+    assert_kelvin_element(result, rel=1e-4)
     assert result.secant_stiffness == pytest.approx(K, rel=1e-3)
 
 

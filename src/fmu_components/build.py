@@ -154,6 +154,15 @@ def windows_compiler():
     return shutil.which(MINGW)
 
 
+def model_identifier(name, structure):
+    """The FMU's model identifier (its file and binary name): the component's name, and for
+    another structure than the shipped one its name too (RoadWheelTyreHauptSedlan), so that
+    a host can load both at once (a Python FMU's entry module is named by it)."""
+    if structure == "final":
+        return name
+    return name + "".join(part.capitalize() for part in structure.split("-"))
+
+
 def entry_source(name, structure, values=None, component=None):
     """The Python flavour's entry module: the shipped model, another structure's, or a
     component with parameter values of its own (values) under the name `name`."""
@@ -165,7 +174,8 @@ def entry_source(name, structure, values=None, component=None):
     if structure == "final":
         return ENTRY_TEMPLATE.format(name=name, catalog_name="COMPONENTS",
                                      definition=f'COMPONENTS["{name}"]')
-    return ENTRY_TEMPLATE.format(name=name, catalog_name="component_definition",
+    return ENTRY_TEMPLATE.format(name=model_identifier(name, structure),
+                                 catalog_name="component_definition",
                                  definition=f'component_definition("{name}", "{structure}")')
 
 
@@ -192,20 +202,21 @@ def build_native(names, destination, staging, structure="final", own=None):
     built = {}
     for name in names:
         definition = definition_of(name, structure, own)
+        identifier = own.name if own else model_identifier(name, structure)
         work = staging / "native" / name
         sources = work / "sources"
         guid, files = native_sources(definition, sources)
-        binaries = {f"binaries/linux64/{name}.so": compile_native(
-            "gcc", sources, files, work / f"{name}.so", ["-fPIC", "-Wl,-Bsymbolic"])}
+        binaries = {f"binaries/linux64/{identifier}.so": compile_native(
+            "gcc", sources, files, work / f"{identifier}.so", ["-fPIC", "-Wl,-Bsymbolic"])}
         if win64:
             # mingw's own C99 printf (no DLL beyond msvcrt), libgcc linked in
-            binaries[f"binaries/win64/{name}.dll"] = compile_native(
-                win64, sources, files, work / f"{name}.dll",
+            binaries[f"binaries/win64/{identifier}.dll"] = compile_native(
+                win64, sources, files, work / f"{identifier}.dll",
                 ["-D__USE_MINGW_ANSI_STDIO=1", "-static-libgcc"])
-        description = model_description(definition, guid=guid, model_identifier=name,
+        description = model_description(definition, guid=guid, model_identifier=identifier,
                                          native=True, source_files=files,
                                          nominals=state_nominals(definition))
-        built[name] = write_fmu(destination / f"{name}.fmu", {
+        built[name] = write_fmu(destination / f"{identifier}.fmu", {
             "modelDescription.xml": description, **binaries,
             **{f"sources/{p.name}": p for p in sorted(sources.iterdir())},
             **identity(definition, guid)})
@@ -256,29 +267,31 @@ def build_python(names, destination, staging, structure="final", own=None):
     identity_extra = () if structure == "final" else (f"structure {structure}",)
     for name in names:
         definition = definition_of(name, structure, own)
-        entry = staging / "python" / f"{name}.py"
-        source = entry_source(name, structure, own and own.values, own and own.component)
-        entry.write_text(source)
-        own_values = (source,) if own else ()  # an own part's values live in its entry module
+        identifier = own.name if own else model_identifier(name, structure)
+        entry = staging / "python" / f"{identifier}.py"
+        entry_text = entry_source(name, structure, own and own.values, own and own.component)
+        entry.write_text(entry_text)
+        own_values = (entry_text,) if own else ()  # an own part's values live in its entry
         pythonfmu_fmu = Path(FmuBuilder.build_FMU(entry, dest=staging / "python",
                                                   project_files=[package]))
         guid = guid_for("python", name, *runtime, *identity_extra, *own_values)
-        guard = compile_guard(staging / "python", name, guid)
-        description = model_description(definition, guid=guid, model_identifier=name,
+        guard = compile_guard(staging / "python", identifier, guid)
+        description = model_description(definition, guid=guid, model_identifier=identifier,
                                          native=False, nominals=state_nominals(definition))
         files = {"modelDescription.xml": description}
-        binary = f"binaries/linux64/{name}.so"
+        binary = f"binaries/linux64/{identifier}.so"
         with zipfile.ZipFile(pythonfmu_fmu) as source:
             for item in source.infolist():
-                if item.filename == binary:
-                    # pythonfmu's library goes beside the guard, which loads it
+                if item.filename.startswith("binaries/linux64/") and item.filename.endswith(".so"):
+                    # pythonfmu's library (named by the model's name) goes beside the
+                    # guard, which loads it
                     files[f"binaries/linux64/{PYTHONFMU_ENGINE}"] = source.read(item)
                 elif not item.filename.startswith("binaries/") and item.filename != "modelDescription.xml":
                     # pythonfmu's win64 binary would run without the guard: dropped
                     files[item.filename] = source.read(item)
         files[binary] = guard
         files.update(identity(definition, guid))
-        built[name] = write_fmu(destination / f"{name}.fmu", files)
+        built[name] = write_fmu(destination / f"{identifier}.fmu", files)
     return built
 
 
