@@ -97,7 +97,7 @@ def test_errors(test, response):
         return f"{np.sqrt(np.mean(error ** 2)):.2f} % rms, {np.max(np.abs(error)):.2f} % max of p-p"
     k = (response[:, 0] / test.rows[:, 3] - 1) * 100
     d = response[:, 1] - test.rows[:, 4]
-    return (f"|K*| {np.sqrt(np.mean(k ** 2)):.2f} % rms; loss angle "
+    return (f"dynamic stiffness {np.sqrt(np.mean(k ** 2)):.2f} % rms; loss angle "
             f"{np.sqrt(np.mean(d ** 2)):.2f} deg rms")
 
 
