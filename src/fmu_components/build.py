@@ -163,8 +163,14 @@ def model_identifier(name, structure):
     return name + "".join(part.capitalize() for part in structure.split("-"))
 
 
-def entry_source(name, structure):
-    """The Python flavour's entry module: the shipped model, or another structure's."""
+def entry_source(name, structure, values=None, component=None):
+    """The Python flavour's entry module: the shipped model, another structure's, or a
+    component with parameter values of its own (values) under the name `name`."""
+    if values is not None:
+        return ENTRY_TEMPLATE.format(
+            name=name, catalog_name="component_definition",
+            definition=f'component_definition("{component}", "{structure}").with_values(\n'
+                       f'        "{name}", {values!r})')
     if structure == "final":
         return ENTRY_TEMPLATE.format(name=name, catalog_name="COMPONENTS",
                                      definition=f'COMPONENTS["{name}"]')
@@ -173,7 +179,21 @@ def entry_source(name, structure):
                                  definition=f'component_definition("{name}", "{structure}")')
 
 
-def build_native(names, destination, staging, structure="final"):
+class Own:
+    """An engineer's own part: `component` in `structure` with parameter values of its own,
+    built under `name` (build --params)."""
+
+    def __init__(self, name, component, structure, values):
+        self.name, self.component, self.structure = name, component, structure
+        self.values = {k: float(v) for k, v in values.items()}
+        self.definition = component_definition(component, structure).with_values(name, self.values)
+
+
+def definition_of(name, structure, own=None):
+    return own.definition if own else component_definition(name, structure)
+
+
+def build_native(names, destination, staging, structure="final", own=None):
     win64 = windows_compiler()
     if win64 is None:
         print(f"warning: {MINGW} not found, so the native FMUs carry no win64 binary (Debian: "
@@ -181,8 +201,8 @@ def build_native(names, destination, staging, structure="final"):
               file=sys.stderr)
     built = {}
     for name in names:
-        definition = component_definition(name, structure)
-        identifier = model_identifier(name, structure)
+        definition = definition_of(name, structure, own)
+        identifier = own.name if own else model_identifier(name, structure)
         work = staging / "native" / name
         sources = work / "sources"
         guid, files = native_sources(definition, sources)
@@ -235,7 +255,7 @@ def compile_guard(directory, name, guid):
     return library
 
 
-def build_python(names, destination, staging, structure="final"):
+def build_python(names, destination, staging, structure="final", own=None):
     from pythonfmu.builder import FmuBuilder
 
     destination.mkdir(parents=True, exist_ok=True)
@@ -246,13 +266,15 @@ def build_python(names, destination, staging, structure="final"):
     # another structure's FMU runs the same package, so its GUID also names the structure
     identity_extra = () if structure == "final" else (f"structure {structure}",)
     for name in names:
-        definition = component_definition(name, structure)
-        identifier = model_identifier(name, structure)
+        definition = definition_of(name, structure, own)
+        identifier = own.name if own else model_identifier(name, structure)
         entry = staging / "python" / f"{identifier}.py"
-        entry.write_text(entry_source(name, structure))
+        entry_text = entry_source(name, structure, own and own.values, own and own.component)
+        entry.write_text(entry_text)
+        own_values = (entry_text,) if own else ()  # an own part's values live in its entry
         pythonfmu_fmu = Path(FmuBuilder.build_FMU(entry, dest=staging / "python",
                                                   project_files=[package]))
-        guid = guid_for("python", name, *runtime, *identity_extra)
+        guid = guid_for("python", name, *runtime, *identity_extra, *own_values)
         guard = compile_guard(staging / "python", identifier, guid)
         description = model_description(definition, guid=guid, model_identifier=identifier,
                                          native=False, nominals=state_nominals(definition))
@@ -273,24 +295,26 @@ def build_python(names, destination, staging, structure="final"):
     return built
 
 
-def build(names, destination, flavours=FLAVOURS, structure="final"):
+def build(names, destination, flavours=FLAVOURS, structure="final", own=None):
     """{flavour: {name: path}}: native FMUs in destination, Python ones in destination/python;
-    the components in one of the thesis's model structures (catalog.STRUCTURES)."""
+    the components in one of the thesis's model structures (catalog.STRUCTURES), or the one
+    part `own` (an Own; names: [own.name])."""
     destination.mkdir(parents=True, exist_ok=True)
     built = {}
     with tempfile.TemporaryDirectory(prefix="fmu_components_") as tmp:
         staging = Path(tmp)
         if "native" in flavours:
-            built["native"] = build_native(names, destination, staging, structure)
+            built["native"] = build_native(names, destination, staging, structure, own)
         if "python" in flavours:
-            built["python"] = build_python(names, destination / "python", staging, structure)
+            built["python"] = build_python(names, destination / "python", staging, structure,
+                                           own)
     return built
 
 
 # --- one run each -------------------------------------------------------------------------
 
 def sine_input(name, stop_time, step):
-    """The thesis sine with its exact (not secant) rate."""
+    """The thesis sine of component `name` with its exact (not secant) rate."""
     mean, amplitude, frequency = THESIS_SINES[name]
     omega = 2 * math.pi * frequency
     t = time_grid(stop_time, step)
@@ -298,19 +322,21 @@ def sine_input(name, stop_time, step):
                        rate=amplitude * omega * np.cos(omega * t))
 
 
-def run(built):
+def run(built, component=None):
+    """One thesis sine through each built FMU; component: what an own part is."""
     from fmpy import simulate_fmu
 
     print(f"\n{'FMU':18s} {'flavour':8s} {'output':12s} {'min':>11s} {'max':>11s} {'unit':>6s} "
           f"{'steps':>6s} {'wall s':>7s} {'us/step':>8s}")
     for flavour, paths in built.items():
         for name, path in paths.items():
-            definition = COMPONENTS[name]
+            definition = COMPONENTS[component or name]
             output = definition.outputs[0]
             stop, step = 2.0, 1e-3
             started = time.perf_counter()
             result = simulate_fmu(str(path), stop_time=stop, output_interval=step,
-                                  input=sine_input(name, stop, step), output=[output.name])
+                                  input=sine_input(component or name, stop, step),
+                                  output=[output.name])
             wall = time.perf_counter() - started
             values = result[output.name]
             steps = len(values) - 1
@@ -324,6 +350,9 @@ EXAMPLES = """examples:
   fmu-components build --no-run --only RotaryDamper --flavour native
   fmu-components build --structure four-element  the torsion bush's four-element model (Appendix 4a)
                                                 into fmus/four-element/
+  fmu-components build --params bush.json --name MyBush --component TrackBushRadial
+                                                your part (fmu-components fit) as fmus/MyBush.fmu
+                                                and fmus/python/MyBush.fmu
 """
 
 
@@ -341,12 +370,21 @@ def configure(parser):
                              "fmus/STRUCTURE for all but final")
     parser.add_argument("--flavour", nargs="+", choices=FLAVOURS, default=list(FLAVOURS))
     parser.add_argument("--no-run", action="store_true", help="build only")
+    parser.add_argument("--params", type=Path, metavar="PARAMS.json",
+                        help="parameter start values (FMU names, SI; fmu-components fit writes "
+                             "them) for one FMU of your own: needs --name and --component")
+    parser.add_argument("--name", help="with --params: the FMU's model name, identifier and "
+                                       "file name (a C identifier)")
+    parser.add_argument("--component", choices=sorted(COMPONENTS),
+                        help="with --params: the component the values are for")
 
 
 def run_command(args):
     from .cli import UsageError
 
     structure = args.structure
+    if args.params or args.name or args.component:
+        return build_own(args)
     names = args.only or [n for n in COMPONENTS if structure in structures_of(n)]
     for name in names:
         if structure not in structures_of(name):
@@ -362,6 +400,40 @@ def run_command(args):
             print(f"built {path}")
     if not args.no_run:
         run(built)
+    return 0
+
+
+def read_own(path, name, component, structure):
+    """An Own from a PARAMS.json (read and checked as the rig reads it), every mistake said
+    in one line."""
+    import re
+
+    from .cli import UsageError
+    from .rig import RigError, parameter_set
+
+    if not (path and name and component):
+        raise UsageError("--params, --name and --component go together: give all three")
+    if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]{0,63}", name) or name in COMPONENTS:
+        raise UsageError(f"--name {name}: give a new name of letters, digits and _ that "
+                         f"starts with a letter (it names the FMU's C and Python identifiers)")
+    if structure not in structures_of(component):
+        raise UsageError(f"{component} comes in no {structure!r} structure (it has: "
+                         f"{', '.join(structures_of(component))})")
+    try:
+        values = parameter_set(component, structure, path)
+    except RigError as error:
+        raise UsageError(f"{path}: {error}") from None
+    return Own(name, component, structure, values)
+
+
+def build_own(args):
+    own = read_own(args.params, args.name, args.component, args.structure)
+    built = build([own.name], args.dest, args.flavour, args.structure, own)
+    for paths in built.values():
+        for path in paths.values():
+            print(f"built {path}")
+    if not args.no_run:
+        run(built, own.component)
     return 0
 
 

@@ -19,6 +19,7 @@ COMMANDS = {
     "validate": ("fmu_components.validate",
                  "run the thesis test programme through the built FMUs against the references"),
     "signal": ("fmu_components.signals", "write an input CSV for an FMU (SI units)"),
+    "fit": ("fmu_components.fit", "identify a rubber component's parameters from measured data"),
     "rig": ("fmu_components.rig", "virtual test rig: dynamic stiffness, loss angle, energy per "
                                   "cycle and secant stiffness of a component at periodic steady "
                                   "state, and its step-and-hold relaxation"),

@@ -250,10 +250,12 @@ class DamperEquations:
                 "rotor_rate": y[1], "dashpot_torque": self.dashpot(y[1])}
 
 
-def equations_for(fmu_name, structure="final"):
+def equations_for(fmu_name, structure="final", spec=None):
+    """The equations of a component in one of the thesis's structures with the thesis's
+    values, or with `spec` (a RubberSpec or DamperSpec of other values)."""
     if fmu_name == "RotaryDamper":
-        return DamperEquations(damper_spec())
-    return RubberEquations(rubber_spec(fmu_name, structure), LOAD_NAMES[fmu_name])
+        return DamperEquations(spec or damper_spec())
+    return RubberEquations(spec or rubber_spec(fmu_name, structure), LOAD_NAMES[fmu_name])
 
 
 # --- solvers ---------------------------------------------------------------------------
@@ -312,9 +314,10 @@ def solve_held_rate(fmu_name, times, deflection, rate, structure="final", read_a
     return {key: np.array([row[key] for row in rows]) for key in rows[0]}
 
 
-def solve_smooth(fmu_name, t_eval, x_of_t, v_of_t, structure="final"):
-    """Outputs at t_eval for a continuous input x(t) with rate v(t)."""
-    equations = equations_for(fmu_name, structure)
+def solve_smooth(fmu_name, t_eval, x_of_t, v_of_t, structure="final", spec=None):
+    """Outputs at t_eval for a continuous input x(t) with rate v(t); spec: other values
+    than the thesis's (see equations_for)."""
+    equations = equations_for(fmu_name, structure, spec)
     t_eval = np.asarray(t_eval, dtype=float)
     y0 = equations.initial_state(x_of_t(t_eval[0]), v_of_t(t_eval[0]))
 

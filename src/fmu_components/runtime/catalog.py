@@ -6,6 +6,7 @@ torsion bush), so k is converted per m (per rad) and xi per m/s (rad/s); the che
 time constant tau = c/(k*xi) = 100, 0.1 and 1.0 s of section 6.4 (spec section 1).
 """
 
+import copy
 import math
 
 from .damper import damper_equations
@@ -102,6 +103,21 @@ class ComponentDefinition:
     def default_parameters(self):
         """The thesis value of every parameter, by name."""
         return {p.name: p.start for p in self.parameters}
+
+    def with_values(self, name, values):
+        """This component under another name, with other parameters' start values (name ->
+        SI value; the others keep theirs): an engineer's own part, such as one identified
+        by ``fmu-components fit``."""
+        twin = copy.copy(self)
+        twin.name = name
+        twin.description = f"{name}: {self.description} Parameter values of its own."
+        twin.parameters = []
+        for parameter in self.parameters:
+            if parameter.name in values:
+                parameter = copy.copy(parameter)
+                parameter.start = float(values[parameter.name])
+            twin.parameters.append(parameter)
+        return twin
 
     def check_parameters(self, values):
         """A message naming the first parameter (or table) that makes no physical sense,

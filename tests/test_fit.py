@@ -1,0 +1,193 @@
+"""fmu-components fit: a small synthetic round trip through the command line (data from the
+independent reference solver with 0.5 % noise, a held-back test predicted), and one clear
+line for each kind of bad data file."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from fmu_components import cli, synthetic
+from fmu_components.history import simulate
+
+COMPONENT = "TrackBushRadial"
+MM = 1e-3
+TRUTH = synthetic.scaled(COMPONENT, {"k": 1.5, "c": 0.7})
+FIXED = ["xi1", "xi2", "xi3", "elastic.a0", "elastic.a2", "elastic.a3", "geometric.h"]
+
+
+def sine_path(mean, amplitude, frequency):
+    return lambda t: mean + amplitude * np.sin(2 * math.pi * frequency * t)
+
+
+def sine_times(frequency, cycles, per_cycle=100):
+    return np.arange(cycles * per_cycle + 1) / (frequency * per_cycle)
+
+
+def measured(label, mean, amplitude, frequency, cycles, seed):
+    return synthetic.measure_path(COMPONENT, label, sine_times(frequency, cycles),
+                                  sine_path(mean, amplitude, frequency), TRUTH, 0.005, seed)
+
+
+def run_fit(*argv):
+    return cli.main(["fit", "--component", COMPONENT, *map(str, argv)])
+
+
+def test_round_trip_recovers_the_parameters_and_predicts_a_held_back_test(tmp_path):
+    files = []
+    for seed, (mean, amplitude, frequency, cycles) in enumerate(
+            [(0.2 * MM, 0.1 * MM, 0.2, 2), (0.3 * MM, 0.05 * MM, 1.0, 3),
+             (0.1 * MM, 0.2 * MM, 5.0, 3)]):
+        history, _ = measured(f"sine{seed}.csv", mean, amplitude, frequency, cycles, seed)
+        files.append(synthetic.write_history(tmp_path / history.label, history))
+    out = tmp_path / "fitted" / "bush.json"
+    assert run_fit("--fix", *FIXED, "--starts", "2", "--out", out, *files) == 0
+
+    fitted = json.loads(out.read_text())
+    assert set(fitted) == set(TRUTH)
+    for name in FIXED + ["geometric.x_ref"]:
+        assert fitted[name] == TRUTH[name]
+    for name in ("k1", "k3", "c3", "elastic.a1"):
+        assert fitted[name] == pytest.approx(TRUTH[name], rel=0.1), name
+    held_back, truth = measured("held.csv", 0.25 * MM, 0.15 * MM, 2.0, 3, 9)
+    predicted = simulate(COMPONENT, fitted, held_back.times, held_back.deflection)
+    assert synthetic.peak_to_peak_error(predicted, truth) < 2.0
+
+    report = (out.parent / "bush_report.md").read_text()
+    for figure in ("responses", "residuals", "correlation"):
+        assert (out.parent / f"bush_{figure}.png").stat().st_size > 10_000
+        assert f"bush_{figure}.png" in report
+    assert "95 % interval" in report
+
+
+# --- bad data files -----------------------------------------------------------------------
+
+def one_line_error(capsys, tmp_path, text, *argv):
+    path = tmp_path / "data.csv"
+    path.write_text(text)
+    with pytest.raises(SystemExit) as exit_:
+        run_fit("--out", tmp_path / "p.json", path, *argv)
+    assert exit_.value.code == 2
+    message = capsys.readouterr().err.strip()
+    assert "\n" not in message and "Traceback" not in message
+    return message
+
+
+def csv_text(t, x, f, header="time,deflection,force"):
+    return header + "\n" + "\n".join(f"{float(a)!r},{float(b)!r},{float(c)!r}"
+                                   for a, b, c in zip(t, x, f)) + "\n"
+
+
+def good_sine(cycles=2.0, n=400):
+    t = np.linspace(0.0, cycles, n)
+    x = 0.2 * MM + 0.1 * MM * np.sin(2 * math.pi * t)
+    return t, x, 81.8e6 * x
+
+
+def test_wrong_columns_are_listed_against_the_expected(capsys, tmp_path):
+    t, x, f = good_sine()
+    message = one_line_error(capsys, tmp_path, csv_text(t, x, f, "t,x,F"))
+    assert "columns t,x,F" in message and "expected time,deflection,force" in message
+    assert "preload,amplitude,frequency,dynamic_stiffness,loss_angle_deg" in message
+
+
+def test_deflection_in_mm_is_caught(capsys, tmp_path):
+    t, x, f = good_sine()
+    message = one_line_error(capsys, tmp_path, csv_text(t, x / MM, f))
+    assert "looks like mm" in message and "give m" in message
+
+
+def test_force_in_kn_is_caught(capsys, tmp_path):
+    t, x, f = good_sine()
+    message = one_line_error(capsys, tmp_path, csv_text(t, x, f / 1e3))
+    assert "looks like kN" in message and "give N" in message
+
+
+def test_too_few_cycles_is_caught(capsys, tmp_path):
+    t, x, f = good_sine(cycles=0.4)
+    message = one_line_error(capsys, tmp_path, csv_text(t, x, f))
+    assert "too few cycles" in message
+
+
+def test_too_few_samples_is_caught(capsys, tmp_path):
+    t, x, f = good_sine(n=20)
+    assert "20 samples" in one_line_error(capsys, tmp_path, csv_text(t, x, f))
+
+
+def test_nan_is_caught(capsys, tmp_path):
+    t, x, f = good_sine()
+    f[17] = np.nan
+    message = one_line_error(capsys, tmp_path, csv_text(t, x, f))
+    assert "line 19" in message and "force" in message and "not finite" in message
+
+
+def test_time_going_back_is_caught(capsys, tmp_path):
+    t, x, f = good_sine()
+    t[100] = t[98]
+    message = one_line_error(capsys, tmp_path, csv_text(t, x, f))
+    assert "time does not increase at line 102" in message
+
+
+def test_the_damper_is_refused(capsys, tmp_path):
+    t, x, f = good_sine()
+    path = tmp_path / "data.csv"
+    path.write_text(csv_text(t, x, f))
+    with pytest.raises(SystemExit):
+        cli.main(["fit", "--component", "RotaryDamper", "--out", str(tmp_path / "p.json"),
+                  str(path)])
+    assert "rubber component" in capsys.readouterr().err
+
+
+def test_rig_table_in_n_per_mm_is_caught(capsys, tmp_path):
+    rows = "\n".join(f"0.0003,0.0001,{f},{60000.0},{10.0}" for f in (0.1, 1.0, 10.0))
+    message = one_line_error(capsys, tmp_path, "preload,amplitude,frequency,dynamic_stiffness,"
+                             f"loss_angle_deg\n{rows}\n")
+    assert "dynamic_stiffness" in message and "give N/m" in message
+
+
+# --- the rig-table format ---------------------------------------------------------------
+
+def test_a_rig_table_point_is_the_reference_steady_state():
+    """The fit's simulation of a table row against the reference solver's steady sine."""
+    from fmu_components.fit import rig_point
+    from fmu_components.history import native_history
+
+    for preload, amplitude, frequency in ((0.3 * MM, 0.05 * MM, 0.5), (0.1 * MM, 0.2 * MM, 10.0)):
+        *_, stiffness, loss = steady_reference_row(preload, amplitude, frequency)
+        ours = rig_point(native_history(COMPONENT), TRUTH, preload, amplitude, frequency)
+        assert ours[0] == pytest.approx(stiffness, rel=2e-4)
+        assert ours[1] == pytest.approx(loss, abs=0.01)
+
+
+def steady_reference_row(preload, amplitude, frequency, cycles=10, per_cycle=200):
+    """|K*| and loss angle of the reference solution's last cycle (independent of the FMUs)."""
+    from fmu_components.harmonics import first_harmonic
+
+    times = sine_times(frequency, cycles, per_cycle)
+    history, force = synthetic.measure_path(COMPONENT, "row", times,
+                                            sine_path(preload, amplitude, frequency), TRUTH, 0.0)
+    result = first_harmonic(times, history.deflection, force, frequency, cycles=1)
+    return preload, amplitude, frequency, result.dynamic_stiffness, result.loss_angle_deg
+
+
+def test_rig_table_round_trip(tmp_path):
+    """|K*| and loss angle of four steady sines of the reference solution: k1, k3 and c3
+    recovered from the thesis's values as the start, the others held at the truth."""
+    from fmu_components.fit import RigTable, fit, read_data
+    from fmu_components.history import component_definition
+
+    rows = [steady_reference_row(0.3 * MM, amplitude, frequency)
+            for amplitude in (0.05 * MM, 0.2 * MM) for frequency in (0.5, 5.0)]
+    path = tmp_path / "table.csv"
+    path.write_text("preload,amplitude,frequency,dynamic_stiffness,loss_angle_deg\n" + "".join(
+        ",".join(repr(float(v)) for v in row) + "\n" for row in rows))
+    table = read_data(path, component_definition(COMPONENT))
+    assert isinstance(table, RigTable)
+    free = ("k1", "k3", "c3")
+    thesis = synthetic.scaled(COMPONENT, {})
+    start = dict(TRUTH, **{name: thesis[name] for name in free})
+    result = fit(COMPONENT, [table], fix=[n for n in TRUTH if n not in free], starts=2,
+                 start_values=start)
+    for name in free:
+        assert result.values[name] == pytest.approx(TRUTH[name], rel=0.03), name
