@@ -441,7 +441,7 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     return call_end(instance, status);
 }
 
-/* The FMUs have Real variables only. */
+/* The FMUs have Real variables and Boolean parameters only. */
 static fmi2Status no_variable_of_type(fmi2Component c, const char *function, size_t nvr,
                                       const fmi2ValueReference vr[], int allowed) {
     Instance *instance = (Instance *)c;
@@ -461,8 +461,20 @@ fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
 
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           fmi2Boolean value[]) {
-    (void)value;
-    return no_variable_of_type(c, "fmi2GetBoolean", nvr, vr, READABLE);
+    Instance *instance = (Instance *)c;
+    if (!call_begin(instance, READABLE, __func__)) return fmi2Error;
+    if (arrays_missing(instance, "fmi2GetBoolean", nvr, vr, value))
+        return call_end(instance, fmi2Error);
+    for (size_t i = 0; i < nvr; i++) {
+        if (vr[i] != RATE_FROM_DEFLECTION) {
+            log_status(instance, fmi2Error, "fmi2GetBoolean: no Boolean variable has value "
+                       "reference %u", (unsigned)vr[i]);
+            for (size_t k = 0; k < nvr; k++) value[k] = fmi2False;
+            return call_end(instance, fmi2Error);
+        }
+        value[i] = instance->s.rate_from_deflection ? fmi2True : fmi2False;
+    }
+    return call_end(instance, fmi2OK);
 }
 
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
@@ -479,8 +491,24 @@ fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
 
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           const fmi2Boolean value[]) {
-    (void)value;
-    return no_variable_of_type(c, "fmi2SetBoolean", nvr, vr, SETTABLE);
+    Instance *instance = (Instance *)c;
+    if (!call_begin(instance, SETTABLE, __func__)) return fmi2Error;
+    if (arrays_missing(instance, "fmi2SetBoolean", nvr, vr, value))
+        return call_end(instance, fmi2Error);
+    for (size_t i = 0; i < nvr; i++) {
+        if (vr[i] != RATE_FROM_DEFLECTION) {
+            log_status(instance, fmi2Error, "fmi2SetBoolean: no Boolean variable has value "
+                       "reference %u; nothing set", (unsigned)vr[i]);
+            return call_end(instance, fmi2Error);
+        }
+        if (!(instance->s.mode & BEFORE_INITIALIZED)) {
+            log_status(instance, fmi2Error, "fmi2SetBoolean: rate_from_deflection is a fixed "
+                       "parameter, settable only before fmi2ExitInitializationMode; nothing set");
+            return call_end(instance, fmi2Error);
+        }
+    }
+    for (size_t i = 0; i < nvr; i++) instance->s.rate_from_deflection = value[i] != fmi2False;
+    return call_end(instance, fmi2OK);
 }
 
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
@@ -529,6 +557,10 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     case STEP_DONE:
         instance->s.last_successful_time = instance->s.time;
         return call_end(instance, fmi2OK);
+    case STEP_WARNED:
+        instance->s.last_successful_time = instance->s.time;
+        log_status(instance, fmi2Warning, "%s", problem);
+        return call_end(instance, fmi2Warning);
     case STEP_REFUSED:
         log_status(instance, fmi2Error, "fmi2DoStep: %s; step refused", problem);
         return call_end(instance, fmi2Error);
