@@ -1,6 +1,6 @@
 """fmu-components: the project's command-line tool.
 
-    fmu-components build | validate | signal | ... --help
+    fmu-components build | validate | signal | simulate | ... --help
 
 Each subcommand lives in its own module, which provides ``configure(parser)`` (its
 arguments, with an example in ``EXAMPLES``) and ``run_command(args)`` (returns the exit
@@ -19,6 +19,8 @@ COMMANDS = {
     "validate": ("fmu_components.validate",
                  "run the thesis test programme through the built FMUs against the references"),
     "signal": ("fmu_components.signals", "write an input CSV for an FMU (SI units)"),
+    "simulate": ("fmu_components.simulate",
+                 "simulate an FMU on an input CSV: result CSV and the force-deflection loop"),
 }
 
 
