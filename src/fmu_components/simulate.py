@@ -175,15 +175,22 @@ def derived_rates(times, deflection):
     return rates
 
 
+def at_times(t, times, values):
+    """values at fmpy's output times t: the sample's own where t is a sample time (fmpy adds
+    up its steps, so only nearly), else interpolated."""
+    i = np.clip(np.searchsorted(times, t), 1, len(times) - 1)
+    nearest = np.where(np.abs(times[i - 1] - t) <= np.abs(times[i] - t), i - 1, i)
+    on_sample = np.abs(times[nearest] - t) <= 1e-9 * np.maximum(1.0, np.abs(t))
+    return np.where(on_sample, values[nearest], np.interp(t, times, values))
+
+
 def write_result(path, component, result, times, values, names, derive_rate):
     """time, deflection, rate, then every output, at fmpy's output times."""
     t = result["time"]
     deflection, rate = component.inputs
-    x = np.interp(t, times, values[:, names.index(deflection)])
-    if derive_rate:
-        v = np.interp(t, times, derived_rates(times, values[:, names.index(deflection)]))
-    else:
-        v = np.interp(t, times, values[:, names.index(rate)])
+    x = values[:, names.index(deflection)]
+    v = derived_rates(times, x) if derive_rate else values[:, names.index(rate)]
+    t, x, v = (at_times(t, times, column) for column in (times, x, v))
     columns = [("time", t), (deflection, x), (rate, v)]
     columns += [(name, result[name]) for name in component.outputs]
     with open(path, "w", newline="") as file:
