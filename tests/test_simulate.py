@@ -162,3 +162,25 @@ def test_step_and_stop_time_are_taken_and_a_wrong_rate_is_reported(native_fmus, 
     assert len(values) == 251 and values[-1, 0] == pytest.approx(0.5)
     assert np.allclose(np.diff(values[:, 0]), 2e-3)
     assert len(table) == 501
+
+
+def test_a_step_finer_than_the_samples_feeds_the_path_between_them(native_fmus, tmp_path,
+                                                                   capsys):
+    """fmpy interpolates the deflection straight between samples; simulate feeds that
+    line's slope as the rate, so the pair fits and the rate check stays quiet."""
+    source, out = tmp_path / "in.csv", tmp_path / "out.csv"
+    table = write_input(source, "TrackBushTorsion", step=1e-2)
+    status, _, errors = run(capsys, native_fmus["TrackBushTorsion"], source, "--out", out,
+                            "--step", "1e-3")
+    assert status == 0 and errors == ""
+    header, values = read_result(out)
+    assert len(values) == 1001
+    samples = values[::10]
+    assert np.allclose(samples[:, 1], table["angle"], rtol=0, atol=1e-15)
+    # between samples: on the straight line, with its slope as the rate
+    slopes = np.diff(table["angle"]) / 1e-2
+    assert np.allclose(values[:-1, 2], np.repeat(slopes, 10), rtol=1e-9)
+    expected = reference.solve_held_rate("TrackBushTorsion", values[:, 0], values[:, 1],
+                                         values[:, 2])["torque"]
+    torque = values[:, header.index("torque")]
+    assert np.max(np.abs(torque - expected)) <= ACCEPTANCE * peak_to_peak(expected)

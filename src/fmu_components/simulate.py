@@ -184,12 +184,29 @@ def at_times(t, times, values):
     return np.where(on_sample, values[nearest], np.interp(t, times, values))
 
 
-def write_result(path, component, result, times, values, names, derive_rate):
+def finer_grid(times, columns, stop_time, step, deflection, rate):
+    """The input on the communication grid when the step is finer than the samples: the
+    deflection straight between samples, as fmpy would interpolate it, and as the rate the
+    slope of that line, which is the rate of the path the FMU is then fed (an interpolated
+    rate column would not fit it, and the FMU's rate check would say so)."""
+    if step >= np.min(np.diff(times)) * (1 - 1e-9):
+        return times, columns
+    grid = times[0] + np.arange(int(math.floor((stop_time - times[0]) / step * (1 + 1e-12))) + 1) * step
+    segment = np.clip(np.searchsorted(times, grid, side="right") - 1, 0, len(times) - 2)
+    x = columns[deflection]
+    slopes = (np.diff(x) / np.diff(times))[segment]
+    resampled = {deflection: x[segment] + slopes * (grid - times[segment])}
+    if rate in columns:
+        resampled[rate] = slopes
+    return grid, resampled
+
+
+def write_result(path, component, result, times, columns, derive_rate):
     """time, deflection, rate, then every output, at fmpy's output times."""
     t = result["time"]
     deflection, rate = component.inputs
-    x = values[:, names.index(deflection)]
-    v = derived_rates(times, x) if derive_rate else values[:, names.index(rate)]
+    x = columns[deflection]
+    v = derived_rates(times, x) if derive_rate else columns[rate]
     t, x, v = (at_times(t, times, column) for column in (times, x, v))
     columns = [("time", t), (deflection, x), (rate, v)]
     columns += [(name, result[name]) for name in component.outputs]
@@ -268,7 +285,8 @@ def run_command(args):
     stop_time, step = check_times(times, args.stop_time, args.step, args.input)
     if args.tolerance is not None and not (args.tolerance > 0.0 and math.isfinite(args.tolerance)):
         raise UsageError(f"--tolerance {args.tolerance!r} must be a positive number")
-    columns = {name: values[:, names.index(name)] for name in feed}
+    times, columns = finer_grid(times, {name: values[:, names.index(name)] for name in feed},
+                                stop_time, step, *component.inputs)
     warnings, errors = [], []
     try:
         result = simulate(component, times, columns, stop_time, step, args.tolerance,
@@ -278,7 +296,7 @@ def run_command(args):
         raise UsageError(f"{component.name} stopped the simulation: {said}") from None
     for message in warnings + errors:
         print(f"{component.name}: {message}", file=sys.stderr)
-    written = write_result(args.out, component, result, times, values, names, args.derive_rate)
+    written = write_result(args.out, component, result, times, columns, args.derive_rate)
     print(f"wrote {args.out}: {len(result)} rows of " + ", ".join(written))
     if args.plot:
         plot_loop(args.plot, component, written)

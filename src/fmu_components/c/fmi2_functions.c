@@ -459,22 +459,28 @@ fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
     return no_variable_of_type(c, "fmi2GetInteger", nvr, vr, READABLE);
 }
 
+/* 1, logged, when a value reference is not the Boolean parameter's (the only one). */
+static int not_boolean(Instance *instance, const char *function, size_t nvr,
+                       const fmi2ValueReference vr[], const char *consequence) {
+    for (size_t i = 0; i < nvr; i++) {
+        if (vr[i] == RATE_FROM_DEFLECTION) continue;
+        log_status(instance, fmi2Error, "%s: no Boolean variable has value reference %u%s",
+                   function, (unsigned)vr[i], consequence);
+        return 1;
+    }
+    return 0;
+}
+
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           fmi2Boolean value[]) {
     Instance *instance = (Instance *)c;
     if (!call_begin(instance, READABLE, __func__)) return fmi2Error;
     if (arrays_missing(instance, "fmi2GetBoolean", nvr, vr, value))
         return call_end(instance, fmi2Error);
-    for (size_t i = 0; i < nvr; i++) {
-        if (vr[i] != RATE_FROM_DEFLECTION) {
-            log_status(instance, fmi2Error, "fmi2GetBoolean: no Boolean variable has value "
-                       "reference %u", (unsigned)vr[i]);
-            for (size_t k = 0; k < nvr; k++) value[k] = fmi2False;
-            return call_end(instance, fmi2Error);
-        }
-        value[i] = instance->s.rate_from_deflection ? fmi2True : fmi2False;
-    }
-    return call_end(instance, fmi2OK);
+    int refused = not_boolean(instance, "fmi2GetBoolean", nvr, vr, "");
+    for (size_t i = 0; i < nvr; i++)
+        value[i] = !refused && instance->s.rate_from_deflection ? fmi2True : fmi2False;
+    return call_end(instance, refused ? fmi2Error : fmi2OK);
 }
 
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
@@ -495,17 +501,12 @@ fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
     if (!call_begin(instance, SETTABLE, __func__)) return fmi2Error;
     if (arrays_missing(instance, "fmi2SetBoolean", nvr, vr, value))
         return call_end(instance, fmi2Error);
-    for (size_t i = 0; i < nvr; i++) {
-        if (vr[i] != RATE_FROM_DEFLECTION) {
-            log_status(instance, fmi2Error, "fmi2SetBoolean: no Boolean variable has value "
-                       "reference %u; nothing set", (unsigned)vr[i]);
-            return call_end(instance, fmi2Error);
-        }
-        if (!(instance->s.mode & BEFORE_INITIALIZED)) {
-            log_status(instance, fmi2Error, "fmi2SetBoolean: rate_from_deflection is a fixed "
-                       "parameter, settable only before fmi2ExitInitializationMode; nothing set");
-            return call_end(instance, fmi2Error);
-        }
+    if (not_boolean(instance, "fmi2SetBoolean", nvr, vr, "; nothing set"))
+        return call_end(instance, fmi2Error);
+    if (nvr > 0 && !(instance->s.mode & BEFORE_INITIALIZED)) {
+        log_status(instance, fmi2Error, "fmi2SetBoolean: rate_from_deflection is a fixed "
+                   "parameter, settable only before fmi2ExitInitializationMode; nothing set");
+        return call_end(instance, fmi2Error);
     }
     for (size_t i = 0; i < nvr; i++) instance->s.rate_from_deflection = value[i] != fmi2False;
     return call_end(instance, fmi2OK);
