@@ -27,9 +27,18 @@ def test_fmu_passes_fmpy_validation(built_fmus, name):
 def test_every_variable_has_unit_description_and_thesis_start_value(built_fmus, name):
     description = read_model_description(str(built_fmus[name]))
     units = {u.name: [d.name for d in u.displayUnits] for u in description.unitDefinitions}
-    catalog = {v.name: v for v in COMPONENTS[name].variables}
-    assert [v.name for v in description.modelVariables] == list(catalog)
-    for variable in description.modelVariables:
+    definition = COMPONENTS[name]
+    catalog = {v.name: v for v in definition.variables}
+    reals = [v for v in description.modelVariables if v.type == "Real"]
+    assert [v.name for v in reals] == list(catalog)
+    # The Boolean parameters come after every Real variable, their value references too.
+    switches = [v for v in description.modelVariables if v.type == "Boolean"]
+    assert [(v.name, v.valueReference, v.causality, v.variability, v.start) for v in switches] == [
+        (s.name, len(catalog) + i, "parameter", "fixed", "false")
+        for i, s in enumerate(definition.switches)]
+    assert len(reals) + len(switches) == len(description.modelVariables)
+    assert all(v.description for v in switches)
+    for variable in reals:
         expected = catalog[variable.name]
         assert variable.unit == expected.unit and variable.unit in units
         assert variable.description

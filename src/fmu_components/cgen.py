@@ -18,7 +18,7 @@ import math
 import re
 
 from .runtime.expressions import FUNCTIONS, Format, GenerationError, Printer, Symbol, Tangent
-from .runtime import integrator
+from .runtime import cosim, integrator
 from .runtime.integrator import ROS34PW2, factor_statements, step_statements
 
 C_KEYWORDS = set("""auto break case char const continue default do double else enum extern float
@@ -187,6 +187,10 @@ class ModelCode:
             f"#define SAME_STEP_SIZE {integrator.SAME_STEP_SIZE!r}",
             f"#define MAX_W_REUSE {integrator.Rosenbrock.MAX_W_REUSE}",
             f"#define SQUARED_ERROR_EXPONENT ({self.tableau.squared_error_exponent!r})",
+            "/* The rate check's margin and floors (runtime/cosim.py). */",
+            f"#define RATE_MARGIN {cosim.RATE_MARGIN!r}",
+            f"#define RATE_STILL {cosim.rate_floors(d.deflection_scale)[0]!r}",
+            f"#define RATE_CREEP {cosim.rate_floors(d.deflection_scale)[1]!r}",
             "#endif", ""])
 
     def source(self):

@@ -1,6 +1,6 @@
 """fmu-components: the project's command-line tool.
 
-    fmu-components build | validate | signal | rig | ... --help
+    fmu-components build | validate | signal | simulate | rig | fit --help
 
 Each subcommand lives in its own module, which provides ``configure(parser)`` (its
 arguments, with an example in ``EXAMPLES``) and ``run_command(args)`` (returns the exit
@@ -19,10 +19,12 @@ COMMANDS = {
     "validate": ("fmu_components.validate",
                  "run the thesis test programme through the built FMUs against the references"),
     "signal": ("fmu_components.signals", "write an input CSV for an FMU (SI units)"),
-    "fit": ("fmu_components.fit", "identify a rubber component's parameters from measured data"),
+    "simulate": ("fmu_components.simulate",
+                 "simulate an FMU on an input CSV: result CSV and the force-deflection loop"),
     "rig": ("fmu_components.rig", "virtual test rig: dynamic stiffness, loss angle, energy per "
                                   "cycle and secant stiffness of a component at periodic steady "
                                   "state, and its step-and-hold relaxation"),
+    "fit": ("fmu_components.fit", "identify a rubber component's parameters from measured data"),
 }
 
 

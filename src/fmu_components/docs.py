@@ -46,6 +46,9 @@ def variables_table(name):
                      f"| parameter | rad/s [deg/s], N.m | Table A6-1 | Dashpot curve points: "
                      f"rates strictly increasing, torques non-decreasing and of the rate's sign "
                      f"(`reference_data/thesis/table_A6-1.csv`, smoothed column) |")
+    for switch in definition.switches:  # Boolean parameters
+        lines.append(f"| `{switch.name}` | parameter (Boolean) | | "
+                     f"{'true' if switch.start else 'false'} | {_cell(switch.description)} |")
     return "\n".join(lines)
 
 

@@ -77,6 +77,8 @@ def model_description(definition, *, guid, model_identifier, native, source_file
     for vr, variable in enumerate(definition.variables):
         variables.append(_scalar_variable(variable, vr, nominal.get(variable.name),
                                           derivative_of.get(variable.name)))
+    for switch in definition.switches:
+        variables.append(_switch_variable(switch, definition.switch_reference(switch.name)))
     root.append(_model_structure(definition, index))
     text = minidom.parseString(tostring(root, encoding="unicode")).toprettyxml(indent="  ")
     return text.replace('<?xml version="1.0" ?>', '<?xml version="1.0" encoding="UTF-8"?>', 1)
@@ -102,6 +104,14 @@ def _scalar_variable(variable, vr, nominal, derivative_of):
     if derivative_of is not None:
         real["derivative"] = str(derivative_of)
     SubElement(node, "Real", real)
+    return node
+
+
+def _switch_variable(switch, vr):
+    node = Element("ScalarVariable", {
+        "name": switch.name, "valueReference": str(vr), "description": switch.description,
+        "causality": "parameter", "variability": "fixed", "initial": "exact"})
+    SubElement(node, "Boolean", start="true" if switch.start else "false")
     return node
 
 

@@ -93,6 +93,42 @@ static int advance(Instance *instance, double x, double v, double h, char *messa
     return 0;
 }
 
+/* As cosim.rate_inconsistency: 1 with the secant rate over the last step when the held
+   rates at its ends do not fit the deflection's movement. */
+static int rate_inconsistency(const Snapshot *s, double *secant) {
+    double moved = s->deflection - s->previous_deflection;
+    double step = s->previous_step;
+    double low = s->previous_rate <= s->rate ? s->previous_rate : s->rate;
+    double high = s->previous_rate <= s->rate ? s->rate : s->previous_rate;
+    low *= step;
+    high *= step;
+    double largest = fabs(moved);
+    if (fabs(low) > largest) largest = fabs(low);
+    if (fabs(high) > largest) largest = fabs(high);
+    double allowance = RATE_MARGIN * largest + (RATE_STILL + RATE_CREEP * step);
+    if (moved < low - allowance || moved > high + allowance) {
+        *secant = moved / step;
+        return 1;
+    }
+    return 0;
+}
+
+/* As adapter.rate_warning, word for word. */
+static void rate_warning(const Snapshot *s, double secant, char *message, size_t size) {
+    const char *x = MODEL_INFO.variables[INPUT_DEFLECTION].name;
+    const VariableInfo *v = &MODEL_INFO.variables[INPUT_RATE];
+    char what[MESSAGE_SIZE];
+    if (s->rate == 0.0)
+        snprintf(what, sizeof what, "%s stays 0 while %s moves", v->name, x);
+    else
+        snprintf(what, sizeof what, "%s = %.6g %s does not fit the movement of %s", v->name,
+                 s->rate, v->unit, x);
+    snprintf(message, size, "fmi2DoStep: %s (%.6g %s over the last step); the rate-dependent "
+             "force is wrong. Give %s in %s with the sign of d(%s)/dt, or set "
+             "rate_from_deflection to derive it. Warned once per instance.", what, secant,
+             v->unit, v->name, v->unit, x);
+}
+
 int cosim_do_step(Instance *instance, double current_time, double step_size, char *message,
                   size_t size) {
     Snapshot *s = &instance->s;
@@ -111,6 +147,14 @@ int cosim_do_step(Instance *instance, double current_time, double step_size, cha
                  "ended at %s s", format_repr(current_time, a), format_repr(time, b));
         return STEP_REFUSED;
     }
+    double held_rate = s->rate, secant = 0.0;
+    int warn = 0;
+    if (s->has_previous) {
+        if (s->rate_from_deflection) /* backward difference over the last step, held */
+            s->rate = (s->deflection - s->previous_deflection) / s->previous_step;
+        else if (!s->rate_warned)
+            warn = rate_inconsistency(s, &secant);
+    }
     /* Nearly every step is one integrator step: the fused path takes it, or hands it back
        untouched to advance. */
     if (N == 0 || !single_step(&instance->data, &s->memory, s->state, s->deflection, s->rate,
@@ -123,15 +167,23 @@ int cosim_do_step(Instance *instance, double current_time, double step_size, cha
             s->memory.w_uses = memory.w_uses;
             s->memory.w_h = memory.w_h;
             memcpy(s->memory.w, memory.w, sizeof memory.w);
+            s->rate = held_rate;
             snprintf(message, size, "step from t = %.9g s by %.6g s failed: %s", current_time,
                      step_size, problem);
             return STEP_FAILED_TO_COMPLETE;
         }
     }
+    s->has_previous = 1;
+    s->previous_deflection = s->deflection;
+    s->previous_rate = s->rate;
+    s->previous_step = step_size;
     s->time = current_time + step_size;
     s->deflection += s->rate * step_size;
     instance->outputs_fresh = 0;
-    return STEP_DONE;
+    if (!warn) return STEP_DONE;
+    s->rate_warned = 1;
+    rate_warning(s, secant, message, size);
+    return STEP_WARNED;
 }
 
 const double *cosim_outputs(Instance *instance) {

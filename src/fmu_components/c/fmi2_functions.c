@@ -441,7 +441,7 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     return call_end(instance, status);
 }
 
-/* The FMUs have Real variables only. */
+/* The FMUs have Real variables and Boolean parameters only. */
 static fmi2Status no_variable_of_type(fmi2Component c, const char *function, size_t nvr,
                                       const fmi2ValueReference vr[], int allowed) {
     Instance *instance = (Instance *)c;
@@ -459,10 +459,28 @@ fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
     return no_variable_of_type(c, "fmi2GetInteger", nvr, vr, READABLE);
 }
 
+/* 1, logged, when a value reference is not the Boolean parameter's (the only one). */
+static int not_boolean(Instance *instance, const char *function, size_t nvr,
+                       const fmi2ValueReference vr[], const char *consequence) {
+    for (size_t i = 0; i < nvr; i++) {
+        if (vr[i] == RATE_FROM_DEFLECTION) continue;
+        log_status(instance, fmi2Error, "%s: no Boolean variable has value reference %u%s",
+                   function, (unsigned)vr[i], consequence);
+        return 1;
+    }
+    return 0;
+}
+
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           fmi2Boolean value[]) {
-    (void)value;
-    return no_variable_of_type(c, "fmi2GetBoolean", nvr, vr, READABLE);
+    Instance *instance = (Instance *)c;
+    if (!call_begin(instance, READABLE, __func__)) return fmi2Error;
+    if (arrays_missing(instance, "fmi2GetBoolean", nvr, vr, value))
+        return call_end(instance, fmi2Error);
+    int refused = not_boolean(instance, "fmi2GetBoolean", nvr, vr, "");
+    for (size_t i = 0; i < nvr; i++)
+        value[i] = !refused && instance->s.rate_from_deflection ? fmi2True : fmi2False;
+    return call_end(instance, refused ? fmi2Error : fmi2OK);
 }
 
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
@@ -479,8 +497,19 @@ fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
 
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           const fmi2Boolean value[]) {
-    (void)value;
-    return no_variable_of_type(c, "fmi2SetBoolean", nvr, vr, SETTABLE);
+    Instance *instance = (Instance *)c;
+    if (!call_begin(instance, SETTABLE, __func__)) return fmi2Error;
+    if (arrays_missing(instance, "fmi2SetBoolean", nvr, vr, value))
+        return call_end(instance, fmi2Error);
+    if (not_boolean(instance, "fmi2SetBoolean", nvr, vr, "; nothing set"))
+        return call_end(instance, fmi2Error);
+    if (nvr > 0 && !(instance->s.mode & BEFORE_INITIALIZED)) {
+        log_status(instance, fmi2Error, "fmi2SetBoolean: rate_from_deflection is a fixed "
+                   "parameter, settable only before fmi2ExitInitializationMode; nothing set");
+        return call_end(instance, fmi2Error);
+    }
+    for (size_t i = 0; i < nvr; i++) instance->s.rate_from_deflection = value[i] != fmi2False;
+    return call_end(instance, fmi2OK);
 }
 
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
@@ -529,6 +558,10 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     case STEP_DONE:
         instance->s.last_successful_time = instance->s.time;
         return call_end(instance, fmi2OK);
+    case STEP_WARNED:
+        instance->s.last_successful_time = instance->s.time;
+        log_status(instance, fmi2Warning, "%s", problem);
+        return call_end(instance, fmi2Warning);
     case STEP_REFUSED:
         log_status(instance, fmi2Error, "fmi2DoStep: %s; step refused", problem);
         return call_end(instance, fmi2Error);

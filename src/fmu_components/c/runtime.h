@@ -60,7 +60,15 @@ typedef struct {
     double last_successful_time;
     double contact;  /* Model Exchange: 1 or 0, a contact's mode as the events set it */
     int warned_states_outside; /* fmi2SetContinuousStates outside its mode: warned once */
+    int rate_from_deflection; /* the Boolean parameter (value reference RATE_FROM_DEFLECTION) */
+    /* The last step, for the rate check and the derived rate (runtime/cosim.py). */
+    int has_previous;
+    double previous_deflection, previous_rate, previous_step;
+    int rate_warned; /* the rate check has warned */
 } Snapshot;
+
+/* The Boolean parameter's value reference: after every Real variable. */
+#define RATE_FROM_DEFLECTION MODEL_VARIABLES
 
 typedef struct {
     Snapshot s;
@@ -132,7 +140,9 @@ void cosim_start(Instance *instance);
 int cosim_input_problem(Instance *instance, double deflection, char *message, size_t size);
 /* Inputs that cosim_input_problem accepted. */
 void cosim_take_inputs(Instance *instance, double deflection, double rate);
-enum { STEP_DONE, STEP_REFUSED, STEP_FAILED_TO_COMPLETE };
+/* STEP_WARNED: done, but the rate did not fit the deflection's movement (once per run); the
+   message is then the rate check's warning. */
+enum { STEP_DONE, STEP_REFUSED, STEP_FAILED_TO_COMPLETE, STEP_WARNED };
 int cosim_do_step(Instance *instance, double current_time, double step_size, char *message,
                   size_t size);
 const double *cosim_outputs(Instance *instance);

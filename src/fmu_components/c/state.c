@@ -12,7 +12,7 @@
 #include "runtime.h"
 #include "state_envelope.h"
 
-#define STATE_FORMAT_VERSION 1u
+#define STATE_FORMAT_VERSION 2u
 #define STATE_MAGIC 0x53544154u /* "STAT" */
 #define ALL_MODES                                                                          \
     (INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED |       \
@@ -47,7 +47,12 @@ static int snapshot_problem(const Snapshot *s, char *message, size_t size) {
         }
     }
     if (!isfinite(s->start_time) || !(s->tolerance > 0.0 && isfinite(s->tolerance)) ||
-        !isfinite(s->last_successful_time) || s->warned > 3u) {
+        !isfinite(s->last_successful_time) || s->warned > 3u ||
+        (s->rate_from_deflection != 0 && s->rate_from_deflection != 1) ||
+        (s->rate_warned != 0 && s->rate_warned != 1) ||
+        (s->has_previous != 0 && s->has_previous != 1) ||
+        (s->has_previous && !(isfinite(s->previous_deflection) && isfinite(s->previous_rate) &&
+                              s->previous_step > 0.0 && isfinite(s->previous_step)))) {
         snprintf(message, size, "the state's experiment settings are not valid");
         return 1;
     }

@@ -25,7 +25,7 @@ from pythonfmu import Fmi2Slave
 from pythonfmu.enums import Fmi2Causality, Fmi2Status, Fmi2Variability
 from pythonfmu.variables import Real
 
-from .cosim import REFUSED, CoSimulation
+from .cosim import REFUSED, WARNED, CoSimulation, rate_floors
 from .integrator import DEFAULT_RTOL, Rosenbrock
 
 # pythonfmu 0.7.0 finds the slave class by executing the entry module's source against the
@@ -119,6 +119,8 @@ class ComponentSlave(Fmi2Slave):
         self._parameter_vrs = range(self._output_vrs.stop,
                                     self._output_vrs.stop + len(definition.parameters))
         self._local_vrs = range(self._parameter_vrs.stop, len(variables))  # states, derivatives
+        self._switch_vrs = range(len(variables), len(variables) + len(definition.switches))
+        self._switches = [s.start for s in definition.switches]  # rate_from_deflection
         self._mode = INSTANTIATED
         self._start_time = 0.0
         self._tolerance = DEFAULT_RTOL
@@ -170,9 +172,13 @@ class ComponentSlave(Fmi2Slave):
             return
         model = self.definition.build_model(values)
         deflection, rate = self._values[DEFLECTION_VR], self._values[RATE_VR]
-        self._cosim = CoSimulation(model, self._tolerance, self._start_time, deflection, rate)
+        self._cosim = self._new_cosim(model, self._tolerance, self._start_time, deflection, rate)
         self._mode = STEP_COMPLETE
         self._outputs_stale = True
+
+    def _new_cosim(self, model, *args):
+        return CoSimulation(model, *args, rate_floors=rate_floors(self.definition.deflection_scale),
+                            rate_from_deflection=self._switches[0])
 
     @fmi_call("fmi2Terminate", {STEP_COMPLETE, STEP_FAILED})
     def terminate(self):
@@ -191,6 +197,10 @@ class ComponentSlave(Fmi2Slave):
                 self._outputs_stale = True
                 return True
             kind, problem = outcome
+            if kind == WARNED:
+                self._outputs_stale = True
+                self.log(rate_warning(self.definition, cosim.rate, problem), Fmi2Status.warning)
+                return True
             if kind == REFUSED:
                 self._error(f"fmi2DoStep: {problem}; step refused")
             else:
@@ -349,7 +359,8 @@ class ComponentSlave(Fmi2Slave):
                      f"thesis measured ({measured}); the model extrapolates. Warned once per "
                      f"instance.", Fmi2Status.warning)
 
-    # The FMUs have Real variables only (pythonfmu's own versions of these would raise).
+    # The FMUs have Real variables and Boolean parameters only (pythonfmu's own versions of
+    # these would raise).
     def _refuse_non_real(self, call, vrs):
         if vrs:
             self._error(f"{call}: no variable of this type has value reference {vrs[0]}")
@@ -358,9 +369,13 @@ class ComponentSlave(Fmi2Slave):
         self._refuse_non_real("fmi2GetInteger", vrs)
         return [0] * len(vrs)
 
+    @fmi_call("fmi2GetBoolean", READABLE, on_failure=lambda self, vrs: [False] * len(vrs))
     def get_boolean(self, vrs):
-        self._refuse_non_real("fmi2GetBoolean", vrs)
-        return [False] * len(vrs)
+        unknown = [vr for vr in vrs if vr not in self._switch_vrs]
+        if unknown:
+            self._error(f"fmi2GetBoolean: no Boolean variable has value reference {unknown[0]}")
+            return [False] * len(vrs)
+        return [self._switches[vr - self._switch_vrs.start] for vr in vrs]
 
     def get_string(self, vrs):
         self._refuse_non_real("fmi2GetString", vrs)
@@ -369,8 +384,20 @@ class ComponentSlave(Fmi2Slave):
     def set_integer(self, vrs, values):
         self._refuse_non_real("fmi2SetInteger", vrs)
 
+    @fmi_call("fmi2SetBoolean", SETTABLE)
     def set_boolean(self, vrs, values):
-        self._refuse_non_real("fmi2SetBoolean", vrs)
+        for vr in vrs:
+            if vr not in self._switch_vrs:
+                self._error(f"fmi2SetBoolean: no Boolean variable has value reference {vr}; "
+                            f"nothing set")
+                return
+            if self._mode not in (INSTANTIATED, INITIALIZATION):
+                name = self.definition.switches[vr - self._switch_vrs.start].name
+                self._error(f"fmi2SetBoolean: {name} is a fixed parameter, settable only "
+                            f"before fmi2ExitInitializationMode; nothing set")
+                return
+        for vr, value in zip(vrs, values):
+            self._switches[vr - self._switch_vrs.start] = bool(value)
 
     def set_string(self, vrs, values):
         self._refuse_non_real("fmi2SetString", vrs)
@@ -381,7 +408,7 @@ class ComponentSlave(Fmi2Slave):
     def _get_fmu_state(self):
         return {"model": self.definition.name, "values": self._values[:], "mode": self._mode,
                 "start_time": self._start_time, "tolerance": self._tolerance,
-                "warned": sorted(self._warned),
+                "warned": sorted(self._warned), "switches": self._switches[:],
                 "cosim": self._cosim.snapshot() if self._cosim is not None else None}
 
     @fmi_call("fmi2SetFMUstate", ANY_STATE)
@@ -394,10 +421,11 @@ class ComponentSlave(Fmi2Slave):
             self._error(f"fmi2SetFMUstate: {problem}; state unchanged")
             return
         values = [float(v) for v in state["values"]]
+        self._switches = [bool(v) for v in state["switches"]]
         cosim = None
         if state["cosim"] is not None:
-            cosim = CoSimulation(self.definition.build_model(self._parameter_values(values)),
-                                 state["tolerance"])
+            cosim = self._new_cosim(self.definition.build_model(self._parameter_values(values)),
+                                    state["tolerance"])
             cosim.restore(state["cosim"])
         self._values = values
         self._mode = state["mode"]
@@ -425,7 +453,9 @@ class ComponentSlave(Fmi2Slave):
             if problem:
                 return f"the state's {problem}"
         if not (_finite(state["start_time"]) and _positive(state["tolerance"])
-                and set(state["warned"]) <= {v.name for v in self.definition.inputs}):
+                and set(state["warned"]) <= {v.name for v in self.definition.inputs}
+                and len(state["switches"]) == len(self._switches)
+                and all(isinstance(v, bool) for v in state["switches"])):
             return "the state's experiment settings are not valid"
         cosim = state["cosim"]
         if cosim is None:
@@ -437,6 +467,11 @@ class ComponentSlave(Fmi2Slave):
         size = self.definition.equations.state_size
         n = self.definition.equations.integrated
         w = memory["w"]
+        previous = cosim["previous"]
+        if not (isinstance(cosim["rate_warned"], bool) and (previous is None or (
+                len(previous) == 3 and all(_finite(v) for v in previous)
+                and _positive(previous[2])))):
+            return "the state's memory of the last step is not valid"
         if not (all(_finite(cosim[k]) for k in ("time", "deflection", "rate"))
                 and len(cosim["state"]) == size and all(_finite(v) for v in cosim["state"])
                 and _positive(cosim["rtol"])
@@ -464,6 +499,20 @@ class ComponentSlave(Fmi2Slave):
             return decoded if isinstance(decoded, dict) else {"invalid": "not a state"}
         except Exception as exc:
             return {"invalid": f"the serialized state cannot be read ({exc})"}
+
+
+def rate_warning(definition, rate, secant):
+    """The rate check's message (runtime/cosim.py), word for word the native flavour's."""
+    deflection, rate_input = definition.inputs
+    if rate == 0.0:
+        what = f"{rate_input.name} stays 0 while {deflection.name} moves"
+    else:
+        what = (f"{rate_input.name} = {rate:.6g} {rate_input.unit} does not fit the movement "
+                f"of {deflection.name}")
+    return (f"fmi2DoStep: {what} ({secant:.6g} {rate_input.unit} over the last step); the "
+            f"rate-dependent force is wrong. Give {rate_input.name} in {rate_input.unit} with "
+            f"the sign of d({deflection.name})/dt, or set rate_from_deflection to derive it. "
+            f"Warned once per instance.")
 
 
 def _finite(value):

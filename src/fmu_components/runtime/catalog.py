@@ -47,6 +47,17 @@ class Variable:
         return None
 
 
+class Switch:
+    """A Boolean parameter. Its value reference follows the Real variables'."""
+    __slots__ = ("name", "description", "start")
+    causality = "parameter"
+
+    def __init__(self, name, description, start=False):
+        self.name = name
+        self.description = description
+        self.start = start
+
+
 class ComponentDefinition:
     """Everything the generic FMU adapter needs to know about one component."""
 
@@ -66,6 +77,16 @@ class ComponentDefinition:
         assert len(states) == equations.continuous.states, name
         self.equations = equations  # model.Equations over the parameters' names
         self.measured_ranges = measured_ranges  # input name -> (low, high, what the thesis measured)
+        # The size of a deflection, for the floors of the rate check (runtime/cosim.py).
+        low, high, _ = measured_ranges[inputs[0].name]
+        self.deflection_scale = max(abs(b) for b in (low, high) if math.isfinite(b))
+        deflection, rate = (v.name for v in inputs)
+        self.switches = (Switch(
+            "rate_from_deflection",
+            f"Derive {rate} from the {deflection} samples instead of reading it: the "
+            f"backward difference over the previous communication step, held over the next "
+            f"(the first step takes the input). For hosts that cannot supply a rate; it lags "
+            f"by about one step (docs/simulate.md)."),)
         self.default_experiment = {"startTime": 0.0, "stopTime": stop_time,
                                    "stepSize": 1e-3, "tolerance": DEFAULT_RTOL}
 
@@ -74,6 +95,10 @@ class ComponentDefinition:
         """By value reference: inputs, outputs, parameters, states, their derivatives."""
         return (list(self.inputs) + list(self.outputs) + list(self.parameters)
                 + list(self.states) + list(self.derivatives))
+
+    def switch_reference(self, name):
+        """The value reference of a Boolean parameter: after every Real variable."""
+        return len(self.variables) + [s.name for s in self.switches].index(name)
 
     def structure(self):
         """The ModelStructure, read off the equations: {output or derivative name: the

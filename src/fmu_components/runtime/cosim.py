@@ -7,6 +7,9 @@
 * A step either completes or leaves everything as it was, with a message that says whether
   the call was refused (it cannot follow the last step) or failed (the integrator could not
   complete it).
+* The rate is checked against the deflection's movement (rate_inconsistency), or with
+  rate_from_deflection derived from it (docs/simulate.md): a rate left at 0, in the wrong
+  unit or of the wrong sign would otherwise give a plausible but wrong force.
 
 The FMU adapter wraps this class; benchmarks and tests can drive it directly.
 """
@@ -17,11 +20,50 @@ from .integrator import DEFAULT_RTOL, Rosenbrock
 
 INFINITY = math.inf
 REFUSED, FAILED = "refused", "failed"  # the two ways a doStep can come back unfinished
+WARNED = "warned"  # a step that completed with a warning about its inputs
+
+# The rate check. Over the last step the deflection moved by `moved`; a rate that belongs
+# to it has the step times the rates held at its two ends on either side of `moved`
+# (the mean value theorem, for a rate that does not turn inside the step), give or take
+# RATE_MARGIN of the larger movement: a sine sampled 10 times a cycle is off by 3.4 % at
+# its fastest, a rate in mm/s by a factor 1000, a rate of the wrong sign by 200 %.
+RATE_MARGIN = 0.25
+# Below these the motion is too small to judge, as fractions of the deflection's scale
+# (the largest bound of its measured range): rounding of the samples, and slow creep.
+STILL_FRACTION = 1e-6
+CREEP_FRACTION_PER_SECOND = 1e-3
+
+
+def rate_floors(deflection_scale):
+    """(still, creep): the movement below which a step is not judged is still + creep*h."""
+    return STILL_FRACTION * deflection_scale, CREEP_FRACTION_PER_SECOND * deflection_scale
+
+
+def rate_inconsistency(previous_deflection, previous_rate, step, deflection, rate, floors):
+    """The rate of the secant over the last step when the held rates at its ends (the
+    previous one and the current one) do not fit the deflection's movement, else None."""
+    moved = deflection - previous_deflection
+    low, high = (previous_rate, rate) if previous_rate <= rate else (rate, previous_rate)
+    low *= step
+    high *= step
+    largest = max(abs(moved), abs(low), abs(high))
+    allowance = RATE_MARGIN * largest + (floors[0] + floors[1] * step)
+    if moved < low - allowance or moved > high + allowance:
+        return moved / step
+    return None
 
 
 class CoSimulation:
-    def __init__(self, model, rtol=DEFAULT_RTOL, start_time=0.0, deflection=0.0, rate=0.0):
+    def __init__(self, model, rtol=DEFAULT_RTOL, start_time=0.0, deflection=0.0, rate=0.0,
+                 rate_floors=None, rate_from_deflection=False):
+        """rate_floors: check the rate against the deflection (cosim.rate_floors), or None
+        not to; rate_from_deflection: derive the rate from the deflection instead."""
         self.model = model
+        self.rate_floors = rate_floors
+        self.rate_from_deflection = rate_from_deflection
+        # The last step: (deflection at its start, the rate held over it, its size).
+        self.previous = None
+        self.rate_warned = False
         self.integrator = Rosenbrock(rtol)
         self.time = start_time
         self.deflection = deflection
@@ -54,7 +96,8 @@ class CoSimulation:
         Returns None, (REFUSED, message) when the call cannot follow the last step, or
         (FAILED, message) when the step could not be completed. Either way nothing has
         changed: the models write their state only once the whole step has succeeded, and
-        the integrator's memory is put back here.
+        the integrator's memory is put back here. A completed step whose rate did not fit
+        the deflection's movement returns (WARNED, secant rate), once per run.
         """
         if not 0.0 < step_size < INFINITY:
             return REFUSED, f"communication step size {step_size!r} s must be positive and finite"
@@ -65,15 +108,20 @@ class CoSimulation:
         if not -slack <= current_time - time <= slack:
             return REFUSED, (f"current time {current_time!r} s does not follow from the last "
                              f"step, which ended at {time!r} s")
+        held_rate, previous, secant = self.rate, self.previous, None
+        if previous is not None:
+            if self.rate_from_deflection:
+                # Backward difference over the last step, held over this one.
+                self.rate = (self.deflection - previous[0]) / previous[2]
+            elif self.rate_floors is not None and not self.rate_warned:
+                secant = rate_inconsistency(previous[0], previous[1], previous[2],
+                                            self.deflection, self.rate, self.rate_floors)
         # Nearly every step is one integrator step: the generated fused path takes it, or
         # hands it back untouched to the model's advance (Rosenbrock.single_step).
         single_step = self._single_step
         if single_step is not None and single_step(self.state, self.deflection, self.rate,
                                                    step_size):
-            self.time = current_time + step_size
-            self.deflection += self.rate * step_size
-            self._outputs = None
-            return None
+            return self._completed(current_time, step_size, secant)
         integrator = self.integrator
         memory = integrator.h_next, integrator.w
         try:
@@ -81,14 +129,23 @@ class CoSimulation:
                                          integrator)
         except BaseException:
             integrator.h_next, integrator.w = memory
+            self.rate = held_rate
             raise
         if problem:
             integrator.h_next, integrator.w = memory
+            self.rate = held_rate
             return FAILED, f"step from t = {current_time:.9g} s by {step_size:.6g} s failed: {problem}"
+        return self._completed(current_time, step_size, secant)
+
+    def _completed(self, current_time, step_size, secant):
+        self.previous = (self.deflection, self.rate, step_size)
         self.time = current_time + step_size
         self.deflection += self.rate * step_size
         self._outputs = None
-        return None
+        if secant is None:
+            return None
+        self.rate_warned = True
+        return WARNED, secant
 
     def outputs(self):
         if self._outputs is None:
@@ -99,7 +156,9 @@ class CoSimulation:
         """Everything a continuation depends on, as plain JSON-able data."""
         return {"time": self.time, "deflection": self.deflection, "rate": self.rate,
                 "state": self.state[:], "integrator": self.integrator.memory(),
-                "rtol": self.integrator.rtol}
+                "rtol": self.integrator.rtol,
+                "previous": list(self.previous) if self.previous is not None else None,
+                "rate_warned": self.rate_warned}
 
     def restore(self, snapshot):
         self.time = snapshot["time"]
@@ -108,4 +167,7 @@ class CoSimulation:
         self.state = list(snapshot["state"])
         self.integrator.recall(snapshot["integrator"])
         self.integrator.rtol = snapshot["rtol"]
+        previous = snapshot["previous"]
+        self.previous = tuple(previous) if previous is not None else None
+        self.rate_warned = snapshot["rate_warned"]
         self._outputs = None

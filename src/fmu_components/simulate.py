@@ -1,0 +1,313 @@
+"""Simulate one FMU (either flavour) on an input CSV with fmpy, and write the result.
+
+The result CSV has the time, both inputs (deflection and rate) and every output, so that
+the force-deflection loop can be plotted from it alone; `--plot` draws that loop. The
+input is checked first, because fmpy would run on a wrong one without a word: a missing
+rate column (fmpy would feed rate 0 and the viscoelastic force would vanish), misspelt
+columns, values in mm or deg where the FMU takes m or rad, a stop time past the input's
+end (fmpy would hold the last sample). docs/simulate.md describes the command.
+"""
+
+import contextlib
+import csv
+import io
+import math
+import os
+import sys
+
+import numpy as np
+
+from .runtime.catalog import COMPONENTS
+from .runtime.units import UNITS
+
+EXAMPLES = """examples:
+  fmu-components signal RoadWheelTyre sine --mean 3.5e-3 --amplitude 1e-3 > tyre_in.csv
+  fmu-components simulate fmus/RoadWheelTyre.fmu tyre_in.csv --out tyre_out.csv --plot tyre_loop.png
+  fmu-components simulate fmus/python/TrackBushRadial.fmu measured.csv --out out.csv --derive-rate
+
+The CSV's first column is time (s); the others are named as the FMU's inputs, in SI units
+(m, m/s, rad, rad/s). Without a rate column, --derive-rate has the FMU derive the rate
+from the deflection samples (parameter rate_from_deflection; it lags by about one step).
+"""
+
+# A deflection this many times the largest bound of the thesis's measured range is taken
+# for a value in the display unit (mm or deg) rather than SI.
+UNIT_MISTAKE_FACTOR = 10.0
+
+
+class Component:
+    """What simulate needs to know of an FMU: its component, inputs and outputs."""
+
+    def __init__(self, path):
+        from fmpy import read_model_description
+
+        from .cli import UsageError
+        if not os.path.isfile(path):
+            raise UsageError(f"{path}: no such FMU; build them with `fmu-components build` "
+                             f"(into fmus/)")
+        try:
+            description = read_model_description(path)
+        except Exception as exc:
+            raise UsageError(f"{path} cannot be read as an FMU ({exc}); give a .fmu file "
+                             f"that `fmu-components build` wrote") from None
+        self.path = path
+        self.name = description.modelName
+        self.definition = COMPONENTS.get(self.name)
+        if self.definition is None:
+            raise UsageError(f"{path} is an FMU of {self.name!r}, not one of this project's "
+                             f"components ({', '.join(sorted(COMPONENTS))})")
+        self.flavour = "pythonfmu" if description.coSimulation.needsExecutionTool else "native C"
+        self.inputs = [v.name for v in self.definition.inputs]
+        self.outputs = [v.name for v in self.definition.outputs]
+
+
+def read_input(path):
+    """(column names, values as an array of rows) of an input CSV, quoted headers or not."""
+    from .cli import UsageError
+    try:
+        with open(path, newline="") as file:
+            rows = [row for row in csv.reader(file) if row]
+    except OSError as exc:
+        raise UsageError(f"{path}: cannot read the input CSV ({exc.strerror})") from None
+    if len(rows) < 3:
+        raise UsageError(f"{path}: an input CSV needs a header line and at least two rows of "
+                         f"samples; write one with `fmu-components signal`")
+    names = [name.strip() for name in rows[0]]
+    try:
+        values = np.array([[float(v) for v in row] for row in rows[1:]])
+    except ValueError as exc:
+        raise UsageError(f"{path}: every value after the header must be a number ({exc})") from None
+    if values.shape[1] != len(names):
+        raise UsageError(f"{path}: every row must have {len(names)} values, as the header")
+    return names, values
+
+
+def check_columns(component, names, derive_rate, path):
+    """The input columns to feed the FMU; a UsageError naming the FMU's inputs against the
+    CSV's columns when they do not fit."""
+    from .cli import UsageError
+    deflection, rate = component.inputs
+    have = ", ".join(names)
+    if names[0] != "time":
+        raise UsageError(f"{path}: the first column must be 'time' (s); its columns are: {have}")
+    unknown = [n for n in names[1:] if n not in component.inputs]
+    if unknown or deflection not in names:
+        raise UsageError(f"{path}: columns {', '.join(names[1:])} do not match the inputs of "
+                         f"{component.name} ({deflection}, {rate}); rename them to those")
+    if rate not in names and not derive_rate:
+        raise UsageError(f"{path} has no {rate} column: {component.name}'s inputs are "
+                         f"{deflection}, {rate}; the CSV's columns are {have}. Add the rate, or "
+                         f"pass --derive-rate to have the FMU derive it from {deflection}")
+    return [deflection] if derive_rate else [deflection, rate]
+
+
+def check_units(component, names, values, path):
+    """A UsageError when the deflection looks like mm (deg) where m (rad) is expected."""
+    from .cli import UsageError
+    variable = component.definition.inputs[0]
+    column = values[:, names.index(variable.name)]
+    largest = float(np.max(np.abs(column)))
+    scale = component.definition.deflection_scale
+    if largest > UNIT_MISTAKE_FACTOR * scale:
+        display, factor = UNITS[variable.unit][1][0]
+        raise UsageError(
+            f"{path}: {variable.name} reaches {largest:.6g} {variable.unit}, far beyond the "
+            f"{scale:.6g} {variable.unit} the thesis measured; it looks like {display}. "
+            f"Convert to SI ({variable.unit}, and its rate in {variable.unit}/s): divide by "
+            f"{factor:.6g}")
+
+
+def check_times(times, stop_time, step, path):
+    """(stop time, step): the defaults from the CSV, and a UsageError past its end."""
+    from .cli import UsageError
+    intervals = np.diff(times)
+    if not np.all(intervals > 0.0):
+        raise UsageError(f"{path}: the times must increase from row to row")
+    end = float(times[-1])
+    if stop_time is None:
+        stop_time = end
+    elif stop_time > end * (1 + 1e-12):
+        raise UsageError(f"--stop-time {stop_time:g} s is past the input's end at {end:g} s, "
+                         f"where fmpy would hold the last sample; give --stop-time {end:g} or "
+                         f"less, or extend the input")
+    if step is None:
+        step = float(np.min(intervals))
+    if not (step > 0.0 and math.isfinite(step)):
+        raise UsageError(f"--step {step!r} must be a positive number of seconds")
+    return stop_time, step
+
+
+def simulate(component, times, columns, stop_time, step, tolerance=None, derive_rate=False,
+             warnings=None, errors=None):
+    """fmpy's result (a structured array: time and the outputs); the FMU's warnings and
+    errors are appended to those lists."""
+    from fmpy import simulate_fmu
+    from fmpy.fmi2 import fmi2Warning
+    inputs = np.zeros(len(times), dtype=[("time", float)] + [(n, float) for n in columns])
+    inputs["time"] = times
+    for name, values in columns.items():
+        inputs[name] = values
+    warnings = [] if warnings is None else warnings
+    errors = [] if errors is None else errors
+
+    def logger(component_, instance, status, category, message):
+        text = message.decode("utf-8", "replace")
+        (warnings if status == fmi2Warning else errors if status > fmi2Warning else []).append(text)
+
+    said = io.StringIO()  # fmpy prints; a rate left out on purpose is no news
+    with contextlib.redirect_stdout(said):
+        result = simulate_fmu(
+            component.path, start_time=float(times[0]), stop_time=stop_time,
+            output_interval=step, relative_tolerance=tolerance, input=inputs,
+            output=component.outputs, logger=logger,
+            start_values={"rate_from_deflection": True} if derive_rate else {})
+    expected = f'missing input for variable "{component.inputs[1]}"'
+    warnings += [line for line in said.getvalue().splitlines()
+                 if line.strip() and not (derive_rate and expected in line)]
+    return result
+
+
+def derived_rates(times, deflection):
+    """The rate the FMU uses with rate_from_deflection at each sample: the backward
+    difference over the step before it, held; the first sample's is 0 (no rate input)."""
+    rates = np.zeros(len(times))
+    rates[1:] = np.diff(deflection) / np.diff(times)
+    return rates
+
+
+def at_times(t, times, values):
+    """values at fmpy's output times t: the sample's own where t is a sample time (fmpy adds
+    up its steps, so only nearly), else interpolated."""
+    i = np.clip(np.searchsorted(times, t), 1, len(times) - 1)
+    nearest = np.where(np.abs(times[i - 1] - t) <= np.abs(times[i] - t), i - 1, i)
+    on_sample = np.abs(times[nearest] - t) <= 1e-9 * np.maximum(1.0, np.abs(t))
+    return np.where(on_sample, values[nearest], np.interp(t, times, values))
+
+
+def finer_grid(times, columns, stop_time, step, deflection, rate):
+    """The input on the communication grid when the step is finer than the samples: the
+    deflection straight between samples, as fmpy would interpolate it, and as the rate the
+    slope of that line, which is the rate of the path the FMU is then fed (an interpolated
+    rate column would not fit it, and the FMU's rate check would say so)."""
+    if step >= np.min(np.diff(times)) * (1 - 1e-9):
+        return times, columns
+    grid = times[0] + np.arange(int(math.floor((stop_time - times[0]) / step * (1 + 1e-12))) + 1) * step
+    segment = np.clip(np.searchsorted(times, grid, side="right") - 1, 0, len(times) - 2)
+    x = columns[deflection]
+    slopes = (np.diff(x) / np.diff(times))[segment]
+    resampled = {deflection: x[segment] + slopes * (grid - times[segment])}
+    if rate in columns:
+        resampled[rate] = slopes
+    return grid, resampled
+
+
+def write_result(path, component, result, times, columns, derive_rate):
+    """time, deflection, rate, then every output, at fmpy's output times."""
+    t = result["time"]
+    deflection, rate = component.inputs
+    x = columns[deflection]
+    v = derived_rates(times, x) if derive_rate else columns[rate]
+    t, x, v = (at_times(t, times, column) for column in (times, x, v))
+    columns = [("time", t), (deflection, x), (rate, v)]
+    columns += [(name, result[name]) for name in component.outputs]
+    with open(path, "w", newline="") as file:
+        writer = csv.writer(file, lineterminator="\n")
+        writer.writerow([name for name, _ in columns])
+        for row in zip(*(c for _, c in columns)):
+            writer.writerow([repr(float(v)) for v in row])
+    return dict(columns)
+
+
+def main_frequency(times, deflection):
+    """The frequency (Hz) of the largest Fourier component of the deflection about its mean,
+    or None for an input that does not oscillate."""
+    if len(times) < 4:
+        return None
+    t = np.linspace(times[0], times[-1], len(times))
+    x = np.interp(t, times, deflection)
+    spectrum = np.abs(np.fft.rfft(x - np.mean(x)))
+    frequencies = np.fft.rfftfreq(len(t), t[1] - t[0])
+    if len(spectrum) < 2 or not spectrum[1:].max() > 0.0:
+        return None
+    return float(frequencies[1 + int(np.argmax(spectrum[1:]))])
+
+
+def plot_loop(path, component, columns):
+    """The force-deflection loop in display units, at 200 dpi."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    deflection = component.definition.inputs[0]
+    load = component.definition.outputs[0]
+    x_display, x_factor = UNITS[deflection.unit][1][0]
+    f_display, f_factor = UNITS[load.unit][1][0]
+    x = columns[deflection.name]
+    frequency = main_frequency(columns["time"], x)
+    main = f", main frequency {frequency:.3g} Hz" if frequency else ""
+    figure, axes = plt.subplots(figsize=(6.4, 4.8))
+    axes.plot(x * x_factor, columns[load.name] * f_factor, lw=1.2)
+    axes.set_xlabel(f"{deflection.name} ({x_display})")
+    axes.set_ylabel(f"{load.name} ({f_display})")
+    axes.set_title(f"{os.path.basename(component.path)} ({component.flavour}): "
+                   f"{deflection.name} {x.min() * x_factor:.4g} to {x.max() * x_factor:.4g} "
+                   f"{x_display}{main}", fontsize=9)
+    axes.grid(True, alpha=0.3)
+    figure.tight_layout()
+    figure.savefig(path, dpi=200)
+    plt.close(figure)
+
+
+def configure(parser):
+    parser.add_argument("fmu", metavar="FMU.fmu", help="an FMU of either flavour")
+    parser.add_argument("input", metavar="INPUT.csv", help="time and the FMU's inputs, SI units")
+    parser.add_argument("--out", metavar="RESULT.csv", required=True,
+                        help="the result: time, deflection, rate and every output")
+    parser.add_argument("--plot", metavar="LOOP.png", help="the force-deflection loop (200 dpi)")
+    parser.add_argument("--derive-rate", action="store_true",
+                        help="the CSV has no rate column: the FMU derives the rate from the "
+                             "deflection (parameter rate_from_deflection)")
+    parser.add_argument("--stop-time", type=float, metavar="T",
+                        help="end of the simulation (s); default: the input's end")
+    parser.add_argument("--step", type=float, metavar="H",
+                        help="communication step (s); default: the input's sample interval")
+    parser.add_argument("--tolerance", type=float, metavar="TOL",
+                        help="the FMU integrator's relative tolerance (default: the FMU's)")
+
+
+def run_command(args):
+    from .cli import UsageError
+    component = Component(args.fmu)
+    names, values = read_input(args.input)
+    feed = check_columns(component, names, args.derive_rate, args.input)
+    check_units(component, names, values, args.input)
+    times = values[:, 0]
+    stop_time, step = check_times(times, args.stop_time, args.step, args.input)
+    if args.tolerance is not None and not (args.tolerance > 0.0 and math.isfinite(args.tolerance)):
+        raise UsageError(f"--tolerance {args.tolerance!r} must be a positive number")
+    times, columns = finer_grid(times, {name: values[:, names.index(name)] for name in feed},
+                                stop_time, step, *component.inputs)
+    warnings, errors = [], []
+    try:
+        result = simulate(component, times, columns, stop_time, step, args.tolerance,
+                          args.derive_rate, warnings, errors)
+    except Exception as exc:
+        said = errors[-1] if errors else str(exc)
+        raise UsageError(f"{component.name} stopped the simulation: {said}") from None
+    for message in warnings + errors:
+        print(f"{component.name}: {message}", file=sys.stderr)
+    written = write_result(args.out, component, result, times, columns, args.derive_rate)
+    print(f"wrote {args.out}: {len(result)} rows of " + ", ".join(written))
+    if args.plot:
+        plot_loop(args.plot, component, written)
+        print(f"wrote {args.plot}")
+    return 0
+
+
+def main(argv=None):
+    from .cli import standalone
+    return standalone("simulate", argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,186 @@
+"""`fmu-components simulate`: an FMU on an input CSV. It refuses what fmpy would run
+without a word (a missing rate column, misspelt columns, mm or deg values, a stop time past
+the input), and its result holds the inputs and every output, matching the independent
+solve."""
+
+import csv
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from fmu_components import cli, reference
+from fmu_components.runtime.catalog import COMPONENTS
+from fmu_components.signals import input_table, sine, time_grid, write_csv
+
+from conftest import ROOT, peak_to_peak
+
+ACCEPTANCE = 0.5e-2  # of the output's peak-to-peak range, as tests/test_accuracy.py
+
+
+def write_input(path, name, columns=None, scale=1.0, frequency=1.0, duration=1.0, step=1e-3):
+    """A sine in the thesis range (times `scale`), with the named columns of the input
+    table (all by default); returns the table."""
+    mean, amplitude = {"RoadWheelTyre": (3.5e-3, 1e-3), "TrackBushRadial": (0.3e-3, 0.1e-3),
+                       "TrackBushTorsion": (math.radians(10), math.radians(5)),
+                       "RotaryDamper": (0.0, 0.21)}[name]
+    t = time_grid(duration, step)
+    table = input_table(name, t, sine(t, mean, amplitude, frequency))
+    for field in table.dtype.names[1:]:
+        table[field] *= scale
+    if columns is not None:
+        table = table[list(columns)]
+    with open(path, "w", newline="") as file:
+        write_csv(table, file)
+    return table
+
+
+def run(capsys, *args):
+    """(exit status, stdout, stderr) of `fmu-components simulate ...` in this process."""
+    try:
+        status = cli.main(["simulate", *map(str, args)])
+    except SystemExit as exit:
+        status = exit.code
+    captured = capsys.readouterr()
+    return status, captured.out, captured.err
+
+
+def read_result(path):
+    with open(path, newline="") as file:
+        rows = list(csv.reader(file))
+    return rows[0], np.array(rows[1:], dtype=float)
+
+
+def test_a_missing_rate_column_is_refused_with_the_inputs_named(native_fmus, tmp_path):
+    """Through the console entry point, as a user runs it."""
+    source = tmp_path / "in.csv"
+    write_input(source, "RoadWheelTyre", ["time", "compression"])
+    out = tmp_path / "out.csv"
+    completed = subprocess.run(
+        [sys.executable, "-m", "fmu_components", "simulate", str(native_fmus["RoadWheelTyre"]),
+         str(source), "--out", str(out)], capture_output=True, text=True, cwd=ROOT)
+    assert completed.returncode == 2 and not out.exists()
+    lines = completed.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in completed.stderr
+    assert ("has no compression_rate column: RoadWheelTyre's inputs are compression, "
+            "compression_rate; the CSV's columns are time, compression") in lines[0]
+    assert "--derive-rate" in lines[0]
+
+
+@pytest.mark.parametrize("name", sorted(COMPONENTS))
+def test_the_result_has_the_inputs_and_every_output_and_matches_the_reference(
+        built_fmus, name, tmp_path, capsys):
+    source, out, plot = tmp_path / "in.csv", tmp_path / "out.csv", tmp_path / "loop.png"
+    table = write_input(source, name)
+    status, said, errors = run(capsys, built_fmus[name], source, "--out", out, "--plot", plot)
+    assert status == 0 and errors == ""
+    header, values = read_result(out)
+    definition = COMPONENTS[name]
+    assert header == ["time"] + [v.name for v in definition.inputs] + [v.name for v in definition.outputs]
+    assert len(values) == len(table)
+    deflection, rate = (v.name for v in definition.inputs)
+    assert np.allclose(values[:, 0], table["time"], rtol=0, atol=1e-12)
+    assert np.array_equal(values[:, 1], table[deflection])
+    assert np.array_equal(values[:, 2], table[rate])
+    expected = reference.solve_held_rate(name, table["time"], table[deflection], table[rate])
+    for output, reference_values in expected.items():
+        column = values[:, header.index(output)]
+        assert np.max(np.abs(column - reference_values)) <= ACCEPTANCE * peak_to_peak(
+            reference_values), output
+    import matplotlib.image
+    assert matplotlib.image.imread(plot).shape[:2] == (960, 1280)  # 6.4 x 4.8 in at 200 dpi
+    assert str(out) in said and str(plot) in said
+
+
+def test_derive_rate_runs_without_a_rate_column(built_fmus, tmp_path, capsys):
+    source, out = tmp_path / "in.csv", tmp_path / "out.csv"
+    table = write_input(source, "TrackBushRadial", ["time", "deflection"])
+    status, _, errors = run(capsys, built_fmus["TrackBushRadial"], source, "--out", out,
+                            "--derive-rate")
+    assert status == 0 and errors == ""  # no fmpy note about the rate left out on purpose
+    header, values = read_result(out)
+    # The rate column is the one the FMU derived: the backward difference, held.
+    x = table["deflection"]
+    assert values[0, 2] == 0.0
+    assert np.allclose(values[1:, 2], np.diff(x) / np.diff(table["time"]), rtol=1e-9)
+    # With the rate derived the viscoelastic force is there (rate 0 would make it vanish).
+    viscoelastic = values[:, header.index("force_viscoelastic")]
+    assert peak_to_peak(viscoelastic) > 0.05 * peak_to_peak(values[:, header.index("force")])
+
+
+def test_misspelt_columns_are_listed_against_the_inputs(native_fmus, tmp_path, capsys):
+    source = tmp_path / "in.csv"
+    write_input(source, "TrackBushTorsion")
+    text = source.read_text().replace('"angle_rate"', '"angle_speed"', 1)
+    source.write_text(text)
+    status, _, errors = run(capsys, native_fmus["TrackBushTorsion"], source, "--out",
+                            tmp_path / "out.csv")
+    assert status == 2 and len(errors.strip().splitlines()) == 1
+    assert ("columns angle, angle_speed do not match the inputs of TrackBushTorsion "
+            "(angle, angle_rate)") in errors
+
+
+@pytest.mark.parametrize("name, scale, unit, factor", [
+    ("RoadWheelTyre", 1e3, "mm", "1000"), ("TrackBushRadial", 1e3, "mm", "1000"),
+    ("TrackBushTorsion", 180 / math.pi, "deg", "57.2958"), ("RotaryDamper", 180 / math.pi, "deg", "57.2958")])
+def test_values_in_mm_or_deg_are_refused_with_what_to_do(native_fmus, tmp_path, capsys, name,
+                                                         scale, unit, factor):
+    source = tmp_path / "in.csv"
+    write_input(source, name, scale=scale)
+    status, _, errors = run(capsys, native_fmus[name], source, "--out", tmp_path / "out.csv")
+    assert status == 2 and len(errors.strip().splitlines()) == 1
+    assert f"it looks like {unit}" in errors and f"Convert to SI" in errors
+    assert f"divide by {factor}" in errors
+
+
+def test_a_stop_time_past_the_input_is_refused(native_fmus, tmp_path, capsys):
+    source = tmp_path / "in.csv"
+    write_input(source, "RoadWheelTyre", duration=0.5)
+    status, _, errors = run(capsys, native_fmus["RoadWheelTyre"], source, "--out",
+                            tmp_path / "out.csv", "--stop-time", "0.8")
+    assert status == 2
+    assert "--stop-time 0.8 s is past the input's end at 0.5 s" in errors
+
+
+def test_step_and_stop_time_are_taken_and_a_wrong_rate_is_reported(native_fmus, tmp_path,
+                                                                    capsys):
+    source, out = tmp_path / "in.csv", tmp_path / "out.csv"
+    table = write_input(source, "RoadWheelTyre", step=2e-3)
+    text = source.read_text().splitlines()
+    # the rate in mm/s: the FMU's rate check warns, and simulate passes it on
+    rows = [text[0]] + [",".join([*r.split(",")[:2], repr(float(r.split(",")[2]) * 1e3)])
+                        for r in text[1:]]
+    source.write_text("\n".join(rows) + "\n")
+    status, _, errors = run(capsys, native_fmus["RoadWheelTyre"], source, "--out", out,
+                            "--stop-time", "0.5", "--tolerance", "1e-6")
+    assert status == 0
+    assert "RoadWheelTyre: fmi2DoStep: compression_rate = " in errors
+    assert "does not fit the movement of compression" in errors
+    _, values = read_result(out)
+    assert len(values) == 251 and values[-1, 0] == pytest.approx(0.5)
+    assert np.allclose(np.diff(values[:, 0]), 2e-3)
+    assert len(table) == 501
+
+
+def test_a_step_finer_than_the_samples_feeds_the_path_between_them(native_fmus, tmp_path,
+                                                                   capsys):
+    """fmpy interpolates the deflection straight between samples; simulate feeds that
+    line's slope as the rate, so the pair fits and the rate check stays quiet."""
+    source, out = tmp_path / "in.csv", tmp_path / "out.csv"
+    table = write_input(source, "TrackBushTorsion", step=1e-2)
+    status, _, errors = run(capsys, native_fmus["TrackBushTorsion"], source, "--out", out,
+                            "--step", "1e-3")
+    assert status == 0 and errors == ""
+    header, values = read_result(out)
+    assert len(values) == 1001
+    samples = values[::10]
+    assert np.allclose(samples[:, 1], table["angle"], rtol=0, atol=1e-15)
+    # between samples: on the straight line, with its slope as the rate
+    slopes = np.diff(table["angle"]) / 1e-2
+    assert np.allclose(values[:-1, 2], np.repeat(slopes, 10), rtol=1e-9)
+    expected = reference.solve_held_rate("TrackBushTorsion", values[:, 0], values[:, 1],
+                                         values[:, 2])["torque"]
+    torque = values[:, header.index("torque")]
+    assert np.max(np.abs(torque - expected)) <= ACCEPTANCE * peak_to_peak(expected)
