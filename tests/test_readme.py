@@ -1,4 +1,11 @@
-"""The README's variables tables are the catalog's."""
+"""The README's variables tables are the catalog's, and every command in it runs."""
+
+import os
+import re
+import shlex
+import subprocess
+import sys
+from pathlib import Path
 
 from fmu_components.docs import all_tables
 
@@ -9,3 +16,87 @@ def test_readme_variables_tables_match_the_catalog():
     readme = (ROOT / "README.md").read_text()
     begin, end = "<!-- variables:begin -->\n", "\n<!-- variables:end -->"
     assert readme[readme.index(begin) + len(begin):readme.index(end)] == all_tables()
+
+
+# --- every command of the README is run: here, or by .ci/run, or by the test named ---------
+
+# Commands that take minutes, or set up the machine, run elsewhere; each entry names where,
+# and the test checks that the place really runs that program.
+RUN_ELSEWHERE = {
+    "python3.11 -m venv .venv": ".ci/run",
+    ".venv/bin/pip install -e": ".ci/run",
+    ".venv/bin/python build_fmus.py": ".ci/run",
+    ".venv/bin/python -m pytest": ".ci/run",
+    ".venv/bin/python examples/road_wheel_station.py": ".ci/run",
+    ".venv/bin/python examples/track_span.py": ".ci/run",
+    ".venv/bin/fmu-components validate": ".ci/run",
+    ".venv/bin/python benchmarks/run.py": "tests/test_benchmark.py",
+}
+
+
+def readme_commands():
+    """Each command of the README's bash blocks, continuation lines joined, comments cut."""
+    readme = (ROOT / "README.md").read_text()
+    commands = []
+    for block in re.findall(r"```bash\n(.*?)```", readme, re.S):
+        for line in block.replace("\\\n", " ").splitlines():
+            line = re.sub(r"\s+#.*$", "", line).strip()
+            for command in line.split(" && "):
+                if command:
+                    commands.append(" ".join(command.split()))
+    return commands
+
+
+def where_run(command):
+    """Where a command that is not run here is run, else None."""
+    for start, place in RUN_ELSEWHERE.items():
+        if command == start or command.startswith(start + " "):
+            # the full validation; the README's narrower one (a case selection) runs here
+            if "validate" in start and command != start:
+                return None
+            return place
+    return None
+
+
+def test_every_readme_command_that_runs_elsewhere_is_run_there():
+    for command in readme_commands():
+        place = where_run(command)
+        if place:
+            # the program and its first argument: "python3.11 -m", ".venv/bin/python examples/..."
+            text = (ROOT / place).read_text()
+            if place.startswith("tests/"):  # the test runs the script with its own Python
+                script = Path(command.split()[1])
+                assert all(f'"{part}"' in text for part in script.parts), (command, place)
+            else:
+                assert " ".join(command.split()[:2]) in text, (command, place)
+
+
+def test_the_readme_quick_start_commands_run_as_written(all_fmus, tmp_path):
+    """The README's other commands, in order, in a scratch folder that holds the built FMUs
+    where the README has them: each exits 0 and writes what the README says it writes."""
+    native = next(iter(all_fmus["native"].values())).parent
+    (tmp_path / "fmus").mkdir()
+    for fmu in native.glob("*.fmu"):
+        os.symlink(fmu, tmp_path / "fmus" / fmu.name)
+    bin_dir = Path(sys.executable).parent
+    ran = []
+    for command in readme_commands():
+        if where_run(command):
+            continue
+        words = shlex.split(command.replace(".venv/bin/", f"{bin_dir}/"))
+        output = None
+        if ">" in words:
+            words, output = words[:words.index(">")], tmp_path / words[words.index(">") + 1]
+        words = [str(tmp_path / "hf") if w == "/tmp/hf" else w for w in words]
+        run = subprocess.run(words, cwd=tmp_path, capture_output=True, text=True, timeout=900)
+        assert run.returncode == 0, (command, run.stderr[-2000:])
+        if output:
+            output.write_text(run.stdout)
+        ran.append(command)
+    assert len(ran) >= 6, ran
+    for written in ("tyre_in.csv", "tyre_out.csv", "tyre_loop.png", "rig_radial/rig.csv",
+                    "fitted/bush.json", "fmus/MyBush.fmu", "fmus/python/MyBush.fmu",
+                    "hf/summary.md"):
+        assert (tmp_path / written).stat().st_size > 0, written
+    header = (tmp_path / "tyre_out.csv").read_text().splitlines()[0].replace('"', "")
+    assert header.split(",")[:3] == ["time", "compression", "compression_rate"]

@@ -1,4 +1,4 @@
-"""Independent reference solutions of the model specification.
+"""Independent reference solutions of the model specification (docs/model-spec.md).
 
 This module shares no code with the FMUs' run-time package: it reads the thesis's own
 numbers from ``reference_data/thesis`` (in the thesis's printed units), converts them to SI
