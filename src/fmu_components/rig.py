@@ -407,7 +407,9 @@ def _extract_fmu(path, component, structure):
     description = read_model_description(str(path))
     if description.modelName != component:
         raise RigError(f"{path} is {description.modelName}, not {component}")
-    names = {v.name for v in description.modelVariables if v.causality == "parameter"}
+    # the Real parameters tell the structures apart (every structure has the same switches)
+    names = {v.name for v in description.modelVariables
+             if v.causality == "parameter" and v.type == "Real"}
     wanted = set(component_definition(component, structure).default_parameters())
     if names != wanted:
         raise RigError(f"{path} is not {component} in the {structure!r} structure; build it "
