@@ -390,7 +390,11 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     GUARDED(c);
     if (FMUstate == NULL || *FMUstate == NULL) CLOSE(fmi2OK);
-    CLOSE(settle(guard, engine.freeFMUstate(guard->engine, FMUstate)));
+    fmi2Status status = settle(guard, engine.freeFMUstate(guard->engine, FMUstate));
+    /* pythonfmu leaves the freed pointer in place: a host that passes it again would
+       hand Python a freed object. */
+    *FMUstate = NULL;
+    CLOSE(status);
 }
 
 /* The serialized state is pythonfmu's bytes (the adapter's JSON) in the envelope. */

@@ -81,6 +81,12 @@ def fmi_call(name, allowed, on_failure=None):
     return decorate
 
 
+def unsigned(vr):
+    """A value reference as the host sent it: pythonfmu passes FMI's unsigned int as a
+    signed one, so references from 2**31 up arrive negative."""
+    return vr & 0xFFFFFFFF
+
+
 def _nan_values(self, vrs):
     return [math.nan] * len(vrs)
 
@@ -259,7 +265,9 @@ class ComponentSlave(Fmi2Slave):
             self._refuse_out_of_sequence("fmi2GetReal", READABLE)
             return _nan_values(self, vrs)
         try:
-            if vrs and min(vrs) < 0:
+            # Unknown references are refused before any cached value is brought up to date:
+            # a refused call leaves the instance (and its serialized state) as it was.
+            if vrs and (min(vrs) < 0 or max(vrs) >= len(self._variables)):
                 raise IndexError
             if self._outputs_stale:
                 self._refresh_outputs()
@@ -269,7 +277,7 @@ class ComponentSlave(Fmi2Slave):
             return [values[vr] for vr in vrs]
         except IndexError:
             unknown = [vr for vr in vrs if not 0 <= vr < len(self._variables)]
-            self._error(f"fmi2GetReal: no variable has value reference {unknown[0]}")
+            self._error(f"fmi2GetReal: no variable has value reference {unsigned(unknown[0])}")
         except Exception as exc:
             self._internal_error("fmi2GetReal", exc)
         return _nan_values(self, vrs)
@@ -310,7 +318,7 @@ class ComponentSlave(Fmi2Slave):
 
     def _check_settable(self, vr, value):
         if not 0 <= vr < len(self._variables):
-            return f"no variable has value reference {vr}"
+            return f"no variable has value reference {unsigned(vr)}"
         variable = self._variables[vr]
         if variable.causality == "output":
             return f"{variable.name} is an output"
@@ -352,7 +360,8 @@ class ComponentSlave(Fmi2Slave):
     # The FMUs have Real variables only (pythonfmu's own versions of these would raise).
     def _refuse_non_real(self, call, vrs):
         if vrs:
-            self._error(f"{call}: no variable of this type has value reference {vrs[0]}")
+            self._error(f"{call}: no variable of this type has value reference "
+                        f"{unsigned(vrs[0])}")
 
     def get_integer(self, vrs):
         self._refuse_non_real("fmi2GetInteger", vrs)
