@@ -88,9 +88,12 @@ def test_random_calls_neither_crash_nor_hang_and_refused_ones_change_nothing(tar
     assert int(figures["refused_checked"]) > RANDOM_CALLS // 50
 
 
-def test_malformed_instantiate_arguments_give_null(target):
+def test_malformed_instantiate_arguments_give_null(target, built_fmus):
     other = target("TrackBushRadial", "other")
-    figures = target("TrackBushTorsion").run("instantiate", other.resources)
+    torsion = target("TrackBushTorsion")
+    offers_model_exchange = fmpy.read_model_description(
+        str(built_fmus["TrackBushTorsion"])).modelExchange is not None
+    figures = torsion.run("instantiate", other.resources, int(offers_model_exchange))
     assert int(figures["instantiate_refused"]) == int(figures["instantiate_cases"]) == 17
 
 
