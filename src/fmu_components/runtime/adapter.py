@@ -81,6 +81,24 @@ def fmi_call(name, allowed, on_failure=None):
     return decorate
 
 
+@functools.lru_cache(maxsize=None)
+def guard_log_function(resources):
+    """The guard's fmu_guard_log (c/fmi2_guard.c) in the FMU's own binary, or None (the
+    adapter run without it): messages then go through pythonfmu's log queue."""
+    import glob
+    import os
+    binaries = os.path.join(os.path.dirname(os.path.abspath(resources)), "binaries", "*", "*.so")
+    for path in glob.glob(binaries):
+        try:
+            function = ctypes.CDLL(path).fmu_guard_log
+        except (OSError, AttributeError):
+            continue
+        function.argtypes = (ctypes.c_int, ctypes.c_char_p, ctypes.c_char_p)
+        function.restype = ctypes.c_int
+        return function
+    return None
+
+
 def unsigned(vr):
     """A value reference as the host sent it: pythonfmu passes FMI's unsigned int as a
     signed one, so references from 2**31 up arrive negative."""
@@ -134,6 +152,15 @@ class ComponentSlave(Fmi2Slave):
         self._arm_range_checks()
 
     # --- logging ----------------------------------------------------------------------
+
+    def log(self, msg, status=Fmi2Status.ok, category=None, debug=None):
+        send = guard_log_function(self.resources) if self.resources else None
+        if category is None:
+            category = f"logStatus{status.name.capitalize()}"
+            if category not in self.log_categories:
+                category = "logAll"
+        if send is None or not send(int(status), category.encode(), str(msg).encode()):
+            super().log(msg, status, category)
 
     def _error(self, message):
         self.log(message, Fmi2Status.error)
