@@ -119,8 +119,9 @@ def test_instances_in_threads_give_the_single_threaded_results(target):
 
 def test_rss_does_not_grow_with_instantiate_free_cycles_or_messages(target, built_fmus):
     figures = target("TrackBushTorsion").run("cycles", 2000, 20000)
-    if built_fmus.flavour == "python" and float(figures["rss_per_cycle_bytes"]) > RSS_BYTES_PER_CYCLE:
-        pytest.xfail(f"pythonfmu 0.7.0's library keeps {figures['rss_per_cycle_bytes']} B per "
-                     f"instance and {figures['rss_per_message_bytes']} B per message")
-    assert float(figures["rss_per_cycle_bytes"]) < RSS_BYTES_PER_CYCLE
     assert float(figures["rss_per_message_bytes"]) < 1.0
+    if built_fmus.flavour == "python" and float(figures["rss_per_cycle_bytes"]) > RSS_BYTES_PER_CYCLE:
+        pytest.xfail(f"{figures['rss_per_cycle_bytes']} B per instantiate/free cycle: the guard "
+                     f"reuses pythonfmu's instances, whose Python slaves it resets; what remains "
+                     f"is not yet found")
+    assert float(figures["rss_per_cycle_bytes"]) < RSS_BYTES_PER_CYCLE
