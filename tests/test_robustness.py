@@ -100,6 +100,32 @@ def test_nonsense_parameter_is_refused_when_set(built_fmus, name, parameter, val
     runner.free()
 
 
+OVERFLOWING = [("TrackBushRadial", "k3", 1e-310), ("TrackBushTorsion", "c3", 1e300),
+               ("RoadWheelTyre", "geometric.h", 1e300), ("RoadWheelTyre", "geometric.x_ref", 1e300),
+               ("RoadWheelTyre", "geometric.x_ref", -1e300)]
+
+
+@pytest.mark.parametrize("name, parameter, value", OVERFLOWING)
+def test_a_parameter_that_overflows_the_arithmetic_is_refused_at_initialization(
+        built_fmus, name, parameter, value):
+    """Finite and of the right sign, but 1/k3 or h*|x - x_ref| would be Inf on every step."""
+    t, x, v = thesis_sine(name, 0.4, STEP)
+    runner = FmuRunner(built_fmus[name])
+    runner.fmu.setupExperiment(startTime=0.0)
+    runner.fmu.enterInitializationMode()
+    runner.set_inputs(x[0], v[0])
+    runner.status(runner.fmu.setReal, [runner.vr[parameter]], [value])
+    assert runner.status(runner.fmu.exitInitializationMode) == ERROR
+    message = last_error(runner)
+    assert parameter in message and repr(value) in message and "magnitudes" in message
+    # Still in initialization mode: the thesis value restores it.
+    default = COMPONENTS[name].default_parameters()[parameter]
+    assert runner.status(runner.fmu.setReal, [runner.vr[parameter]], [default]) == OK
+    assert runner.status(runner.fmu.exitInitializationMode) == OK
+    assert np.all(np.isfinite(runner.run(x[:50], v[:50], STEP)))
+    runner.free()
+
+
 def test_non_monotone_damper_table_is_refused_at_initialization(built_fmus):
     runner = FmuRunner(built_fmus["RotaryDamper"])
     runner.fmu.setupExperiment(startTime=0.0)

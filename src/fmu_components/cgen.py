@@ -19,6 +19,7 @@ import re
 
 from .runtime.expressions import FUNCTIONS, Format, GenerationError, Printer, Symbol, Tangent
 from .runtime import cosim, integrator
+from .runtime.catalog import LARGEST_PARAMETER, SMALLEST_PARAMETER
 from .runtime.integrator import ROS34PW2, factor_statements, step_statements
 
 C_KEYWORDS = set("""auto break case char const continue default do double else enum extern float
@@ -174,6 +175,8 @@ class ModelCode:
             f"#define MODEL_TABLES {len(e.tables)}",
             f"#define MODEL_TABLE_POINTS {table_points}",
             f"#define MODEL_PARAMETERS {len(d.parameters)}",
+            f"#define SMALLEST_PARAMETER {c_number(SMALLEST_PARAMETER)}",
+            f"#define LARGEST_PARAMETER {c_number(LARGEST_PARAMETER)}",
             f"#define MODEL_CONTINUOUS {e.continuous.states}",
             f"#define MODEL_EVENT_INDICATORS {len(e.continuous.event_indicators)}",
             "/* The integrator's constants (runtime/integrator.py) and the controller's power of",

@@ -97,6 +97,16 @@ int parameter_problem(const double *values, char *message, size_t size) {
             snprintf(message, size, "parameter %s", problem);
             return 1;
         }
+        /* As catalog.magnitude_problem: outside these, 1/k or k*k overflows. */
+        double size_of = fabs(values[vr]);
+        if (values[vr] != 0.0 && !(size_of >= SMALLEST_PARAMETER && size_of <= LARGEST_PARAMETER)) {
+            char text[REPR_SIZE];
+            snprintf(message, size, "parameter %s = %s %s is outside the magnitudes the model's "
+                     "arithmetic takes (zero or 1e-100 to 1e100 in size)",
+                     MODEL_INFO.variables[vr].name, format_repr(values[vr], text),
+                     MODEL_INFO.variables[vr].unit);
+            return 1;
+        }
     }
     for (int t = 0; t < MODEL_TABLES; t++) {
         const TableInfo *table = &MODEL_INFO.tables[t];

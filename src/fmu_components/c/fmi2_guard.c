@@ -99,7 +99,51 @@ typedef struct {
     int fatal;        /* the engine reported fmi2Fatal: never call it again */
     int busy;         /* inside a call: a logger calling back is refused */
     fmi2Real last_successful_time;
+    char *resource_location; /* what pythonfmu's instance was made with */
 } Guard;
+
+/* Freed instances kept for reuse. pythonfmu 0.7.0 keeps about 2 KiB per instance it makes
+   and never gives it back (a sys.path entry, a class made from the entry module's source);
+   an instance reset through fmi2Reset makes a fresh slave without any of that. A reused
+   instance keeps its Guard, whose engine_callbacks pythonfmu refers to. The pool is not
+   emptied when the library is unloaded: the interpreter may already be finalized then. */
+/* The instance whose call this thread is inside, for fmu_guard_log. */
+static __thread Guard *calling;
+
+#define POOL_SIZE 4
+static pthread_mutex_t pool_lock = PTHREAD_MUTEX_INITIALIZER;
+static Guard *pool[POOL_SIZE];
+static int pool_count;
+
+static Guard *pool_take(const char *resource_location) {
+    Guard *found = NULL;
+    pthread_mutex_lock(&pool_lock);
+    for (int i = 0; i < pool_count && found == NULL; i++)
+        if (strcmp(pool[i]->resource_location, resource_location) == 0) {
+            found = pool[i];
+            pool[i] = pool[--pool_count];
+        }
+    pthread_mutex_unlock(&pool_lock);
+    return found;
+}
+
+static int pool_put(Guard *guard) {
+    int kept = 0;
+    pthread_mutex_lock(&pool_lock);
+    if (pool_count < POOL_SIZE) {
+        pool[pool_count++] = guard;
+        kept = 1;
+    }
+    pthread_mutex_unlock(&pool_lock);
+    return kept;
+}
+
+static void release(Guard *guard) {
+    host_log_forget(&guard->log);
+    free(guard->instance_name);
+    free(guard->resource_location);
+    free(guard);
+}
 
 static void load_engine(void) {
     /* A Python host already has the interpreter; a C host needs the shared library, with
@@ -204,6 +248,7 @@ static fmi2Status finish(Guard *guard, fmi2Status status) {
     }
     guard->n_pending = guard->n_dropped = 0;
     guard->busy = 0;
+    calling = NULL;
     return status;
 }
 
@@ -219,6 +264,17 @@ static fmi2Status settle(Guard *guard, fmi2Status status) {
 
 #define CLOSE(status) return finish(guard, (status))
 
+
+/* The adapter's way to log (runtime/adapter.py): straight to the instance this thread is
+   calling, rather than through pythonfmu's log queue, which keeps about 190 bytes of every
+   message it passes on. 0 if this thread is inside no call of this library. */
+__attribute__((visibility("default"))) int fmu_guard_log(int status, const char *category,
+                                                         const char *message) {
+    if (calling == NULL) return 0;
+    guard_logger(calling, NULL, (fmi2Status)status, category, message);
+    return 1;
+}
+
 /* The opening of every call passed to pythonfmu: declares `guard`, returns for a missing
    instance, one that failed fatally, or a logger calling back into the instance, and
    starts the call's worst status at fmi2OK. CLOSE(status) ends the call. */
@@ -226,6 +282,7 @@ static fmi2Status settle(Guard *guard, fmi2Status status) {
     Guard *guard = (Guard *)(c);                                                            \
     if (guard == NULL || guard->busy) return fmi2Error;                                     \
     guard->busy = 1;                                                                        \
+    calling = guard;                                                                        \
     guard->worst = fmi2OK;                                                                  \
     if (guard->fatal) CLOSE(refuse(guard, __func__))
 
@@ -264,23 +321,34 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         host_log(&log, fmi2Error, engine_problem);
         return NULL;
     }
-    Guard *guard = calloc(1, sizeof *guard);
+    Guard *guard = pool_take(fmuResourceLocation);
+    int reused = guard != NULL;
+    if (!reused) guard = calloc(1, sizeof *guard);
     if (guard == NULL) return NULL;
+    free(guard->instance_name);
     guard->instance_name = strdup(instanceName);
+    if (!reused) guard->resource_location = strdup(fmuResourceLocation);
     guard->log = log;
     guard->log.instance_name = guard->instance_name;
     guard->log.debug_logging = loggingOn;
     guard->engine_callbacks = *functions;
     guard->engine_callbacks.logger = guard_logger;
     guard->engine_callbacks.componentEnvironment = guard;
+    guard->last_successful_time = 0.0;
     guard->busy = 1;
-    guard->engine = engine.instantiate(instanceName, fmuType, fmuGUID, fmuResourceLocation,
-                                       &guard->engine_callbacks, visible, fmi2True);
+    calling = guard;
+    guard->worst = fmi2OK;
+    if (reused) {
+        settle(guard, engine.reset(guard->engine));
+    } else {
+        guard->engine = engine.instantiate(instanceName, fmuType, fmuGUID, fmuResourceLocation,
+                                           &guard->engine_callbacks, visible, fmi2True);
+    }
     finish(guard, fmi2OK);
-    if (guard->engine == NULL || guard->worst >= fmi2Error) {
+    if (guard->engine == NULL || guard->worst >= fmi2Error || guard->instance_name == NULL ||
+        guard->resource_location == NULL) {
         /* A half-made instance is not freed through pythonfmu: it may be broken. */
-        free(guard->instance_name);
-        free(guard);
+        release(guard);
         return NULL;
     }
     return guard;
@@ -290,14 +358,15 @@ void fmi2FreeInstance(fmi2Component c) {
     Guard *guard = (Guard *)c;
     if (guard == NULL || guard->busy) return;
     if (!guard->fatal) {
+        host_log_forget(&guard->log);
+        if (pool_put(guard)) return;
         guard->worst = fmi2OK;
         guard->busy = 1;
+        calling = guard;
         engine.freeInstance(guard->engine);
         finish(guard, fmi2OK);
     }
-    host_log_forget(&guard->log);
-    free(guard->instance_name);
-    free(guard);
+    release(guard);
 }
 
 /* Recorded here, not passed on: pythonfmu must keep logging everything. */
@@ -390,7 +459,11 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     GUARDED(c);
     if (FMUstate == NULL || *FMUstate == NULL) CLOSE(fmi2OK);
-    CLOSE(settle(guard, engine.freeFMUstate(guard->engine, FMUstate)));
+    fmi2Status status = settle(guard, engine.freeFMUstate(guard->engine, FMUstate));
+    /* pythonfmu leaves the freed pointer in place: a host that passes it again would
+       hand Python a freed object. */
+    *FMUstate = NULL;
+    CLOSE(status);
 }
 
 /* The serialized state is pythonfmu's bytes (the adapter's JSON) in the envelope. */

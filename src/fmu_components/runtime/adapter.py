@@ -81,6 +81,30 @@ def fmi_call(name, allowed, on_failure=None):
     return decorate
 
 
+@functools.lru_cache(maxsize=None)
+def guard_log_function(resources):
+    """The guard's fmu_guard_log (c/fmi2_guard.c) in the FMU's own binary, or None (the
+    adapter run without it): messages then go through pythonfmu's log queue."""
+    import glob
+    import os
+    binaries = os.path.join(os.path.dirname(os.path.abspath(resources)), "binaries", "*", "*.so")
+    for path in glob.glob(binaries):
+        try:
+            function = ctypes.CDLL(path).fmu_guard_log
+        except (OSError, AttributeError):
+            continue
+        function.argtypes = (ctypes.c_int, ctypes.c_char_p, ctypes.c_char_p)
+        function.restype = ctypes.c_int
+        return function
+    return None
+
+
+def unsigned(vr):
+    """A value reference as the host sent it: pythonfmu passes FMI's unsigned int as a
+    signed one, so references from 2**31 up arrive negative."""
+    return vr & 0xFFFFFFFF
+
+
 def _nan_values(self, vrs):
     return [math.nan] * len(vrs)
 
@@ -130,6 +154,15 @@ class ComponentSlave(Fmi2Slave):
         self._arm_range_checks()
 
     # --- logging ----------------------------------------------------------------------
+
+    def log(self, msg, status=Fmi2Status.ok, category=None, debug=None):
+        send = guard_log_function(self.resources) if self.resources else None
+        if category is None:
+            category = f"logStatus{status.name.capitalize()}"
+            if category not in self.log_categories:
+                category = "logAll"
+        if send is None or not send(int(status), category.encode(), str(msg).encode()):
+            super().log(msg, status, category)
 
     def _error(self, message):
         self.log(message, Fmi2Status.error)
@@ -269,7 +302,9 @@ class ComponentSlave(Fmi2Slave):
             self._refuse_out_of_sequence("fmi2GetReal", READABLE)
             return _nan_values(self, vrs)
         try:
-            if vrs and min(vrs) < 0:
+            # Unknown references are refused before any cached value is brought up to date:
+            # a refused call leaves the instance (and its serialized state) as it was.
+            if vrs and (min(vrs) < 0 or max(vrs) >= len(self._variables)):
                 raise IndexError
             if self._outputs_stale:
                 self._refresh_outputs()
@@ -279,7 +314,7 @@ class ComponentSlave(Fmi2Slave):
             return [values[vr] for vr in vrs]
         except IndexError:
             unknown = [vr for vr in vrs if not 0 <= vr < len(self._variables)]
-            self._error(f"fmi2GetReal: no variable has value reference {unknown[0]}")
+            self._error(f"fmi2GetReal: no variable has value reference {unsigned(unknown[0])}")
         except Exception as exc:
             self._internal_error("fmi2GetReal", exc)
         return _nan_values(self, vrs)
@@ -320,7 +355,7 @@ class ComponentSlave(Fmi2Slave):
 
     def _check_settable(self, vr, value):
         if not 0 <= vr < len(self._variables):
-            return f"no variable has value reference {vr}"
+            return f"no variable has value reference {unsigned(vr)}"
         variable = self._variables[vr]
         if variable.causality == "output":
             return f"{variable.name} is an output"
@@ -363,7 +398,8 @@ class ComponentSlave(Fmi2Slave):
     # these would raise).
     def _refuse_non_real(self, call, vrs):
         if vrs:
-            self._error(f"{call}: no variable of this type has value reference {vrs[0]}")
+            self._error(f"{call}: no variable of this type has value reference "
+                        f"{unsigned(vrs[0])}")
 
     def get_integer(self, vrs):
         self._refuse_non_real("fmi2GetInteger", vrs)

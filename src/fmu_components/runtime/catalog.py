@@ -20,6 +20,21 @@ MM = 1e-3
 
 
 POSITIVE, NON_NEGATIVE = "positive", "zero or positive"
+
+# The parameter magnitudes the model's arithmetic takes: a product, quotient or square of
+# two such values stays a normal double (about 1e-308 to 1e308), so a parameter cannot
+# make every step NaN or Inf (k3 = 1e-310 gives 1/k3 = Inf; a slope of 1e300 overflows).
+# The native runtime checks the same bounds (cgen writes them to model_config.h).
+SMALLEST_PARAMETER, LARGEST_PARAMETER = 1e-100, 1e100
+
+
+def magnitude_problem(variable, value):
+    """A message if a parameter's nonzero value is outside the magnitudes the model's
+    arithmetic takes, else None."""
+    if value != 0.0 and not SMALLEST_PARAMETER <= abs(value) <= LARGEST_PARAMETER:
+        return (f"{variable.name} = {value!r} {variable.unit} is outside the magnitudes the "
+                f"model's arithmetic takes (zero or 1e-100 to 1e100 in size)")
+    return None
 DERIVATIVE_UNITS = {"m": "m/s", "rad": "rad/s", "1": "1/s", "rad/s": "rad/s2"}
 
 
@@ -148,7 +163,8 @@ class ComponentDefinition:
         """A message naming the first parameter (or table) that makes no physical sense,
         else None."""
         for parameter in self.parameters:
-            problem = parameter.check(values[parameter.name])
+            value = values[parameter.name]
+            problem = parameter.check(value) or magnitude_problem(parameter, value)
             if problem:
                 return f"parameter {problem}"
         for table in self.equations.tables:
