@@ -131,7 +131,8 @@ def test_both_flavours_build_and_agree_to_the_bit(structure_fmus, name, structur
     definition = component_definition(name, structure)
     descriptions = [read_model_description(str(p)) for p in (native, python)]
     for description in descriptions:
-        assert [v.name for v in description.modelVariables] == [v.name for v in definition.variables]
+        assert [v.name for v in description.modelVariables] == [
+            v.name for v in (*definition.variables, *definition.switches)]
     assert descriptions[0].guid != descriptions[1].guid
     mean, amplitude, frequency = THESIS_SINES[name]
     t = time_grid(2.0 / frequency, 1e-3)
