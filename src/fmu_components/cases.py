@@ -240,10 +240,10 @@ def _damper_cases():
 
 
 CASES = (
-    _rubber_cases("RoadWheelTyre", 0.0, "mm", MM, [1, 2, 3, 4, 5], 0.2, 3.5, [0.5, 1, 2, 3],
+    _rubber_cases("RoadWheelTyre", 0.0, "mm", MM, [1, 2, 3, 4, 5], 0.2, 3.5, [0.5, 1, 1.5, 2],
                   3.5, 1.0, [0.1, 1.0, 10.0, 20.0], 4.0)
     + _rubber_cases("TrackBushRadial", 0.0, "mm", MM, [0.05, 0.15, 0.25, 0.35, 0.45], 0.02, 0.3,
-                    [0.05, 0.1, 0.2, 0.3], 0.3, 0.1, [0.1, 1.0, 10.0, 20.0], 0.3)
+                    [0.05, 0.1, 0.15, 0.2], 0.3, 0.1, [0.1, 1.0, 10.0, 20.0], 0.3)
     # Torsion starts relaxed at the 10 deg live angle, where the elastic torque is ~0.
     + _rubber_cases("TrackBushTorsion", 10.0, "deg", RAD_PER_DEG, [-10, 0, 10, 20, 30], 1.0, 10.0,
                     [2.5, 5, 10, 15, 20], 10.0, 5.0, [0.1, 1.0, 5.0], 25.0)

@@ -329,7 +329,10 @@ RUBBER_PARTS = {
         elastic=((0.0, 2.17e6, -2.14e8, 1.82e11), "Eq. 5.3.1-3"),
         geometric=(543.0, 0.0, "Eq. 5.3.2-2: f = 543 x + 1"),
         unilateral=True,
-        measured_range=(-math.inf, 10 * MM, "compression up to about 6 mm (45 kN), Fig. 5.4-3")),
+        # The thesis loaded the tyre to 45 kN (Fig. 5.4-3): Fe(6 mm) = 44.6 kN. The warning
+        # leaves room for a bump's overshoot and comes at 10 mm, Fe = 182 kN.
+        measured_range=(-math.inf, 10 * MM, "loads up to 45 kN, about 6 mm, Fig. 5.4-3; "
+                                            "warned beyond 10 mm, Fe = 182 kN")),
     "TrackBushRadial": dict(
         description="Warrior track-link bush, radial (pin) deflection: carbon-black-filled "
                     "natural rubber, {model}.",
