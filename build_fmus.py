@@ -6,7 +6,14 @@ Kept so that ``python build_fmus.py`` works from the repository root; the code i
 
 import sys
 
-if __name__ == "__main__":
-    from fmu_components.build import main
+SETUP = ('python3.11 -m venv .venv && .venv/bin/pip install -e ".[test]", '
+         'then run .venv/bin/python build_fmus.py')
 
+if __name__ == "__main__":
+    try:
+        from fmu_components.build import main
+    except ModuleNotFoundError as missing:
+        # Run by a Python without the project installed: say how to get the environment.
+        sys.exit(f"build_fmus.py: error: {missing.name} is not installed in {sys.executable}; "
+                 f"create the project's environment: {SETUP}")
     sys.exit(main())

@@ -379,10 +379,27 @@ def configure(parser):
                         help="with --params: the component the values are for")
 
 
+def check_host(flavours, will_run):
+    """Everything the build needs, checked before it starts: one line on what to install."""
+    from importlib.util import find_spec
+
+    from .cli import UsageError
+
+    if shutil.which("gcc") is None:
+        raise UsageError("gcc not found: install a C compiler (Debian/Ubuntu: apt-get install gcc)")
+    needed = (["pythonfmu"] if "python" in flavours else []) + (["fmpy"] if will_run else [])
+    missing = [module for module in needed if find_spec(module) is None]
+    if missing:
+        raise UsageError(f"{', '.join(missing)} not installed in {sys.executable}: run inside the "
+                         f"project's environment (python3.11 -m venv .venv && "
+                         f'.venv/bin/pip install -e ".[test]")')
+
+
 def run_command(args):
     from .cli import UsageError
 
     structure = args.structure
+    check_host(args.flavour, not args.no_run)
     if args.params or args.name or args.component:
         return build_own(args)
     names = args.only or [n for n in COMPONENTS if structure in structures_of(n)]

@@ -117,12 +117,43 @@ def configure(parser):
     parser.add_argument("--step", type=float, default=1e-3)
 
 
+# A deflection this many times the thesis's measured range is a unit mistake, not a test.
+UNIT_MISTAKE_FACTOR = 10.0
+
+
+def unit_mistake(fmu_name, deflection):
+    """One line saying the values look like mm (or deg) where m (or rad) are expected, or None."""
+    definition = COMPONENTS[fmu_name]
+    variable = definition.inputs[0]
+    low, high, _ = definition.measured_ranges[variable.name]
+    span = max(abs(bound) for bound in (low, high) if math.isfinite(bound))
+    largest = float(np.max(np.abs(deflection))) if len(deflection) else 0.0
+    if largest <= UNIT_MISTAKE_FACTOR * span:
+        return None
+    scale, meant = (1e-3, "mm") if variable.unit == "m" else (math.pi / 180, "deg")
+    return (f"{variable.name} reaches {largest:g} {variable.unit}, far beyond the measured range "
+            f"(about {span:.3g} {variable.unit}): the values look like {meant}; give "
+            f"{variable.unit} (e.g. {largest:g} {meant} = {largest * scale:.4g} {variable.unit})")
+
+
 def run_command(args):
+    from .cli import UsageError
+
+    if not (args.step > 0 and args.stop_time >= args.step):
+        raise UsageError("--step must be > 0 and --stop-time at least one step (seconds), "
+                         "e.g. --stop-time 2 --step 1e-3")
+    if args.shape == "sine" and args.frequency <= 0:
+        raise UsageError("--frequency must be > 0 (Hz), e.g. --frequency 1")
+    if args.shape == "ramp" and args.ramp_time <= 0:
+        raise UsageError("--ramp-time must be > 0 (seconds), e.g. --ramp-time 0.1")
     t = time_grid(args.stop_time, args.step)
     if args.shape == "sine":
         x = sine(t, args.mean, args.amplitude, args.frequency)
     else:
         x = ramp_and_hold(t, args.mean, args.mean + args.amplitude, args.ramp_time)
+    mistake = unit_mistake(args.fmu, x)
+    if mistake:
+        raise UsageError(mistake)
     write_csv(input_table(args.fmu, t, x), sys.stdout)
     return 0
 

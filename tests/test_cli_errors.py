@@ -1,0 +1,83 @@
+"""The command-line tool's mistakes come out as one line that says what to do, no traceback."""
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+from conftest import ROOT
+
+
+def run(arguments, env=None, python_options=()):
+    environment = {**os.environ, "PYTHONPATH": str(ROOT / "src"), **(env or {})}
+    return subprocess.run([sys.executable, *python_options, *arguments], cwd=ROOT, env=environment,
+                          capture_output=True, text=True, timeout=120)
+
+
+def one_line_error(result, *words):
+    assert result.returncode != 0
+    assert "Traceback" not in result.stderr
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    for word in words:
+        assert word in lines[0], lines[0]
+    return lines[0]
+
+
+def test_build_script_outside_the_environment_says_how_to_create_it():
+    # -S: no site-packages, so neither the project nor pythonfmu can be imported
+    result = run(["build_fmus.py"], env={"PYTHONPATH": ""}, python_options=["-S"])
+    one_line_error(result, "venv", "pip install -e", "build_fmus.py")
+
+
+def test_build_without_gcc_says_to_install_it(tmp_path):
+    result = run(["-m", "fmu_components", "build", "--no-run", "--dest", str(tmp_path)],
+                 env={"PATH": str(tmp_path)})
+    one_line_error(result, "gcc", "apt-get install gcc")
+    assert not list(tmp_path.glob("*.fmu"))
+
+
+@pytest.mark.parametrize("fmu, mean, amplitude, meant", [
+    ("RoadWheelTyre", "3.5", "1", "mm"),         # mm typed where m are expected
+    ("TrackBushRadial", "0.3", "0.1", "mm"),
+    ("TrackBushTorsion", "10", "5", "deg"),      # deg typed where rad are expected
+    ("RotaryDamper", "0", "12", "deg"),
+])
+def test_signal_in_the_wrong_unit_is_refused(fmu, mean, amplitude, meant):
+    result = run(["-m", "fmu_components", "signal", fmu, "sine", "--mean", mean,
+                  "--amplitude", amplitude])
+    one_line_error(result, f"look like {meant}")
+    assert result.stdout == ""
+
+
+@pytest.mark.parametrize("fmu, mean, amplitude", [
+    ("RoadWheelTyre", "3.5e-3", "1e-3"), ("TrackBushRadial", "0.3e-3", "0.1e-3"),
+    ("TrackBushTorsion", "0.1745", "0.0873"), ("RotaryDamper", "0", "0.21")])
+def test_signal_in_si_units_is_written(fmu, mean, amplitude):
+    result = run(["-m", "fmu_components", "signal", fmu, "sine", "--mean", mean,
+                  "--amplitude", amplitude, "--stop-time", "0.01"])
+    assert result.returncode == 0, result.stderr
+    assert len(result.stdout.splitlines()) == 12  # header and 11 samples
+
+
+@pytest.mark.parametrize("options, words", [
+    (["--step", "0"], ["--step"]),
+    (["--frequency", "-1"], ["--frequency"]),
+])
+def test_signal_timing_mistakes_are_one_line(options, words):
+    result = run(["-m", "fmu_components", "signal", "RoadWheelTyre", "sine", "--mean", "3.5e-3",
+                  *options])
+    one_line_error(result, *words)
+
+
+def test_validate_before_building_says_to_build(tmp_path):
+    result = run(["-m", "fmu_components", "validate", "--fmu", "RotaryDamper", "--fmus",
+                  str(tmp_path), "--report", str(tmp_path / "report")])
+    one_line_error(result, "fmu-components build")
+
+
+def test_validate_with_no_matching_case_says_where_the_names_are(tmp_path):
+    result = run(["-m", "fmu_components", "validate", "--case", "no_such_case", "--fmus",
+                  str(tmp_path), "--report", str(tmp_path / "report")])
+    one_line_error(result, "reference_data")
