@@ -316,3 +316,37 @@ def test_validation_command_refuses_missing_fmus(tmp_path):
     with pytest.raises(SystemExit) as stop:
         validate.main([f"--fmus={tmp_path}", "--case=RotaryDamper/A_*"])
     assert stop.value.code == 2
+
+
+# --- the report's titles and plots --------------------------------------------------------
+
+class _Shown:
+    """What report.conditions reads of an outcome: the case, its inputs and its time."""
+
+    def __init__(self, case):
+        self.case, self.inputs = case, case.inputs()
+        self.reference = {"time": self.inputs["time"]}
+
+
+@pytest.mark.parametrize("case", [c for c in cases.CASES if (c.fmu, c.test) in SPEC_SINES],
+                         ids=lambda c: c.key)
+def test_plot_titles_name_the_spec_preload_amplitude_and_frequency(case):
+    from fmu_components.report import DISPLAY, conditions
+
+    factor = DISPLAY[case.fmu][0][0]
+    said = conditions(_Shown(case))
+    mean, amplitude, frequency = (float(re.match(r"(\+-)?(-?[\d.e-]+)", said[k]).group(2))
+                                  for k in (list(said)[0], "amplitude", "frequency"))
+    assert any(math.isclose(mean, m * factor, rel_tol=2e-3, abs_tol=1e-3 * amplitude)
+               and math.isclose(amplitude, a * factor, rel_tol=2e-3)
+               and math.isclose(frequency, f, rel_tol=1e-3)
+               for m, a, f in SPEC_SINES[case.fmu, case.test]), said
+
+
+def test_report_plots_are_200_dpi(built_fmus, tmp_path):
+    from PIL import Image
+
+    assert validate.main([f"--fmus={built_fmus['RotaryDamper'].parent}",
+                          f"--report={tmp_path}", "--case=RotaryDamper/A_*"]) == 0
+    for image in tmp_path.glob("*.png"):
+        assert Image.open(image).info["dpi"] == pytest.approx((200, 200), abs=0.5)

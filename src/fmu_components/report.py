@@ -5,6 +5,7 @@ One figure per test of each component (spec section 5), plus one plot per case o
 output against time with the FMU's error.
 """
 
+import math
 from pathlib import Path
 
 import matplotlib
@@ -28,8 +29,11 @@ DISPLAY = {
     # The damper as the thesis reports it: Table 11.2-1 in rad, Table A6-1 in rad/s.
     "RotaryDamper": ((1.0, "rad"), (1.0, "N.m"), (1.0, "rad/s")),
 }
+DPI = 200  # print quality
 REFERENCE_STYLE = dict(color="black", linewidth=1.0)
-FMU_STYLE = dict(linestyle="--", linewidth=1.4)
+# Dashed with open markers, so that the FMU shows where it lies exactly on the reference.
+FMU_STYLE = dict(linestyle="--", linewidth=1.2, marker="o", markersize=3.5, markerfacecolor="none")
+FMU_MARKERS = 40  # markers per curve
 ELASTIC_STYLE = dict(color="0.6", linewidth=2.0)
 
 
@@ -60,6 +64,49 @@ class Axes:
         return f"{self.load} ({self.f_unit})"
 
 
+# Tests whose input is not one sine: their titles name the shape instead.
+NOT_ONE_SINE = {"IV", "dual sine", "sweep"}
+
+
+def _fmu_style(n):
+    return dict(FMU_STYLE, markevery=max(1, n // FMU_MARKERS))
+
+
+def conditions(outcome):
+    """Preload (mean), amplitude and frequency of a periodic case's shown window, in display
+    units, e.g. {"preload": "3.5 mm", "amplitude": "+-1 mm", "frequency": "1 Hz"}; {} for a
+    ramp or a sweep."""
+    if outcome.case.test in NOT_ONE_SINE:
+        return {}
+    axes = Axes(outcome.case.fmu)
+    # The shown window is whole cycles with both ends sampled: one end dropped, mean, rms and
+    # the spectrum's bins are exact for a sine.
+    x = axes.x(outcome.inputs)[_shown(outcome)][:-1]
+    spectrum = np.abs(np.fft.rfft(x - x.mean()))
+    frequency = np.argmax(spectrum[1:]) + 1 if len(spectrum) > 1 else 0
+    mean_name = "preload" if outcome.case.fmu != "RotaryDamper" else "mean"
+    amplitude = math.sqrt(2) * float(np.std(x))
+    # a mean within 1 % of the amplitude is a zero mean (the grid's sampling of a sine)
+    mean = x.mean() if abs(x.mean()) > 1e-2 * amplitude else 0.0
+    return {mean_name: f"{_round(mean)} {axes.x_unit}",
+            "amplitude": f"+-{_round(amplitude)} {axes.x_unit}",
+            "frequency": f"{_round(frequency / (len(x) * outcome.case.step))} Hz"}
+
+
+def _round(value):
+    return f"{float(f'{value:.3g}'):g}"
+
+
+def describe(outcomes):
+    """The conditions every outcome shares, for a title: "preload 3.5 mm, 1 Hz"."""
+    shared = None
+    for outcome in outcomes:
+        these = conditions(outcome)
+        shared = these if shared is None else {k: v for k, v in shared.items()
+                                               if these.get(k) == v}
+    return ", ".join(v if k == "frequency" else f"{k} {v}" for k, v in (shared or {}).items())
+
+
 def _shown(outcome):
     return outcome.reference["time"] >= outcome.case.shown_from - outcome.case.step / 2
 
@@ -70,14 +117,19 @@ def _overlay(ax, outcome, x_of, y_of, color, label):
     ax.plot(x_of(outcome.inputs)[k], y_of(outcome.reference)[k], **REFERENCE_STYLE)
     if outcome.errors:  # the FMU ran the whole case
         ax.plot(x_of(outcome.inputs)[k], y_of(outcome.result)[k], color=color, label=label,
-                **FMU_STYLE)
+                **_fmu_style(int(np.count_nonzero(k))))
 
 
 def _legend_note(ax, elastic=False):
     ax.plot([], [], label="reference (independent solve)", **REFERENCE_STYLE)
     if elastic:
         ax.plot([], [], label="elastic force Fe (section 5.3.1)", **ELASTIC_STYLE)
-    ax.legend(fontsize=8, loc="best")
+    _legend_outside(ax)
+
+
+def _legend_outside(ax):
+    """Legend to the right of the axes, never over the data."""
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     ax.grid(True, alpha=0.3)
 
 
@@ -115,7 +167,8 @@ def plot_relaxation(fig, outcomes):
             ax.plot(t[k], axes.f(outcome.reference)[k], **REFERENCE_STYLE)
             if outcome.errors:
                 ax.plot(t[k], axes.f(outcome.result)[k], color=color,
-                        label=f"FMU, {outcome.case.label}", **FMU_STYLE)
+                        label=f"FMU, {outcome.case.label}",
+                        **_fmu_style(int(np.count_nonzero(np.ones_like(t)[k]))))
         ax.set_xlabel("time since the hold began (s), log scale" if log else "time (s)")
         ax.set_ylabel(axes.f_label)
         if log:
@@ -142,7 +195,12 @@ def plot_sweep(fig, outcomes):
     """Steady torque of the constant-velocity sweep against Table A6-1 (Fig. A6-1)."""
     (outcome,) = outcomes
     case = outcome.case
-    table, time_history = fig.subplots(1, 2)
+    grid = fig.add_gridspec(2, 2)
+    table = fig.add_subplot(grid[:, 0])
+    # The plateaus shorten as the rate rises (the travel is fixed): the fast end gets a panel
+    # of its own so that each plateau can be read.
+    early = fig.add_subplot(grid[0, 1])
+    late = fig.add_subplot(grid[1, 1])
     spec = reference.damper_spec()
     rates, smoothed = spec.rates, spec.torques
     measured = np.array([float(r["measured_N_m"]) for r in reference.thesis_rows("table_A6-1.csv")])
@@ -162,28 +220,37 @@ def plot_sweep(fig, outcomes):
                    label="FMU, steady torque")
     table.set_xlabel("angular velocity (rad/s)")
     table.set_ylabel("torque (N.m)")
-    table.legend(fontsize=8)
+    table.legend(fontsize=7, loc="upper left")  # the curve runs from lower left to upper right
     table.grid(True, alpha=0.3)
     t = outcome.reference["time"]
-    time_history.plot(t, outcome.reference["torque"], **REFERENCE_STYLE)
-    if outcome.errors:
-        time_history.plot(t, outcome.result["torque"], color="tab:blue", label="FMU", **FMU_STYLE)
-    time_history.set_xlabel("time (s)")
-    time_history.set_ylabel("torque (N.m)")
-    _legend_note(time_history)
+    for panel, k in ((early, t <= SWEEP_SPLIT), (late, t >= SWEEP_SPLIT)):
+        panel.plot(t[k], outcome.reference["torque"][k], **REFERENCE_STYLE)
+        if outcome.errors:
+            panel.plot(t[k], outcome.result["torque"][k], color="tab:blue", label="FMU",
+                       **_fmu_style(int(np.count_nonzero(k))))
+        panel.set_xlim(t[k][0], t[k][-1])
+        panel.set_ylabel("torque (N.m)")
+        _legend_note(panel)
+    early.set_title(f"up to {SWEEP_SPLIT:g} s: |omega| up to 1.6 rad/s", fontsize=9)
+    late.set_title(f"after {SWEEP_SPLIT:g} s: |omega| 1.6 to 14 rad/s", fontsize=9)
+    late.set_xlabel("time (s)")
+
+
+SWEEP_SPLIT = 20.0  # s
 
 
 def plot_test(outcomes, path):
     """The figure of one test of one component."""
     case = outcomes[0].case
     wide_plot = WIDE_PLOTS.get(case.test)
-    fig = plt.figure(figsize=(13, 5.5) if wide_plot else (8, 6))
+    fig = plt.figure(figsize=(15, 6.5) if wide_plot else (10, 6.5))
     if wide_plot:
         wide_plot(fig, outcomes)
     else:
         plot_loops(fig.subplots(), outcomes)
-    _save(fig, f"{case.fmu}: {programme.TESTS[case.test].title}\nthesis {case.figure}; FMU "
-               f"dashed over the reference", path, dpi=100)
+    shared = describe(outcomes)
+    _save(fig, f"{case.fmu}: {programme.TESTS[case.test].title}{', ' + shared if shared else ''}"
+               f"\nthesis {case.figure}; FMU dashed with markers over the reference (black)", path)
 
 
 # Tests drawn on a wide figure of two panels; every other test is a set of loops.
@@ -199,7 +266,8 @@ def plot_case(outcome, path):
     axes = Axes(outcome.case.fmu)
     panels[0].plot(t, axes.f(outcome.reference), **REFERENCE_STYLE, label="reference")
     if outcome.errors:
-        panels[0].plot(t, axes.f(outcome.result), color="tab:blue", label="FMU", **FMU_STYLE)
+        panels[0].plot(t, axes.f(outcome.result), color="tab:blue", label="FMU",
+                       **_fmu_style(len(t)))
         for name in names:
             error = 100 * (outcome.result[name] - outcome.reference[name]) / \
                 programme.column_scale(outcome.reference[name])
@@ -208,21 +276,29 @@ def plot_case(outcome, path):
     panels[1].set_ylabel(f"FMU - reference\n(% of peak-to-peak;\nlimit {STRICT_LIMIT:g} %)")
     panels[1].set_xlabel("time (s)")
     for panel in panels:
-        panel.legend(fontsize=8)
-        panel.grid(True, alpha=0.3)
-    _save(fig, f"{outcome.case.key}: strict error {outcome.strict_error:.4f} % "
-               f"({'pass' if outcome.passed else 'FAIL'})", path, dpi=80)
+        _legend_outside(panel)
+    shared = describe([outcome])
+    _save(fig, f"{outcome.case.key}{': ' + shared if shared else ''}\nstrict error "
+               f"{outcome.strict_error:.4f} % ({'pass' if outcome.passed else 'FAIL'})", path)
 
 
-def _save(fig, title, path, dpi):
+def _save(fig, title, path):
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=dpi)
+    fig.savefig(path, dpi=DPI, bbox_inches="tight")
     plt.close(fig)
 
 
-def write_report(outcomes, folder):
-    """Plots and summary.md in folder; returns the summary's path."""
+def plot_count(outcomes):
+    """How many PNGs write_report draws for these outcomes (for a progress bar)."""
+    ran = [o for o in outcomes if o.reference is not None]
+    return len(ran) + len({(o.case.fmu, o.case.test) for o in ran})
+
+
+def write_report(outcomes, folder, progress=None):
+    """Plots and summary.md in folder; returns the summary's path. progress (a tqdm bar, or
+    None) advances by one per plot."""
+    advance = progress.update if progress is not None else (lambda n: None)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     groups = {}
@@ -240,6 +316,7 @@ def write_report(outcomes, folder):
     for (fmu, test), members in groups.items():
         name = f"test_{fmu}_{test.replace(' ', '_')}.png"
         plot_test(members, folder / name)
+        advance(1)
         lines += [f"### {fmu}: {programme.TESTS[test].title}", "",
                   f"Thesis {members[0].case.figure}.", "", f"![{fmu} {test}]({name})", ""]
     header, *table = rows(outcomes)
@@ -250,6 +327,7 @@ def write_report(outcomes, folder):
         name = f"case_{outcome.case.fmu}_{outcome.case.name}.png"
         if outcome.reference is not None:
             plot_case(outcome, folder / name)
+            advance(1)
         lines.append("| " + " | ".join(row) + (f" | [plot]({name}) |" if outcome.reference
                                                is not None else " |  |"))
     summary = folder / "summary.md"

@@ -145,18 +145,25 @@ def run_command(args):
         raise UsageError(f"not built: {', '.join(missing)} (run fmu-components build first)")
 
     outcomes = []
-    # The bar draws on a terminal; in a CI log (no terminal) it stays out of the way.
-    progress = tqdm(selected, desc="validating", unit="case", file=sys.stderr, disable=None)
-    for case in progress:
+    # One bar over the simulations and the plots (the plots take most of the time). It draws
+    # on a terminal; in a CI log (no terminal) it stays out of the way.
+    progress = tqdm(total=len(selected), desc="simulating", unit="step", file=sys.stderr,
+                    disable=None)
+    for case in selected:
         progress.set_postfix_str(case.key)
         try:
             outcomes.append(run_case(case, args.fmus / f"{case.fmu}.fmu", args.reference_data))
         except Exception as exc:  # a case that cannot run is a failed case, not a crash
             outcomes.append(Outcome(case, problem=f"{type(exc).__name__}: {exc}"))
-    progress.close()
+        progress.update(1)
 
-    from .report import write_report  # matplotlib only once there is something to plot
-    summary = write_report(outcomes, args.report)
+    from .report import plot_count, write_report  # matplotlib only once there is something to plot
+    progress.total = len(selected) + plot_count(outcomes)
+    progress.set_description("plotting")
+    progress.set_postfix_str("")
+    progress.refresh()
+    summary = write_report(outcomes, args.report, progress)
+    progress.close()
     print(table(outcomes))
     failed = [o for o in outcomes if not o.passed]
     print(f"\n{len(outcomes) - len(failed)} of {len(outcomes)} cases pass (strict error <= "
