@@ -358,7 +358,8 @@ def plot_speed(path, speed, profile, nonlinear, linear):
                   lw=1.0, ls="--")
         axis.set_ylabel(label)
         axis.grid(alpha=0.3)
-    axes[1].legend(loc="upper right", fontsize=8)
+    # in the road panel, whose upper right is empty once the bump has passed: off the data
+    axes[0].legend(*axes[1].get_legend_handles_labels(), loc="upper right", fontsize=8)
     axes[-1].set_xlabel("time (s)")
     save_figure(figure, path)
 
