@@ -9,5 +9,5 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 def save_figure(figure, path):
     figure.tight_layout()
-    figure.savefig(path, dpi=200)  # print quality, as the validation report
+    figure.savefig(path, dpi=200, bbox_inches="tight")  # print quality; legends beside the axes kept
     plt.close(figure)

@@ -209,7 +209,8 @@ def plot_span(path, result, span):
         axes[1].plot(t, np.degrees(result["joint_angle"][:, j]), color=colours[j], lw=0.8)
         axes[2].plot(t, result["radial_force"][:, j] / 1e3, color=colours[j], lw=0.8)
     axes[0].set_ylabel("joint torque,\nTrackBushTorsion (N.m)")
-    axes[0].legend(fontsize=8, loc="upper left")
+    # legends beside the axes: the curves fill each panel
+    axes[0].legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     axes[1].set_ylabel("joint angle (deg)\n(live angle 10 deg)")
     axes[2].set_ylabel("pin radial force,\nTrackBushRadial (kN)")
     heights = (result["link_height"] - result["link_height"][0]) * 1e3
@@ -218,7 +219,7 @@ def plot_span(path, result, span):
                      label=f"link {i}" if i in (0, heights.shape[1] // 2) else None)
     axes[3].plot(t, result["lift"] * 1e3, "k--", lw=1.0, label="end lift")
     axes[3].set_ylabel("link height from\nstatic (mm)")
-    axes[3].legend(fontsize=8, loc="upper left")
+    axes[3].legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     axes[-1].set_xlabel("time (s)")
     for axis in axes:
         axis.grid(alpha=0.3)
@@ -244,7 +245,7 @@ def plot_shapes(path, result, span):
     axis.set_ylabel("height (mm): end joints\nand link centres")
     axis.set_title("Span shape (static sag at t = 0)")
     axis.grid(alpha=0.3)
-    axis.legend(fontsize=7, ncol=3)
+    axis.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     save_figure(figure, path)
 
 
