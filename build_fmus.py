@@ -14,6 +14,7 @@ if __name__ == "__main__":
         from fmu_components.build import main
     except ModuleNotFoundError as missing:
         # Run by a Python without the project installed: say how to get the environment.
-        sys.exit(f"build_fmus.py: error: {missing.name} is not installed in {sys.executable}; "
-                 f"create the project's environment: {SETUP}")
+        print(f"build_fmus.py: error: {missing.name} is not installed in {sys.executable}; "
+              f"create the project's environment: {SETUP}", file=sys.stderr)
+        sys.exit(2)  # a usage error, as the command-line tool's
     sys.exit(main())

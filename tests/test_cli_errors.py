@@ -16,7 +16,7 @@ def run(arguments, env=None, python_options=()):
 
 
 def one_line_error(result, *words):
-    assert result.returncode != 0
+    assert result.returncode == 2
     assert "Traceback" not in result.stderr
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1, result.stderr
