@@ -463,7 +463,10 @@ static int run_states(const char *other_file, uint64_t seed) {
     /* Another format version, with a correct checksum. */
     size_t length = size - ENVELOPE_OVERHEAD;
     const unsigned char *payload = good + ENVELOPE_OVERHEAD - 4;
-    envelope_write(bad, model_name, guid, 2, payload, length);
+    /* the format version follows the 8-byte tag, 4 bytes little-endian: one past it */
+    uint32_t version = (uint32_t)good[8] | (uint32_t)good[9] << 8 | (uint32_t)good[10] << 16
+                       | (uint32_t)good[11] << 24;
+    envelope_write(bad, model_name, guid, version + 1, payload, length);
     expect_refused(c, bad, size, "another version's");
     /* Crafted: the payload changed, the envelope and checksum remade. Each must be refused
        or, if accepted, give finite outputs. */
