@@ -21,12 +21,21 @@ import math
 import sys
 import traceback
 
-from pythonfmu import Fmi2Slave
-from pythonfmu.enums import Fmi2Causality, Fmi2Status, Fmi2Variability
-from pythonfmu.variables import Real
+# Inside an FMU this package is named for its build (fmu_components_<tag>) and carries its
+# own copy of pythonfmu, so that neither another FMU's copy nor the host's is used (build.py,
+# spec section 8); in the development tree pythonfmu is the installed one.
+if __package__ == "fmu_components.runtime":
+    import pythonfmu
+else:
+    from .. import pythonfmu
 
 from .cosim import REFUSED, WARNED, CoSimulation, rate_floors
 from .integrator import DEFAULT_RTOL, Rosenbrock
+
+Fmi2Slave, Real = pythonfmu.Fmi2Slave, pythonfmu.Real
+Fmi2Causality, Fmi2Status, Fmi2Variability = (pythonfmu.enums.Fmi2Causality,
+                                              pythonfmu.enums.Fmi2Status,
+                                              pythonfmu.enums.Fmi2Variability)
 
 # pythonfmu 0.7.0 finds the slave class by executing the entry module's source against the
 # module's namespace and then calls Py_DECREF on that namespace, a borrowed reference
@@ -47,6 +56,14 @@ _CLASSES = {}
 
 def first_class(cls):
     return _CLASSES.setdefault(f"{cls.__module__}.{cls.__qualname__}", cls)
+
+
+def forget_import_path(resources):
+    """pythonfmu puts the resources folder first on sys.path for every instance it makes, to
+    import the entry module; the modules are imported when the slave is made, so the entry
+    goes again rather than one more staying per instance."""
+    if resources and sys.path and sys.path[0] == resources:
+        del sys.path[0]
 
 
 # FMI 2.0 co-simulation states (section 4.2.4) and the calls each allows (the masks the
@@ -127,6 +144,7 @@ class ComponentSlave(Fmi2Slave):
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         hold_module_namespace(vars(sys.modules[type(self).__module__]))
+        forget_import_path(self.resources)
         definition = self.definition
         self.modelName = definition.name
         variables = definition.variables
