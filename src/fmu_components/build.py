@@ -59,7 +59,7 @@ RUNTIME_SOURCES = ("fmi2_functions.c", "model_exchange.c", "cosimulation.c", "in
                    "state.c", "hermite.c", "text.c", "host_log.c", "state_envelope.c",
                    "instantiation.c")
 RUNTIME_HEADERS = ("runtime.h", "model.h", "arithmetic.h", "hermite.h", "text.h", "host_log.h",
-                   "state_envelope.h", "instantiation.h")
+                   "state_envelope.h", "instantiation.h", "call_flag.h")
 FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
 GENERATED = ("model_config.h", "model.c")
 # The same arithmetic in the same order as the Python flavour: no fused multiply-add, no

@@ -17,11 +17,17 @@
  *   logger                   a logger that calls back into the instance
  *   cycles COUNT MESSAGES    instantiate/free cycles and logged messages, RSS measured
  *   threads COUNT STEPS      instances in threads, compared with a single-threaded run
+ *   shared THREADS CALLS     threads calling one instance at once: one steps it, the others
+ *                            make calls that must fail; each call is its own or refused,
+ *                            and a refusal is told to the thread that made the call
+ *   thread-states CALLS      (Python flavour) the Python thread states that calls from a C
+ *                            host thread make, and whether a thread's goes when it ends
  *
  * Every call runs under alarm(): a hang ends the process with SIGALRM. It prints
  * "key value" lines; the exit code is 0 only if every check held.
  */
 
+#define _GNU_SOURCE
 #include <dlfcn.h>
 #include <math.h>
 #include <pthread.h>
@@ -639,6 +645,182 @@ static int run_threads(int count, long steps) {
     return failures ? 3 : 0;
 }
 
+/* ---- threads calling one instance ---- */
+
+static fmi2Component shared_instance;
+static long shared_calls;
+static __thread unsigned long overlap_messages; /* refusals told to this thread */
+static unsigned long good_refused, good_told, bad_ok, bad_calls, good_reads;
+
+static void shared_logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
+                          fmi2String category, fmi2String message, ...) {
+    (void)env; (void)name; (void)status; (void)category;
+    if (message && strstr(message, "another call on this instance has not returned"))
+        overlap_messages++;
+}
+
+/* A call of the stepping thread: its own status, or fmi2Error with the refusal told. */
+static int own_or_told(fmi2Status status, unsigned long told_before, const char *what) {
+    if (status == fmi2OK) return 1;
+    if (status == fmi2Error && overlap_messages > told_before) {
+        good_refused++;
+        good_told++;
+        return 0;
+    }
+    fail("the stepping thread's %s gave %d%s", what, status,
+         status == fmi2Error ? " without a refusal told to it" : "");
+    return 0;
+}
+
+static void *stepping_thread(void *unused) {
+    (void)unused;
+    double time = 0.0, set[2] = {0.0, 0.0};
+    for (long k = 0; k < shared_calls; k++) {
+        double t = time;
+        fmi2Real in[2] = {0.002 * sin(10.0 * t), 0.02 * cos(10.0 * t)}, back[3];
+        fmi2ValueReference vrs[3] = {vr_in[0], vr_in[1], vr_out};
+        unsigned long told = overlap_messages;
+        if (own_or_told(fmi.SetReal(shared_instance, vr_in, 2, in), told, "fmi2SetReal"))
+            memcpy(set, in, sizeof set);
+        told = overlap_messages;
+        if (own_or_told(fmi.DoStep(shared_instance, time, 1e-3, fmi2True), told, "fmi2DoStep"))
+            time += 1e-3;
+        told = overlap_messages;
+        if (own_or_told(fmi.GetReal(shared_instance, vrs, 3, back), told, "fmi2GetReal")) {
+            good_reads++;
+            /* No other thread changes the instance: the inputs read back are the last set. */
+            if (back[0] != set[0] || back[1] != set[1] || !isfinite(back[2]))
+                fail("read back [%g %g %g] after setting [%g %g]", back[0], back[1], back[2],
+                     set[0], set[1]);
+        }
+    }
+    return NULL;
+}
+
+/* Calls that fail on their own: a NaN input, a negative step, an unknown reference. */
+static void *failing_thread(void *unused) {
+    (void)unused;
+    fmi2Real nan_input[1] = {NAN}, value;
+    fmi2ValueReference unknown = 0xFFFFFFF0u;
+    for (long k = 0; k < shared_calls; k++) {
+        fmi2Status s[3] = {fmi.SetReal(shared_instance, vr_in, 1, nan_input),
+                           fmi.DoStep(shared_instance, 0.0, -1.0, fmi2True),
+                           fmi.GetReal(shared_instance, &unknown, 1, &value)};
+        for (int i = 0; i < 3; i++) {
+            __atomic_add_fetch(&bad_calls, 1, __ATOMIC_RELAXED);
+            if (s[i] != fmi2Error) __atomic_add_fetch(&bad_ok, 1, __ATOMIC_RELAXED);
+        }
+        usleep((useconds_t)(k % 4) * 10); /* pauses of 0 to 30 us: the stepping thread gets in */
+    }
+    return NULL;
+}
+
+static int run_shared(int count, long calls) {
+    static const fmi2CallbackFunctions callbacks = {shared_logger, calloc, free, NULL, NULL};
+    shared_instance = instantiate("shared", &callbacks, fmi2False);
+    if (!shared_instance || !initialize(shared_instance, 0.0, 0.0)) { fail("instantiate"); return 3; }
+    shared_calls = calls;
+    pthread_t threads[64];
+    if (count < 2 || count > 64) { fail("2 to 64 threads"); return 3; }
+    alarm(CALL_SECONDS * 10);
+    pthread_create(&threads[0], NULL, stepping_thread, NULL);
+    for (int i = 1; i < count; i++) pthread_create(&threads[i], NULL, failing_thread, NULL);
+    for (int i = 0; i < count; i++) pthread_join(threads[i], NULL);
+    alarm(0);
+    if (bad_ok) fail("%lu calls that fail on their own were answered as if they had not", bad_ok);
+    /* The instance still works from one thread. */
+    fmi2Real out = NAN, in[2] = {0.001, 0.0}, now = 0.0;
+    fmi.GetRealStatus(shared_instance, fmi2LastSuccessfulTime, &now);
+    if (fmi.SetReal(shared_instance, vr_in, 2, in) != fmi2OK ||
+        fmi.DoStep(shared_instance, now, 1e-3, fmi2True) > fmi2Warning ||
+        fmi.GetReal(shared_instance, &vr_out, 1, &out) != fmi2OK || !isfinite(out))
+        fail("the instance does not work after the threads");
+    fmi.FreeInstance(shared_instance);
+    printf("shared_threads %d\nshared_stepping_calls %ld\nshared_stepping_refused %lu\n"
+           "shared_stepping_told %lu\nshared_stepping_reads %lu\nshared_failing_calls %lu\n"
+           "shared_failing_ok %lu\n", count, 3 * calls, good_refused, good_told, good_reads,
+           bad_calls, bad_ok);
+    return failures ? 3 : 0;
+}
+
+/* ---- Python thread states ---- */
+
+/* Python's C API in the process (the Python flavour's binary loaded it): a probe thread of
+   its own makes a thread state, whose unique id tells how many were made before it, and
+   counts the interpreter's live ones. */
+static struct {
+    int (*ensure)(void);
+    void (*release)(int);
+    void *(*get)(void);
+    unsigned long long (*id)(void *);
+    void *(*main_interpreter)(void);
+    void *(*head)(void *);
+    void *(*next)(void *);
+} py;
+typedef struct { unsigned long long id; long live; } Probe;
+
+static void *probe_thread(void *result) {
+    Probe *probe = result;
+    int gil = py.ensure();
+    probe->id = py.id(py.get());
+    probe->live = 0;
+    for (void *state = py.head(py.main_interpreter()); state; state = py.next(state)) probe->live++;
+    py.release(gil);
+    return NULL;
+}
+
+static Probe probe(void) {
+    Probe result;
+    pthread_t thread;
+    pthread_create(&thread, NULL, probe_thread, &result);
+    pthread_join(thread, NULL);
+    return result;
+}
+
+static void *cycles_thread(void *argument) {
+    fmi2Component c = argument;
+    fmi2Real in[2] = {0.001, 0.0}, out;
+    for (long k = 0; k < shared_calls; k++) {
+        fmi.SetReal(c, vr_in, 2, in);
+        fmi.DoStep(c, 0.0, 1e-3, fmi2True); /* refused (not the current time) after the first */
+        fmi.GetReal(c, &vr_out, 1, &out);
+    }
+    return NULL;
+}
+
+static int run_thread_states(long calls) {
+    fmi2Component c = instantiate("states", &quiet, fmi2False);
+    if (!c || !initialize(c, 0.0, 0.0)) { fail("instantiate"); return 3; }
+#define PY(field, name) *(void **)&py.field = dlsym(RTLD_DEFAULT, #name);
+    PY(ensure, PyGILState_Ensure) PY(release, PyGILState_Release) PY(get, PyThreadState_Get)
+    PY(id, PyThreadState_GetID) PY(main_interpreter, PyInterpreterState_Main)
+    PY(head, PyInterpreterState_ThreadHead) PY(next, PyThreadState_Next)
+#undef PY
+    if (!py.ensure || !py.release || !py.get || !py.id || !py.main_interpreter || !py.head || !py.next) {
+        printf("python 0\n"); /* the native flavour */
+        fmi.FreeInstance(c);
+        return failures ? 3 : 0;
+    }
+    shared_calls = calls;
+    alarm(CALL_SECONDS * 10);
+    Probe before = probe();
+    cycles_thread(c); /* this thread */
+    Probe after_calls = probe();
+    pthread_t thread; /* a thread that makes the same calls and ends */
+    pthread_create(&thread, NULL, cycles_thread, c);
+    pthread_join(thread, NULL);
+    Probe after_thread = probe();
+    alarm(0);
+    fmi.FreeInstance(c);
+    /* each probe makes one state itself */
+    printf("python 1\ncalls %ld\nthread_states_made_by_calls %llu\n"
+           "thread_states_made_by_a_thread %llu\nlive_thread_states_before %ld\n"
+           "live_thread_states_after_the_thread_ended %ld\n", 3 * calls,
+           after_calls.id - before.id - 1, after_thread.id - after_calls.id - 1, after_calls.live,
+           after_thread.live);
+    return failures ? 3 : 0;
+}
+
 int main(int argc, char **argv) {
     if (argc < 8) {
         fprintf(stderr, "usage: %s MODE BINARY RESOURCE_URI GUID VR_DEFLECTION VR_RATE VR_OUTPUT "
@@ -682,6 +864,8 @@ int main(int argc, char **argv) {
     else if (!strcmp(mode, "logger")) status = run_logger();
     else if (!strcmp(mode, "cycles") && argc > 9) status = run_cycles(atol(argv[8]), atol(argv[9]));
     else if (!strcmp(mode, "threads") && argc > 9) status = run_threads(atoi(argv[8]), atol(argv[9]));
+    else if (!strcmp(mode, "shared") && argc > 9) status = run_shared(atoi(argv[8]), atol(argv[9]));
+    else if (!strcmp(mode, "thread-states") && argc > 8) status = run_thread_states(atol(argv[8]));
     else { fprintf(stderr, "unknown mode or missing arguments: %s\n", mode); return 1; }
     printf("failures %lu\n", failures);
     dlclose(library);

@@ -47,18 +47,21 @@ void log_status(const Instance *instance, fmi2Status status, const char *format,
     host_log(&instance->log, status, message);
 }
 
-int call_refused(Instance *instance, int allowed, const char *function) {
-    if (instance == NULL || instance->magic != INSTANCE_MAGIC || instance->busy) return 0;
+int call_refused(Instance *instance, int claimed, int allowed, const char *function) {
+    if (!claimed) {
+        if (call_refusal_told(&instance->call, host_log_calling_back()))
+            log_status(instance, fmi2Error, CALL_OVERLAP_MESSAGE, function);
+        return 0;
+    }
     char list[256] = "";
     for (size_t i = 0; i < sizeof MODES / sizeof MODES[0]; i++) {
         if (!(allowed & MODES[i].mode)) continue;
         if (list[0]) strncat(list, ", ", sizeof list - strlen(list) - 1);
         strncat(list, MODES[i].name, sizeof list - strlen(list) - 1);
     }
-    instance->busy = 1;
     log_status(instance, fmi2Error, "%s is not allowed in state %s (allowed in: %s); call "
                "ignored", function, mode_name(instance->s.mode), list);
-    instance->busy = 0;
+    call_end(instance, fmi2Error);
     return 0;
 }
 
@@ -243,7 +246,12 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 
 void fmi2FreeInstance(fmi2Component c) {
     Instance *instance = (Instance *)c;
-    if (instance == NULL || instance->magic != INSTANCE_MAGIC || instance->busy) return;
+    if (instance == NULL || instance->magic != INSTANCE_MAGIC) return;
+    if (!call_claim(&instance->call)) {
+        if (call_refusal_told(&instance->call, host_log_calling_back()))
+            log_status(instance, fmi2Error, CALL_OVERLAP_MESSAGE, __func__);
+        return;
+    }
     instance->magic = 0;
     host_log_forget(&instance->log);
     free(instance->instance_name);

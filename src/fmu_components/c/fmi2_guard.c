@@ -14,7 +14,11 @@
  *  - loads the Python shared library (PYTHON_LIBRARY) with global symbols when the host
  *    process has no Python of its own, so C hosts need no LD_PRELOAD;
  *  - stops calling an instance that reported fmi2Fatal, so the host is never crashed by it,
- *    and refuses a logger that calls back into the instance;
+ *    and refuses a call while another on the same instance has not returned (a second
+ *    thread, or a logger calling back: call_flag.h);
+ *  - keeps one Python thread state for each host thread that has none of its own (a C
+ *    host's), rather than pythonfmu making and destroying one in every call, and drops it
+ *    when the thread ends;
  *  - always lets pythonfmu log (it drops every message unless debug logging is on) and
  *    applies the host's logging choice itself (host_log.c, shared with the native runtime);
  *  - wraps serialized states in the envelope the native runtime uses (state_envelope.c:
@@ -32,6 +36,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "call_flag.h"
 #include "fmi2Functions.h"
 #include "host_log.h"
 #include "instantiation.h"
@@ -81,7 +86,26 @@ static struct {
 static pthread_once_t engine_once = PTHREAD_ONCE_INIT;
 static char engine_problem[8192]; /* empty when the engine loaded */
 
-typedef struct {
+/* The few functions of Python's C API the guard calls itself, looked up in the process (the
+   guard does not link libpython). A thread state is opaque here. */
+static struct {
+    int (*is_initialized)(void);                /* Py_IsInitialized */
+    int (*is_finalizing)(void);                 /* _Py_IsFinalizing */
+    void *(*this_thread_state)(void);           /* PyGILState_GetThisThreadState */
+    int (*ensure)(void);                        /* PyGILState_Ensure */
+    void *(*save_thread)(void);                 /* PyEval_SaveThread */
+    void (*restore_thread)(void *);             /* PyEval_RestoreThread */
+    void (*clear_thread_state)(void *);         /* PyThreadState_Clear */
+    void (*delete_current_thread_state)(void);  /* PyThreadState_DeleteCurrent */
+} python;
+
+/* The Python thread state kept for a host thread that had none: made at its first call
+   once the interpreter runs, dropped by this key's destructor when the thread ends. */
+static pthread_key_t kept_thread_state;
+static int kept_thread_state_made;
+static __thread int thread_state_settled; /* this thread has one of its own, or a kept one */
+
+typedef struct Guard {
     fmi2Component engine;
     fmi2CallbackFunctions engine_callbacks; /* the host's, with our logger in between */
     HostLog log;                            /* the host's logger and logging choice */
@@ -97,7 +121,8 @@ typedef struct {
     } pending[PENDING_MESSAGES];
     int n_pending, n_dropped;
     int fatal;        /* the engine reported fmi2Fatal: never call it again */
-    int busy;         /* inside a call: a logger calling back is refused */
+    CallFlag call;    /* claimed while a call runs: another thread, or the logger, is refused */
+    struct Guard *outer; /* the instance this thread was calling before this one */
     fmi2Real last_successful_time;
     char *resource_location; /* what pythonfmu's instance was made with */
 } Guard;
@@ -145,6 +170,33 @@ static void release(Guard *guard) {
     free(guard);
 }
 
+/* pythonfmu's calls each ask for the GIL with PyGILState_Ensure and give it back with
+   PyGILState_Release. On a thread with no Python thread state (a C host's), that makes a
+   state and destroys it again in every call (an mmap and munmap among the work). A state
+   made once here and kept, with the GIL given back, turns their pair into taking and
+   giving back the GIL. A thread with a state of its own (a Python host's) is left alone. */
+static void keep_python_thread_state(void) {
+    if (thread_state_settled || !kept_thread_state_made || !python.is_initialized()) return;
+    thread_state_settled = 1;
+    if (python.this_thread_state() != NULL) return;
+    python.ensure();
+    pthread_setspecific(kept_thread_state, python.save_thread());
+}
+
+/* The thread ends: its kept state goes, unless the interpreter has already gone (it freed
+   every state) or is going. */
+static void drop_python_thread_state(void *state) {
+    if (!python.is_initialized() || (python.is_finalizing && python.is_finalizing())) return;
+    python.restore_thread(state);
+    python.clear_thread_state(state);
+    python.delete_current_thread_state();
+}
+
+/* Unloaded: no thread's end may call into this library any more. */
+__attribute__((destructor)) static void forget_kept_thread_states(void) {
+    if (kept_thread_state_made) pthread_key_delete(kept_thread_state);
+}
+
 static void load_engine(void) {
     /* A Python host already has the interpreter; a C host needs the shared library, with
        its symbols global because pythonfmu's library leaves them undefined. */
@@ -155,6 +207,21 @@ static void load_engine(void) {
                  PYTHON_LIBRARY, dlerror());
         return;
     }
+#define PYTHON(field, name)                                                                 \
+    if ((*(void **)&python.field = dlsym(RTLD_DEFAULT, #name)) == NULL) {                   \
+        snprintf(engine_problem, sizeof engine_problem, "the Python library lacks " #name);  \
+        return;                                                                             \
+    }
+    PYTHON(is_initialized, Py_IsInitialized)
+    PYTHON(this_thread_state, PyGILState_GetThisThreadState)
+    PYTHON(ensure, PyGILState_Ensure)
+    PYTHON(save_thread, PyEval_SaveThread)
+    PYTHON(restore_thread, PyEval_RestoreThread)
+    PYTHON(clear_thread_state, PyThreadState_Clear)
+    PYTHON(delete_current_thread_state, PyThreadState_DeleteCurrent)
+#undef PYTHON
+    *(void **)&python.is_finalizing = dlsym(RTLD_DEFAULT, "_Py_IsFinalizing"); /* optional */
+    kept_thread_state_made = pthread_key_create(&kept_thread_state, drop_python_thread_state) == 0;
     Dl_info self;
     if (!dladdr((void *)&load_engine, &self) || self.dli_fname == NULL) {
         snprintf(engine_problem, sizeof engine_problem, "cannot locate the FMU's binary folder");
@@ -234,8 +301,26 @@ static void guard_logger(fmi2ComponentEnvironment environment, fmi2String instan
     snprintf(guard->pending[i].text, sizeof guard->pending[i].text, "%s", message ? message : "");
 }
 
-/* The end of every call: the messages kept during it go to the host (still busy, so a
-   logger calling back is refused), then the call's status. */
+/* The opening of every call that has claimed the instance. */
+static void enter(Guard *guard) {
+    guard->outer = calling;
+    calling = guard;
+    guard->worst = fmi2OK;
+    keep_python_thread_state();
+}
+
+/* A call that found another on the instance not returned: refused, touching nothing. */
+static fmi2Status overlapping(Guard *guard, const char *function) {
+    if (call_refusal_told(&guard->call, host_log_calling_back())) {
+        char message[MESSAGE_SIZE];
+        snprintf(message, sizeof message, CALL_OVERLAP_MESSAGE, function);
+        host_log(&guard->log, fmi2Error, message);
+    }
+    return fmi2Error;
+}
+
+/* The end of every call: the messages kept during it go to the host (the instance still
+   claimed, so a logger calling back is refused), then the call's status. */
 static fmi2Status finish(Guard *guard, fmi2Status status) {
     for (int i = 0; i < guard->n_pending; i++)
         host_log_send(&guard->log, guard->pending[i].status, guard->pending[i].category,
@@ -247,8 +332,8 @@ static fmi2Status finish(Guard *guard, fmi2Status status) {
         host_log_send(&guard->log, fmi2Warning, "logStatusWarning", message);
     }
     guard->n_pending = guard->n_dropped = 0;
-    guard->busy = 0;
-    calling = NULL;
+    calling = guard->outer;
+    call_release(&guard->call);
     return status;
 }
 
@@ -276,14 +361,13 @@ __attribute__((visibility("default"))) int fmu_guard_log(int status, const char 
 }
 
 /* The opening of every call passed to pythonfmu: declares `guard`, returns for a missing
-   instance, one that failed fatally, or a logger calling back into the instance, and
-   starts the call's worst status at fmi2OK. CLOSE(status) ends the call. */
+   instance, one that failed fatally, or one with another call not returned, and starts the
+   call's worst status at fmi2OK. CLOSE(status) ends the call. */
 #define GUARDED(c)                                                                          \
     Guard *guard = (Guard *)(c);                                                            \
-    if (guard == NULL || guard->busy) return fmi2Error;                                     \
-    guard->busy = 1;                                                                        \
-    calling = guard;                                                                        \
-    guard->worst = fmi2OK;                                                                  \
+    if (guard == NULL) return fmi2Error;                                                    \
+    if (!call_claim(&guard->call)) return overlapping(guard, __func__);                     \
+    enter(guard);                                                                           \
     if (guard->fatal) CLOSE(refuse(guard, __func__))
 
 /* pythonfmu reads the arrays it is given without looking: NULL is refused here. */
@@ -335,9 +419,8 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     guard->engine_callbacks.logger = guard_logger;
     guard->engine_callbacks.componentEnvironment = guard;
     guard->last_successful_time = 0.0;
-    guard->busy = 1;
-    calling = guard;
-    guard->worst = fmi2OK;
+    call_claim(&guard->call); /* a new instance, or a freed one: nobody else has it */
+    enter(guard);
     if (reused) {
         settle(guard, engine.reset(guard->engine));
     } else {
@@ -356,13 +439,17 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 
 void fmi2FreeInstance(fmi2Component c) {
     Guard *guard = (Guard *)c;
-    if (guard == NULL || guard->busy) return;
+    if (guard == NULL) return;
+    if (!call_claim(&guard->call)) {
+        overlapping(guard, __func__);
+        return;
+    }
     if (!guard->fatal) {
         host_log_forget(&guard->log);
+        call_release(&guard->call);
         if (pool_put(guard)) return;
-        guard->worst = fmi2OK;
-        guard->busy = 1;
-        calling = guard;
+        call_claim(&guard->call);
+        enter(guard);
         engine.freeInstance(guard->engine);
         finish(guard, fmi2OK);
     }

@@ -4,6 +4,26 @@
 #include <stdlib.h>
 #include <string.h>
 
+#if defined(_MSC_VER)
+#define THREAD_LOCAL __declspec(thread)
+#else
+#define THREAD_LOCAL __thread
+#endif
+
+/* How deep this thread is in host loggers called from here: a call on an instance from
+   inside one is the logger calling back. */
+static THREAD_LOCAL int logger_depth;
+
+int host_log_calling_back(void) { return logger_depth > 0; }
+
+static void call_logger(const HostLog *log, fmi2Status status, const char *category,
+                        const char *message) {
+    logger_depth++;
+    log->logger(log->environment, log->instance_name ? log->instance_name : "", status,
+                category, message);
+    logger_depth--;
+}
+
 const char *log_category(fmi2Status status) {
     switch (status) {
     case fmi2Warning: return "logStatusWarning";
@@ -29,9 +49,8 @@ int host_log_wants(const HostLog *log, fmi2Status status, const char *category) 
 void host_log_send(const HostLog *log, fmi2Status status, const char *category,
                    const char *message) {
     if (log->logger == NULL) return;
-    const char *name = log->instance_name ? log->instance_name : "";
     if (strchr(message, '%') == NULL) {
-        log->logger(log->environment, name, status, category, message);
+        call_logger(log, status, category, message);
         return;
     }
     char escaped[2 * MESSAGE_SIZE + 1];
@@ -41,7 +60,7 @@ void host_log_send(const HostLog *log, fmi2Status status, const char *category,
         escaped[n++] = *in;
     }
     escaped[n] = '\0';
-    log->logger(log->environment, name, status, category, escaped);
+    call_logger(log, status, category, escaped);
 }
 
 void host_log(const HostLog *log, fmi2Status status, const char *message) {

@@ -40,4 +40,7 @@ int host_log_set(HostLog *log, fmi2Boolean on, size_t n, const fmi2String catego
                  char *problem);
 void host_log_forget(HostLog *log);
 
+/* 1 if this thread is inside a host logger that host_log_send called. */
+int host_log_calling_back(void);
+
 #endif

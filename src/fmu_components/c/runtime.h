@@ -6,7 +6,8 @@
  * statement, so that both flavours take the same steps and give the same bits.
  *
  * No globals: everything an instance has is in its Instance, so instances are independent
- * and calls on different instances from different threads are safe.
+ * and calls on different instances from different threads are safe; two calls on one
+ * instance at once are refused (call_flag.h).
  */
 #ifndef RUNTIME_H
 #define RUNTIME_H
@@ -14,6 +15,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "call_flag.h"
 #include "fmi2Functions.h"
 #include "host_log.h"
 #include "model.h"
@@ -78,28 +80,28 @@ typedef struct {
     fmi2Type type;
     HostLog log;
     char *instance_name;
-    int busy;        /* inside a call: a logger calling back is refused */
+    CallFlag call; /* claimed while a call runs: another thread, or the logger, is refused */
     uint32_t magic;
 } Instance;
 
 #define INSTANCE_MAGIC 0x54565247u /* "TVRG" */
 
-/* The opening of every call on an instance: 1 when the call may go on (and the instance is
-   marked busy until call_end), 0 when it is refused: no instance, a logger calling back
-   into it (refused silently), or a state where FMI does not allow the call (logged). */
-int call_refused(Instance *instance, int allowed, const char *function);
+/* The opening of every call on an instance: 1 when the call may go on (and has the instance
+   to itself until call_end), 0 when it is refused: no instance, another call on it not
+   returned (call_flag.h), or a state where FMI does not allow the call (logged). */
+int call_refused(Instance *instance, int claimed, int allowed, const char *function);
 
 static inline int call_begin(Instance *instance, int allowed, const char *function) {
-    if (instance != NULL && instance->magic == INSTANCE_MAGIC && !instance->busy &&
-        (instance->s.mode & allowed)) {
-        instance->busy = 1;
-        return 1;
+    if (instance != NULL && instance->magic == INSTANCE_MAGIC) {
+        int claimed = call_claim(&instance->call);
+        if (claimed && (instance->s.mode & allowed)) return 1;
+        return call_refused(instance, claimed, allowed, function);
     }
-    return call_refused(instance, allowed, function);
+    return 0;
 }
 
 static inline fmi2Status call_end(Instance *instance, fmi2Status status) {
-    instance->busy = 0;
+    call_release(&instance->call);
     return status;
 }
 

@@ -32,10 +32,7 @@ else:
 from .cosim import REFUSED, WARNED, CoSimulation, rate_floors
 from .integrator import DEFAULT_RTOL, Rosenbrock
 
-Fmi2Slave, Real = pythonfmu.Fmi2Slave, pythonfmu.Real
-Fmi2Causality, Fmi2Status, Fmi2Variability = (pythonfmu.enums.Fmi2Causality,
-                                              pythonfmu.enums.Fmi2Status,
-                                              pythonfmu.enums.Fmi2Variability)
+Fmi2Slave, Fmi2Status = pythonfmu.Fmi2Slave, pythonfmu.enums.Fmi2Status
 
 # pythonfmu 0.7.0 finds the slave class by executing the entry module's source against the
 # module's namespace and then calls Py_DECREF on that namespace, a borrowed reference
@@ -129,11 +126,6 @@ def _nan_values(self, vrs):
 # The catalog lists a component's variables inputs first: deflection, then its rate.
 DEFLECTION_VR, RATE_VR = 0, 1
 
-_CAUSALITY = {"input": (Fmi2Causality.input, Fmi2Variability.continuous),
-              "local": (Fmi2Causality.local, Fmi2Variability.continuous),
-              "output": (Fmi2Causality.output, Fmi2Variability.continuous),
-              "parameter": (Fmi2Causality.parameter, Fmi2Variability.fixed)}
-
 
 class ComponentSlave(Fmi2Slave):
     definition = None  # a catalog.ComponentDefinition, set by each FMU's entry class
@@ -149,14 +141,11 @@ class ComponentSlave(Fmi2Slave):
         self.modelName = definition.name
         variables = definition.variables
         self._variables = variables
+        # Value references are catalog order. No variable is registered with pythonfmu: every
+        # call that would read its registry is the adapter's own, and the modelDescription
+        # is the project's (fmu_components.model_description). A slave then holds no
+        # reference cycle, and goes as soon as pythonfmu lets go of it.
         self._values = [v.start if v.start is not None else 0.0 for v in variables]
-        # pythonfmu needs the variables registered (value references in catalog order); the
-        # modelDescription is the project's own (fmu_components.model_description).
-        for vr, variable in enumerate(variables):
-            causality, variability = _CAUSALITY[variable.causality]
-            self.register_variable(Real(
-                variable.name, causality=causality, variability=variability,
-                getter=lambda vr=vr: self._values[vr], setter=lambda value: None))
         self._output_vrs = range(2, 2 + len(definition.outputs))
         self._parameter_vrs = range(self._output_vrs.stop,
                                     self._output_vrs.stop + len(definition.parameters))

@@ -21,6 +21,10 @@ MM = 1e-3
 
 POSITIVE, NON_NEGATIVE = "positive", "zero or positive"
 
+# Compiled models by equations and parameter values (ComponentDefinition.build_model).
+_MODELS = {}
+MAX_MODELS = 64
+
 # The parameter magnitudes the model's arithmetic takes: a product, quotient or square of
 # two such values stays a normal double (about 1e-308 to 1e308), so a parameter cannot
 # make every step NaN or Inf (k3 = 1e-310 gives 1/k3 = Inf; a slope of 1e300 overflows).
@@ -137,8 +141,16 @@ class ComponentDefinition:
         return structure
 
     def build_model(self, values):
-        """The Python model with these parameter values (name -> value)."""
-        return Model(self.equations, values)
+        """The Python model with these parameter values (name -> value). A model is read-only
+        once made, so instances with the same equations and values share one: making
+        another instance compiles nothing."""
+        key = (id(self.equations), tuple(sorted((n, repr(v)) for n, v in values.items())))
+        cached = _MODELS.get(key)
+        if cached is None or cached.equations is not self.equations:
+            if len(_MODELS) >= MAX_MODELS:
+                _MODELS.clear()  # a host sweeping parameters: do not grow forever
+            cached = _MODELS[key] = Model(self.equations, values)
+        return cached
 
     def default_parameters(self):
         """The thesis value of every parameter, by name."""

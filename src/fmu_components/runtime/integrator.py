@@ -384,16 +384,20 @@ class Rosenbrock:
         """(factor, step, single_step_for, source text) for a system (a compiled model)."""
         last_system, compiled = self._last_compiled
         if last_system is not system:
-            source = python_step(self.tableau, system)
-            key = (source, tuple(sorted(system.namespace.items())))
-            compiled = self._compiled.get(key)
+            # A model shared by many instances (catalog) keeps its step: printed once.
+            compiled = system.compiled_steps.get(self.tableau.name)
             if compiled is None:
-                if len(self._compiled) >= self.MAX_COMPILED:
-                    self._compiled.clear()  # a host sweeping parameters: do not grow forever
-                functions = compile_python(source, system.namespace,
-                                           f"<{self.tableau.name} step>")
-                compiled = self._compiled[key] = (functions["factor"], functions["step"],
-                                                  functions["single_step_for"], source)
+                source = python_step(self.tableau, system)
+                key = (source, tuple(sorted(system.namespace.items())))
+                compiled = self._compiled.get(key)
+                if compiled is None:
+                    if len(self._compiled) >= self.MAX_COMPILED:
+                        self._compiled.clear()  # a host sweeping parameters: do not grow forever
+                    functions = compile_python(source, system.namespace,
+                                               f"<{self.tableau.name} step>")
+                    compiled = self._compiled[key] = (functions["factor"], functions["step"],
+                                                      functions["single_step_for"], source)
+                system.compiled_steps[self.tableau.name] = compiled
             self._last_compiled = (system, compiled)
         return compiled
 

@@ -192,6 +192,7 @@ class Model:
     def __init__(self, equations, values=None):
         values = dict(values or {})
         self.equations = equations
+        self.compiled_steps = {}  # tableau name -> the integrator's step for this model
         self.integrated_size = equations.integrated
         self.state_size = equations.state_size
         self.tables = {table.name: shared_curve(*table.points(values))
