@@ -39,3 +39,17 @@ def test_quick_benchmark_runs_and_reports_finite_figures(all_fmus, tmp_path):
         assert figures["instances"] == 4 and figures["real_time_factor"] > 0
     text = report.read_text()
     assert "## Cost at h = 1 ms" in text and "## Vehicle scale" in text
+
+
+def test_the_python_flavours_c_host_benchmark_runs_and_reports_every_fmu(all_fmus):
+    python_dir = str(next(iter(all_fmus["python"].values())).parent)
+    run = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "python_c_host.py"), "--quick",
+                          "--fmus", python_dir, "--before", python_dir],
+                         capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, run.stderr
+    rows = [line.split("|")[1:-1] for line in run.stdout.splitlines()
+            if line.startswith("| ") and not line.startswith("| FMU")]
+    assert {row[0].strip() for row in rows} == set(all_fmus["python"])
+    for row in rows:
+        medians = [float(cell.split()[0]) for cell in row[1:]]
+        assert len(medians) == 5 and all(math.isfinite(v) and v > 0 for v in medians)
