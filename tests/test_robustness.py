@@ -299,6 +299,56 @@ def test_a_broken_serialized_state_is_refused(built_fmus, kind, expected):
     runner.free()
 
 
+def forged(flavour, payload, craft, n_variables):
+    """The payload of a TrackBushTorsion state with one value forged. The Python state is
+    JSON; the native one is its Snapshot (runtime.h): the FMI state (an int padded to 8
+    bytes), the values by reference, start time, tolerance, the initialized flag (padded),
+    time, deflection, rate, then the model state."""
+    k1 = 6  # TrackBushTorsion's first stiffness (catalog order)
+    if flavour == "native":
+        model_state = 8 + 8 * n_variables + 8 + 8 + 8 + 3 * 8
+        offset, value = {"a bogus FMI state": (0, struct.pack("<i", 12345)),
+                         "a negative stiffness": (8 + 8 * k1, struct.pack("<d", -1.0)),
+                         "a NaN model state": (model_state, struct.pack("<d", math.nan))}[craft]
+        return payload[:offset] + value + payload[offset + len(value):]
+    state = json.loads(payload)
+    if craft == "a bogus FMI state":
+        state["mode"] = "Bogus"
+    elif craft == "a negative stiffness":
+        state["values"][k1] = -1.0
+    elif craft == "a NaN model state":
+        state["cosim"]["state"][0] = math.nan
+    elif craft == "an empty model state":
+        state["cosim"]["state"] = []
+    elif craft == "a parameter given as text":
+        state["values"][k1] = str(state["values"][k1])
+    return json.dumps(state).encode()
+
+
+# The native state is a fixed binary layout: it has no list to empty and no text.
+CRAFTS = {"native": ["a bogus FMI state", "a negative stiffness", "a NaN model state"],
+          "python": ["a bogus FMI state", "a negative stiffness", "a NaN model state",
+                     "an empty model state", "a parameter given as text"]}
+
+
+def test_a_forged_state_with_a_valid_checksum_is_refused_and_changes_nothing(built_fmus):
+    """A state whose envelope and checksum are right but whose content no run could reach:
+    every value passes the checks fmi2SetReal makes before any of it is used."""
+    runner = FmuRunner(built_fmus["TrackBushTorsion"])
+    runner.initialize(math.radians(10), 0.0)
+    before = runner.step(math.radians(10), 0.1, STEP)
+    blob = serialized(runner)
+    n_variables = sum(1 for v in runner.description.modelVariables if v.type == "Real")
+    for craft in CRAFTS[built_fmus.flavour]:
+        payload = forged(built_fmus.flavour, blob[ENVELOPE_HEAD:-4], craft, n_variables)
+        assert payload != blob[ENVELOPE_HEAD:-4]
+        status, message = refused_state(runner, reseal(blob, payload))
+        assert status == ERROR and "state" in message, (craft, message)
+        assert runner.read() == before, craft
+    assert np.all(np.isfinite(runner.step(math.radians(10), 0.1, STEP)))
+    runner.free()
+
+
 def test_a_state_of_another_component_is_refused(built_fmus):
     damper = FmuRunner(built_fmus["RotaryDamper"])
     damper.initialize(0.0, 0.0)
