@@ -178,6 +178,18 @@ def test_a_logger_calling_back_into_the_instance_is_refused_and_harms_nothing(ra
     fmu.lib.fmi2FreeInstance(c)
 
 
+@pytest.mark.parametrize("vr", [2**31, 2**32 - 1])
+def test_an_unknown_value_reference_is_named_as_the_unsigned_number_the_host_sent(raw, vr):
+    fmu = raw("TrackBushTorsion")
+    c = fmu.initialized()
+    value = (c_double * 1)(1.0)
+    assert fmu.lib.fmi2GetReal(c, (c_uint * 1)(vr), 1, value) == ERROR
+    assert f"value reference {vr}" in fmu.last_error()
+    assert fmu.set(c, [vr], [1.0]) == ERROR
+    assert f"value reference {vr}" in fmu.last_error()
+    fmu.lib.fmi2FreeInstance(c)
+
+
 def test_a_message_with_percent_signs_reaches_a_formatting_logger_as_written(raw, tmp_path):
     fmu = raw("TrackBushTorsion")
     uri = (tmp_path / "100%s%n").as_uri()  # percent-encoded: file:///.../100%25s%25n
