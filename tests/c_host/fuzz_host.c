@@ -21,7 +21,7 @@
  *                            make calls that must fail; each call is its own or refused,
  *                            and a refusal is told to the thread that made the call
  *   thread-states CALLS      (Python flavour) the Python thread states that calls from a C
- *                            host thread make, and whether a thread's goes when it ends
+ *                            host thread make, and whether a thread's goes once it has ended
  *
  * Every call runs under alarm(): a hang ends the process with SIGALRM. It prints
  * "key value" lines; the exit code is 0 only if every check held.
@@ -777,14 +777,22 @@ static Probe probe(void) {
     return result;
 }
 
-static void *cycles_thread(void *argument) {
-    fmi2Component c = argument;
+static void cycles(fmi2Component c) {
     fmi2Real in[2] = {0.001, 0.0}, out;
     for (long k = 0; k < shared_calls; k++) {
         fmi.SetReal(c, vr_in, 2, in);
         fmi.DoStep(c, 0.0, 1e-3, fmi2True); /* refused (not the current time) after the first */
         fmi.GetReal(c, &vr_out, 1, &out);
     }
+}
+
+/* The calls, then a wait while the main thread takes the GIL: the thread then ends while
+   the host holds the GIL and waits for it, which must not hang. */
+static pthread_barrier_t calls_made, gil_taken;
+static void *cycles_thread(void *argument) {
+    cycles(argument);
+    pthread_barrier_wait(&calls_made);
+    pthread_barrier_wait(&gil_taken);
     return NULL;
 }
 
@@ -804,11 +812,19 @@ static int run_thread_states(long calls) {
     shared_calls = calls;
     alarm(CALL_SECONDS * 10);
     Probe before = probe();
-    cycles_thread(c); /* this thread */
+    cycles(c); /* this thread */
     Probe after_calls = probe();
     pthread_t thread; /* a thread that makes the same calls and ends */
+    pthread_barrier_init(&calls_made, NULL, 2);
+    pthread_barrier_init(&gil_taken, NULL, 2);
     pthread_create(&thread, NULL, cycles_thread, c);
+    pthread_barrier_wait(&calls_made);
+    int gil = py.ensure();
+    pthread_barrier_wait(&gil_taken);
     pthread_join(thread, NULL);
+    py.release(gil);
+    fmi2Real out;
+    fmi.GetReal(c, &vr_out, 1, &out); /* the next call deletes the ended thread's state */
     Probe after_thread = probe();
     alarm(0);
     fmi.FreeInstance(c);

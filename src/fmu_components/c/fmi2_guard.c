@@ -17,8 +17,8 @@
  *    and refuses a call while another on the same instance has not returned (a second
  *    thread, or a logger calling back: call_flag.h);
  *  - keeps one Python thread state for each host thread that has none of its own (a C
- *    host's), rather than pythonfmu making and destroying one in every call, and drops it
- *    when the thread ends;
+ *    host's), rather than pythonfmu making and destroying one in every call, and deletes
+ *    it after the thread has ended;
  *  - always lets pythonfmu log (it drops every message unless debug logging is on) and
  *    applies the host's logging choice itself (host_log.c, shared with the native runtime);
  *  - wraps serialized states in the envelope the native runtime uses (state_envelope.c:
@@ -89,21 +89,28 @@ static char engine_problem[8192]; /* empty when the engine loaded */
 /* The few functions of Python's C API the guard calls itself, looked up in the process (the
    guard does not link libpython). A thread state is opaque here. */
 static struct {
-    int (*is_initialized)(void);                /* Py_IsInitialized */
-    int (*is_finalizing)(void);                 /* _Py_IsFinalizing */
-    void *(*this_thread_state)(void);           /* PyGILState_GetThisThreadState */
-    int (*ensure)(void);                        /* PyGILState_Ensure */
-    void *(*save_thread)(void);                 /* PyEval_SaveThread */
-    void (*restore_thread)(void *);             /* PyEval_RestoreThread */
-    void (*clear_thread_state)(void *);         /* PyThreadState_Clear */
-    void (*delete_current_thread_state)(void);  /* PyThreadState_DeleteCurrent */
+    int (*is_initialized)(void);         /* Py_IsInitialized */
+    void *(*this_thread_state)(void);    /* PyGILState_GetThisThreadState */
+    int (*ensure)(void);                 /* PyGILState_Ensure */
+    void (*release)(int);                /* PyGILState_Release */
+    void *(*save_thread)(void);          /* PyEval_SaveThread */
+    void (*clear_thread_state)(void *);  /* PyThreadState_Clear */
+    void (*delete_thread_state)(void *); /* PyThreadState_Delete */
 } python;
 
 /* The Python thread state kept for a host thread that had none: made at its first call
-   once the interpreter runs, dropped by this key's destructor when the thread ends. */
+   once the interpreter runs; when the thread ends, this key's destructor hands it to
+   `ended`, and the next call into this library deletes it. */
 static pthread_key_t kept_thread_state;
 static int kept_thread_state_made;
 static __thread int thread_state_settled; /* this thread has one of its own, or a kept one */
+
+typedef struct Ended {
+    void *state;
+    struct Ended *next;
+} Ended;
+static pthread_mutex_t ended_lock = PTHREAD_MUTEX_INITIALIZER;
+static Ended *ended;
 
 typedef struct Guard {
     fmi2Component engine;
@@ -183,13 +190,37 @@ static void keep_python_thread_state(void) {
     pthread_setspecific(kept_thread_state, python.save_thread());
 }
 
-/* The thread ends: its kept state goes, unless the interpreter has already gone (it freed
-   every state) or is going. */
-static void drop_python_thread_state(void *state) {
-    if (!python.is_initialized() || (python.is_finalizing && python.is_finalizing())) return;
-    python.restore_thread(state);
-    python.clear_thread_state(state);
-    python.delete_current_thread_state();
+/* A thread with a kept state ends. Its end must not wait for the GIL (the host may hold it
+   while it waits for the thread), so the state waits for the next call instead. */
+static void hand_over_thread_state(void *state) {
+    Ended *node = malloc(sizeof *node);
+    if (node == NULL) return; /* the state stays with the interpreter until it ends */
+    node->state = state;
+    pthread_mutex_lock(&ended_lock);
+    node->next = ended;
+    __atomic_store_n(&ended, node, __ATOMIC_RELEASE);
+    pthread_mutex_unlock(&ended_lock);
+}
+
+/* The states of threads that have ended, deleted under the GIL (none, almost always). */
+static void delete_ended_thread_states(void) {
+    if (__atomic_load_n(&ended, __ATOMIC_ACQUIRE) == NULL) return;
+    pthread_mutex_lock(&ended_lock);
+    Ended *list = ended;
+    ended = NULL;
+    pthread_mutex_unlock(&ended_lock);
+    int alive = python.is_initialized(); /* else the interpreter has freed every state */
+    int gil = alive ? python.ensure() : 0;
+    while (list != NULL) {
+        Ended *next = list->next;
+        if (alive) {
+            python.clear_thread_state(list->state);
+            python.delete_thread_state(list->state);
+        }
+        free(list);
+        list = next;
+    }
+    if (alive) python.release(gil);
 }
 
 /* Unloaded: no thread's end may call into this library any more. */
@@ -215,13 +246,12 @@ static void load_engine(void) {
     PYTHON(is_initialized, Py_IsInitialized)
     PYTHON(this_thread_state, PyGILState_GetThisThreadState)
     PYTHON(ensure, PyGILState_Ensure)
+    PYTHON(release, PyGILState_Release)
     PYTHON(save_thread, PyEval_SaveThread)
-    PYTHON(restore_thread, PyEval_RestoreThread)
     PYTHON(clear_thread_state, PyThreadState_Clear)
-    PYTHON(delete_current_thread_state, PyThreadState_DeleteCurrent)
+    PYTHON(delete_thread_state, PyThreadState_Delete)
 #undef PYTHON
-    *(void **)&python.is_finalizing = dlsym(RTLD_DEFAULT, "_Py_IsFinalizing"); /* optional */
-    kept_thread_state_made = pthread_key_create(&kept_thread_state, drop_python_thread_state) == 0;
+    kept_thread_state_made = pthread_key_create(&kept_thread_state, hand_over_thread_state) == 0;
     Dl_info self;
     if (!dladdr((void *)&load_engine, &self) || self.dli_fname == NULL) {
         snprintf(engine_problem, sizeof engine_problem, "cannot locate the FMU's binary folder");
@@ -307,6 +337,7 @@ static void enter(Guard *guard) {
     calling = guard;
     guard->worst = fmi2OK;
     keep_python_thread_state();
+    delete_ended_thread_states();
 }
 
 /* A call that found another on the instance not returned: refused, touching nothing. */
