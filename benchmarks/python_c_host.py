@@ -3,6 +3,7 @@ against an earlier build in the same C host.
 
     python benchmarks/python_c_host.py                          # fmus/python
     python benchmarks/python_c_host.py --before OLD/python      # and an earlier build's FMUs
+    python benchmarks/python_c_host.py --fmus fmus --before OLD # the native flavour likewise
     python benchmarks/python_c_host.py --quick                  # seconds: checks that it runs
 
 Every figure comes from this one run: each repetition measures every FMU in both hosts back
@@ -56,7 +57,7 @@ def measure(current, before, repeats, steps):
 
 
 def report(results, repeats, steps, before):
-    lines = ["# The Python flavour in a C host", "",
+    lines = ["# FMUs in a C host and in fmpy", "",
              f"Microseconds per fmi2SetReal (both inputs) + fmi2DoStep + fmi2GetReal (every "
              f"output) at h = 1 ms on the standard input; {repeats} repetitions of {steps} "
              f"steps, medians with the range; ratios within each repetition.", "",

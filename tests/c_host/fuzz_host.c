@@ -486,7 +486,7 @@ static int run_states(const char *other_file, uint64_t seed) {
             crafted_payload[at] = below(2) ? (unsigned char)junk[below(sizeof junk - 1)]
                                            : (unsigned char)next_random();
         }
-        envelope_write(bad, model_name, guid, 1, crafted_payload, length);
+        envelope_write(bad, model_name, guid, version, crafted_payload, length);
         fmi2FMUstate s = NULL;
         alarm(CALL_SECONDS);
         fmi2Status status = fmi.DeSerializeFMUstate(c, (fmi2Byte *)bad, size, &s);
