@@ -21,7 +21,8 @@ MM = 1e-3
 
 POSITIVE, NON_NEGATIVE = "positive", "zero or positive"
 
-# Compiled models by equations and parameter values (ComponentDefinition.build_model).
+# Compiled models by equations (the object) and parameter values (their repr, so that
+# -0.0 is not 0.0): ComponentDefinition.build_model.
 _MODELS = {}
 MAX_MODELS = 64
 
@@ -144,9 +145,9 @@ class ComponentDefinition:
         """The Python model with these parameter values (name -> value). A model is read-only
         once made, so instances with the same equations and values share one: making
         another instance compiles nothing."""
-        key = (id(self.equations), tuple(sorted((n, repr(v)) for n, v in values.items())))
+        key = (self.equations, tuple(sorted((n, repr(v)) for n, v in values.items())))
         cached = _MODELS.get(key)
-        if cached is None or cached.equations is not self.equations:
+        if cached is None:
             if len(_MODELS) >= MAX_MODELS:
                 _MODELS.clear()  # a host sweeping parameters: do not grow forever
             cached = _MODELS[key] = Model(self.equations, values)
