@@ -154,3 +154,11 @@ def test_a_c_host_thread_keeps_one_python_thread_state_and_drops_it_when_it_ends
     assert int(figures["thread_states_made_by_a_thread"]) == 1
     assert (figures["live_thread_states_after_the_thread_ended"]
             == figures["live_thread_states_before"])
+
+
+def test_a_thread_that_ends_after_its_library_was_closed_harms_nothing(target):
+    """A host thread calls the FMU, the host closes the library, then the thread ends: the
+    Python guard's thread-end hook must be gone with the library (it was a SIGSEGV)."""
+    figures = target("TrackBushTorsion").run("unload")
+    assert figures["unloaded"] == "1"  # really unmapped, and loaded again afterwards
+    assert int(figures["failures"]) == 0

@@ -22,6 +22,8 @@
  *                            and a refusal is told to the thread that made the call
  *   thread-states CALLS      (Python flavour) the Python thread states that calls from a C
  *                            host thread make, and whether a thread's goes once it has ended
+ *   unload                   a thread calls the FMU and ends after the host has closed the
+ *                            library; then the library is loaded again
  *
  * Every call runs under alarm(): a hang ends the process with SIGALRM. It prints
  * "key value" lines; the exit code is 0 only if every check held.
@@ -837,19 +839,15 @@ static int run_thread_states(long calls) {
     return failures ? 3 : 0;
 }
 
-int main(int argc, char **argv) {
-    if (argc < 8) {
-        fprintf(stderr, "usage: %s MODE BINARY RESOURCE_URI GUID VR_DEFLECTION VR_RATE VR_OUTPUT "
-                        "[ARGS...]\n", argv[0]);
-        return 1;
-    }
-    setvbuf(stdout, NULL, _IOLBF, 0);
-    void *library = dlopen(argv[2], RTLD_NOW | RTLD_LOCAL);
-    if (!library) { fprintf(stderr, "dlopen failed: %s\n", dlerror()); return 2; }
+/* ---- loading ---- */
+
+static void *load(const char *binary) {
+    void *library = dlopen(binary, RTLD_NOW | RTLD_LOCAL);
+    if (!library) { fprintf(stderr, "dlopen failed: %s\n", dlerror()); return NULL; }
 #define LOOKUP(name)                                                                       \
     if ((*(void **)&fmi.name = dlsym(library, "fmi2" #name)) == NULL) {                   \
         fprintf(stderr, "missing fmi2%s\n", #name);                                        \
-        return 2;                                                                          \
+        return NULL;                                                                       \
     }
     LOOKUP(Instantiate) LOOKUP(FreeInstance) LOOKUP(SetDebugLogging) LOOKUP(SetupExperiment)
     LOOKUP(EnterInitializationMode) LOOKUP(ExitInitializationMode) LOOKUP(Terminate)
@@ -859,6 +857,66 @@ int main(int argc, char **argv) {
     LOOKUP(SerializeFMUstate) LOOKUP(DeSerializeFMUstate) LOOKUP(DoStep) LOOKUP(GetStatus)
     LOOKUP(GetRealStatus)
 #undef LOOKUP
+    return library;
+}
+
+/* ---- unloading ---- */
+
+static pthread_barrier_t unload_calls_made, unload_closed;
+static void *unload_worker(void *unused) {
+    (void)unused;
+    fmi2Component c = instantiate("unload", &quiet, fmi2False);
+    if (!c || !initialize(c, 0.001, 0.0)) fail("instantiate in the thread");
+    /* Calls that log nothing: a Python FMU that logs holds its library itself (the
+       adapter's way to the guard's fmu_guard_log), and then nothing unloads it. */
+    fmi2Real in[2] = {0.001, 0.0}, out;
+    for (int k = 0; c && k < 100; k++)
+        if (fmi.SetReal(c, vr_in, 2, in) != fmi2OK || fmi.DoStep(c, k * 1e-3, 1e-3, fmi2True) != fmi2OK ||
+            fmi.GetReal(c, &vr_out, 1, &out) != fmi2OK)
+            fail("a call in the thread failed");
+    if (c) fmi.FreeInstance(c);
+    pthread_barrier_wait(&unload_calls_made);
+    pthread_barrier_wait(&unload_closed); /* the library is gone: the thread now ends */
+    return NULL;
+}
+
+/* A thread calls the FMU, the host closes the library, the thread ends: nothing of the
+   library may run at the thread's end. Then the library is loaded again and works. */
+static int run_unload(const char *binary, void **library) {
+    pthread_t thread;
+    pthread_barrier_init(&unload_calls_made, NULL, 2);
+    pthread_barrier_init(&unload_closed, NULL, 2);
+    alarm(CALL_SECONDS * 10);
+    pthread_create(&thread, NULL, unload_worker, NULL);
+    pthread_barrier_wait(&unload_calls_made);
+    dlclose(*library);
+    void *still = dlopen(binary, RTLD_NOW | RTLD_NOLOAD);
+    int unloaded = still == NULL;
+    if (still) dlclose(still);
+    pthread_barrier_wait(&unload_closed);
+    pthread_join(thread, NULL);
+    *library = load(binary);
+    if (!*library) return 3;
+    fmi2Component c = instantiate("again", &quiet, fmi2False);
+    fmi2Real out = NAN;
+    if (!c || !initialize(c, 0.001, 0.0) || fmi.DoStep(c, 0.0, 1e-3, fmi2True) != fmi2OK ||
+        fmi.GetReal(c, &vr_out, 1, &out) != fmi2OK || !isfinite(out))
+        fail("the library loaded again does not work");
+    if (c) fmi.FreeInstance(c);
+    alarm(0);
+    printf("unloaded %d\n", unloaded);
+    return failures ? 3 : 0;
+}
+
+int main(int argc, char **argv) {
+    if (argc < 8) {
+        fprintf(stderr, "usage: %s MODE BINARY RESOURCE_URI GUID VR_DEFLECTION VR_RATE VR_OUTPUT "
+                        "[ARGS...]\n", argv[0]);
+        return 1;
+    }
+    setvbuf(stdout, NULL, _IOLBF, 0);
+    void *library = load(argv[2]);
+    if (!library) return 2;
     resource_uri = argv[3];
     guid = argv[4];
     vr_in[0] = (fmi2ValueReference)strtoul(argv[5], NULL, 10);
@@ -882,6 +940,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(mode, "threads") && argc > 9) status = run_threads(atoi(argv[8]), atol(argv[9]));
     else if (!strcmp(mode, "shared") && argc > 9) status = run_shared(atoi(argv[8]), atol(argv[9]));
     else if (!strcmp(mode, "thread-states") && argc > 8) status = run_thread_states(atol(argv[8]));
+    else if (!strcmp(mode, "unload")) status = run_unload(argv[2], &library);
     else { fprintf(stderr, "unknown mode or missing arguments: %s\n", mode); return 1; }
     printf("failures %lu\n", failures);
     dlclose(library);
