@@ -129,16 +129,12 @@ DEFLECTION_VR, RATE_VR = 0, 1
 
 class ComponentSlave(Fmi2Slave):
     definition = None  # a catalog.ComponentDefinition, set by each FMU's entry class
-    author = "fmu-components"
-    license = "MIT"
-    version = "0.1.0"
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         hold_module_namespace(vars(sys.modules[type(self).__module__]))
         forget_import_path(self.resources)
         definition = self.definition
-        self.modelName = definition.name
         variables = definition.variables
         self._variables = variables
         # Value references are catalog order. No variable is registered with pythonfmu: every
