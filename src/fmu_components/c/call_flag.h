@@ -38,7 +38,7 @@ enum { CALL_FREE = 0, CALL_BUSY = 1, CALL_BUSY_REFUSAL_TOLD = 2 };
 static inline int call_claim(CallFlag *flag) { return FLAG_SWAP(flag, CALL_FREE, CALL_BUSY); }
 
 /* For a call that did not get the instance: 1 if it should log why. `calling_back`: this
-   thread is inside the host's logger (host_log_calling_back). */
+   thread is inside the host's logger (host_log_overlap says which). */
 static inline int call_refusal_told(CallFlag *flag, int calling_back) {
     return !calling_back || FLAG_SWAP(flag, CALL_BUSY, CALL_BUSY_REFUSAL_TOLD);
 }

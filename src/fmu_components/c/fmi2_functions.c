@@ -49,8 +49,7 @@ void log_status(const Instance *instance, fmi2Status status, const char *format,
 
 int call_refused(Instance *instance, int claimed, int allowed, const char *function) {
     if (!claimed) {
-        if (call_refusal_told(&instance->call, host_log_calling_back()))
-            log_status(instance, fmi2Error, CALL_OVERLAP_MESSAGE, function);
+        host_log_overlap(&instance->log, &instance->call, function);
         return 0;
     }
     char list[256] = "";
@@ -248,8 +247,7 @@ void fmi2FreeInstance(fmi2Component c) {
     Instance *instance = (Instance *)c;
     if (instance == NULL || instance->magic != INSTANCE_MAGIC) return;
     if (!call_claim(&instance->call)) {
-        if (call_refusal_told(&instance->call, host_log_calling_back()))
-            log_status(instance, fmi2Error, CALL_OVERLAP_MESSAGE, __func__);
+        host_log_overlap(&instance->log, &instance->call, __func__);
         return;
     }
     instance->magic = 0;

@@ -342,11 +342,7 @@ static void enter(Guard *guard) {
 
 /* A call that found another on the instance not returned: refused, touching nothing. */
 static fmi2Status overlapping(Guard *guard, const char *function) {
-    if (call_refusal_told(&guard->call, host_log_calling_back())) {
-        char message[MESSAGE_SIZE];
-        snprintf(message, sizeof message, CALL_OVERLAP_MESSAGE, function);
-        host_log(&guard->log, fmi2Error, message);
-    }
+    host_log_overlap(&guard->log, &guard->call, function);
     return fmi2Error;
 }
 

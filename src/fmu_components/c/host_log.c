@@ -14,7 +14,12 @@
    inside one is the logger calling back. */
 static THREAD_LOCAL int logger_depth;
 
-int host_log_calling_back(void) { return logger_depth > 0; }
+void host_log_overlap(const HostLog *log, CallFlag *call, const char *function) {
+    if (!call_refusal_told(call, logger_depth > 0)) return;
+    char message[MESSAGE_SIZE];
+    snprintf(message, sizeof message, CALL_OVERLAP_MESSAGE, function);
+    host_log(log, fmi2Error, message);
+}
 
 static void call_logger(const HostLog *log, fmi2Status status, const char *category,
                         const char *message) {

@@ -8,6 +8,7 @@
 
 #include <stddef.h>
 
+#include "call_flag.h"
 #include "fmi2Functions.h"
 
 #define MAX_LOG_CATEGORIES 16
@@ -40,7 +41,9 @@ int host_log_set(HostLog *log, fmi2Boolean on, size_t n, const fmi2String catego
                  char *problem);
 void host_log_forget(HostLog *log);
 
-/* 1 if this thread is inside a host logger that host_log_send called. */
-int host_log_calling_back(void);
+/* A call refused because another call on its instance has not returned (call_flag.h): the
+   host is told, unless this thread is inside a host logger that host_log_send called (a
+   logger calling back) and has been told once during the running call. */
+void host_log_overlap(const HostLog *log, CallFlag *call, const char *function);
 
 #endif
