@@ -650,7 +650,7 @@ static int run_threads(int count, long steps) {
 /* ---- threads calling one instance ---- */
 
 static fmi2Component shared_instance;
-static long shared_calls;
+static long calls_per_thread;
 static __thread unsigned long overlap_messages; /* refusals told to this thread */
 static unsigned long good_refused, good_told, bad_ok, bad_calls, good_reads;
 
@@ -677,7 +677,7 @@ static int own_or_told(fmi2Status status, unsigned long told_before, const char 
 static void *stepping_thread(void *unused) {
     (void)unused;
     double time = 0.0, set[2] = {0.0, 0.0};
-    for (long k = 0; k < shared_calls; k++) {
+    for (long k = 0; k < calls_per_thread; k++) {
         double t = time;
         fmi2Real in[2] = {0.002 * sin(10.0 * t), 0.02 * cos(10.0 * t)}, back[3];
         fmi2ValueReference vrs[3] = {vr_in[0], vr_in[1], vr_out};
@@ -704,7 +704,7 @@ static void *failing_thread(void *unused) {
     (void)unused;
     fmi2Real nan_input[1] = {NAN}, value;
     fmi2ValueReference unknown = 0xFFFFFFF0u;
-    for (long k = 0; k < shared_calls; k++) {
+    for (long k = 0; k < calls_per_thread; k++) {
         fmi2Status s[3] = {fmi.SetReal(shared_instance, vr_in, 1, nan_input),
                            fmi.DoStep(shared_instance, 0.0, -1.0, fmi2True),
                            fmi.GetReal(shared_instance, &unknown, 1, &value)};
@@ -721,7 +721,7 @@ static int run_shared(int count, long calls) {
     static const fmi2CallbackFunctions callbacks = {shared_logger, calloc, free, NULL, NULL};
     shared_instance = instantiate("shared", &callbacks, fmi2False);
     if (!shared_instance || !initialize(shared_instance, 0.0, 0.0)) { fail("instantiate"); return 3; }
-    shared_calls = calls;
+    calls_per_thread = calls;
     pthread_t threads[64];
     if (count < 2 || count > 64) { fail("2 to 64 threads"); return 3; }
     alarm(CALL_SECONDS * 10);
@@ -781,7 +781,7 @@ static Probe probe(void) {
 
 static void cycles(fmi2Component c) {
     fmi2Real in[2] = {0.001, 0.0}, out;
-    for (long k = 0; k < shared_calls; k++) {
+    for (long k = 0; k < calls_per_thread; k++) {
         fmi.SetReal(c, vr_in, 2, in);
         fmi.DoStep(c, 0.0, 1e-3, fmi2True); /* refused (not the current time) after the first */
         fmi.GetReal(c, &vr_out, 1, &out);
@@ -811,7 +811,7 @@ static int run_thread_states(long calls) {
         fmi.FreeInstance(c);
         return failures ? 3 : 0;
     }
-    shared_calls = calls;
+    calls_per_thread = calls;
     alarm(CALL_SECONDS * 10);
     Probe before = probe();
     cycles(c); /* this thread */
