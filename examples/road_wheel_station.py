@@ -41,8 +41,11 @@ from exudyn.itemInterface import (CoordinateConstraint, MarkerBodyPosition,
                                   ObjectConnectorCoordinateSpringDamper, ObjectGround,
                                   ObjectJointRevolute2D, ObjectRigidBody2D)
 
-from fmu_coupling import (FmuComponent, HostCoupling, KelvinElement, connector_state,
-                          fmu_path, harmonic_kelvin_equivalent, solve_fixed_step)
+from fmu_components.coupling import DEFAULT_SCHEME, Coupling, FmuComponent
+from fmu_components.coupling.exudyn_host import connector_state, solve
+from fmu_components.coupling.kelvin import KelvinElement, harmonic_kelvin_equivalent
+
+from fmu_coupling import fmu_path
 
 GRAVITY = 9.81
 STATIONS = 12
@@ -161,7 +164,7 @@ class Station:
     """The station in exudyn with its two components; `run` drives it at one speed."""
 
     def __init__(self, speed, profile, fmu_dir=None, linear=None,
-                 stiffness_coupled=STIFFNESS_COUPLED):
+                 stiffness_coupled=STIFFNESS_COUPLED, coupling=DEFAULT_SCHEME):
         """linear: a Linearisation, whose Kelvin elements replace both components; without
         it both components are the FMUs."""
         self.speed = speed
@@ -178,10 +181,8 @@ class Station:
             stiffness, damping, _ = linear.damper
             damper = KelvinElement("damper", "torque", stiffness, damping, 0.0, 0.0)
         else:
-            tyre = FmuComponent(fmu_path("RoadWheelTyre", fmu_dir), "tyre", unilateral=True,
-                                use_stiffness="tyre" in stiffness_coupled)
-            damper = FmuComponent(fmu_path("RotaryDamper", fmu_dir), "damper",
-                                  use_stiffness="damper" in stiffness_coupled)
+            tyre = FmuComponent(fmu_path("RoadWheelTyre", fmu_dir), "tyre", unilateral=True)
+            damper = FmuComponent(fmu_path("RotaryDamper", fmu_dir), "damper")
         self.tyre, self.damper = tyre, damper
         self.bar_preload = torsion_bar_preload(TYRES_PER_WHEEL * static_tyre_load)
 
@@ -250,7 +251,7 @@ class Station:
             springForceUserFunction=self._tyre_force))
 
         self.hull_node = hull_node
-        self.coupling = HostCoupling(record=self._record)
+        self.coupling = Coupling(coupling, record=self._record)
         self.coupling.add(tyre, self._tyre_state)
         self.coupling.add(damper, self._damper_state)
         mbs.Assemble()
@@ -290,7 +291,7 @@ class Station:
 
     def run(self, end_time, step):
         """Integrate to end_time with a fixed host step; returns the recorded histories."""
-        solve_fixed_step(self.mbs, self.coupling, end_time, step)
+        self.host = solve(self.mbs, self.coupling, end_time, step)
         names = ("time", "hull_acceleration", "hull_force", "arm_angle", "damper_torque",
                  "dashpot_torque", "rotor_rate", "tyre_compression", "tyre_force")
         data = np.array(self.records)
@@ -301,11 +302,13 @@ SETTLE_TIME = 1.0  # s after the bump: the body's bounce dies out
 
 
 def simulate(speed, profile, step, fmu_dir=None, linear=None,
-             stiffness_coupled=STIFFNESS_COUPLED, end_time=None):
+             stiffness_coupled=STIFFNESS_COUPLED, end_time=None, coupling=DEFAULT_SCHEME):
     """One drive at `speed` (m/s); histories plus the damper's energy balance."""
     if end_time is None:
         end_time = profile.end / speed + SETTLE_TIME
-    result = Station(speed, profile, fmu_dir, linear, stiffness_coupled).run(end_time, step)
+    station = Station(speed, profile, fmu_dir, linear, stiffness_coupled, coupling)
+    result = station.run(end_time, step)
+    result["costs"] = station.coupling.costs()
     # Work done on the damper, and what its dashpot dissipated (FMU only): J.
     result["damper_work"] = cumulative_trapezoid(result["damper_torque"], result["arm_angle"],
                                                  initial=0)

@@ -38,7 +38,10 @@ from exudyn.itemInterface import (CoordinateConstraint, LoadForceVector, MarkerB
                                   ObjectConnectorCoordinateSpringDamper, ObjectGround,
                                   ObjectRigidBody2D)
 
-from fmu_coupling import FmuComponent, HostCoupling, connector_state, fmu_path, solve_fixed_step
+from fmu_components.coupling import DEFAULT_SCHEME, Coupling, FmuComponent
+from fmu_components.coupling.exudyn_host import connector_state, solve
+
+from fmu_coupling import fmu_path
 
 GRAVITY = 9.81
 TENSION = 13e3  # N, section 5.1.2
@@ -51,13 +54,14 @@ DEFAULT_STEP = 5e-4  # s
 
 
 class TrackSpan:
-    def __init__(self, links=10, lift=0.01, frequency=6.0, fmu_dir=None):
+    def __init__(self, links=10, lift=0.01, frequency=6.0, fmu_dir=None,
+                 coupling=DEFAULT_SCHEME):
         self.links, self.lift, self.frequency = links, lift, frequency
         SC = exu.SystemContainer()
         mbs = SC.AddSystem()
         self.SC, self.mbs = SC, mbs
         joints = links + 1
-        self.coupling = HostCoupling(record=self._record)
+        self.coupling = Coupling(coupling, record=self._record)
         self.radial = [FmuComponent(fmu_path("TrackBushRadial", fmu_dir), f"radial_{j}")
                        for j in range(joints)]
         self.torsion = [FmuComponent(fmu_path("TrackBushTorsion", fmu_dir), f"torsion_{j}")
@@ -178,7 +182,7 @@ class TrackSpan:
 
     def run(self, end_time, step):
         self.solve_static()
-        solve_fixed_step(self.mbs, self.coupling, end_time, step)
+        self.host = solve(self.mbs, self.coupling, end_time, step)
         t, torques, angles, forces, heights, accelerations = zip(*self.records)
         return {"time": np.array(t), "joint_torque": np.array(torques),
                 "joint_angle": np.array(angles), "radial_force": np.array(forces),
