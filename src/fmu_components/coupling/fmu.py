@@ -258,11 +258,12 @@ class FmuComponent:
         self.restores += 1
         self._stepped = False
 
-    def trial(self, time, deflection, rate=None):
+    def trial(self, time, deflection, rate=None, pieces=1):
         """Outputs after stepping from the last accepted point along the secant to
-        (time, deflection); the host's `rate` there is not needed (the secant is the rate
-        that matches the host's motion over the step). Raises StepDiscarded (the state is restored) if the FMU
-        cannot complete the step, CouplingError if it refuses it."""
+        (time, deflection), in `pieces` equal doSteps; the host's `rate` there is not
+        needed (the secant is the rate that matches the host's motion over the step).
+        Raises StepDiscarded (the state is restored) if the FMU cannot complete the
+        step, CouplingError if it refuses it."""
         if not self._saved:
             raise RuntimeError(f"{self.name}: begin_step() before trial()")
         step = time - self.time
@@ -272,19 +273,23 @@ class FmuComponent:
         if self._stepped:
             self._restore()
         secant = (deflection - self.deflection) / step
-        self._call(self.time, self._fmu.setReal, self._input_vrs, [self.deflection, secant])
         self._stepped = True
-        self.do_steps += 1
-        try:
-            self._fmu.doStep(self.time, step)
-        except FMICallException as error:
-            if error.status == fmi2Discard:
-                message = self.messages[-1] if self.messages else "no message"
-                self._restore()
-                raise StepDiscarded(self.name, self.time, step, message) from None
-            raise CouplingError(self.name, self.time, f"fmi2DoStep by {step:.6g} s returned "
-                                f"{'fmi2Fatal' if error.status == 4 else 'fmi2Error'}"
-                                f"{self._said()}") from None
+        piece = step / pieces
+        for i in range(pieces):
+            start = self.time + i * piece
+            self._call(start, self._fmu.setReal, self._input_vrs,
+                       [self.deflection + secant * i * piece, secant])
+            self.do_steps += 1
+            try:
+                self._fmu.doStep(start, piece)
+            except FMICallException as error:
+                if error.status == fmi2Discard:
+                    message = self.messages[-1] if self.messages else "no message"
+                    self._restore()
+                    raise StepDiscarded(self.name, start, piece, message) from None
+                raise CouplingError(self.name, start, f"fmi2DoStep by {piece:.6g} s "
+                                    f"returned {'fmi2Fatal' if error.status == 4 else 'fmi2Error'}"
+                                    f"{self._said()}") from None
         self.trial_outputs = self._read(time)
         self._seen(self.trial_outputs)
         self._trial_point = (time, deflection, secant)

@@ -45,7 +45,7 @@ class KelvinElement:
     def begin_step(self):
         self._trial = None
 
-    def trial(self, time, deflection, rate=0.0):
+    def trial(self, time, deflection, rate=0.0, pieces=1):
         self._trial = deflection, self._evaluate(deflection, rate)
         return self._trial[1]
 

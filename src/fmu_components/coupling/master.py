@@ -16,7 +16,7 @@ The schemes (schemes.py) decide the load laws and how many passes a step takes.
 import warnings
 from dataclasses import dataclass
 
-from .fmu import StepDiscarded
+from .errors import CouplingError, StepDiscarded
 from .schemes import scheme_named
 
 
@@ -44,7 +44,7 @@ class Coupling:
         self.passes = 0  # in the current step
         self.steps = 0  # accepted
         self.total_passes = 0
-        self.retries = 0
+        self.retries = 0  # steps retried shorter (or FMU steps cut) for a discarded one
         self.unconverged_steps = 0
         self.last_mismatch = 0.0
 
@@ -78,15 +78,16 @@ class Coupling:
         try:
             for component, read_state in self.entries:
                 deflection, rate = read_state()
-                outputs = component.trial(time, deflection, rate)
+                outputs = self._trial(component, time, deflection, rate)
                 results.append((component, deflection, rate, outputs))
         except StepDiscarded as discarded:
             for component in self.components:
                 component.reject()
-            self.retries += 1
             if not self.host_can_retry:
-                raise
-            return Verdict(retry_step=0.5 * discarded.step)
+                raise CouplingError(discarded.component, discarded.time,
+                                    f"{discarded} (cut into 64 steps too)") from None
+            self.retries += 1
+            return Verdict(retry_step=0.5 * (time - self.time))
         mismatch = max((self.scheme.mismatch(c, x, v, out) for c, x, v, out in results),
                        default=0.0)
         self.last_mismatch = mismatch
@@ -102,6 +103,19 @@ class Coupling:
         for component in self.components:
             component.law = self.scheme.next_law(component)
         return Verdict(repeat=True, mismatch=mismatch)
+
+    def _trial(self, component, time, deflection, rate):
+        """The component's trial; a host that cannot retry a step gets the FMU's step
+        cut into pieces along the same secant instead (up to 64)."""
+        pieces = 1
+        while True:
+            try:
+                return component.trial(time, deflection, rate, pieces=pieces)
+            except StepDiscarded:
+                if self.host_can_retry or pieces >= 64:
+                    raise
+                pieces *= 2
+                self.retries += 1
 
     def accept(self, time):
         """The host accepted its step to `time`. A call at the time already reached (a
