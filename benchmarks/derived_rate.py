@@ -3,11 +3,11 @@ docs/simulate.md). Prints a Markdown table.
 
     python benchmarks/derived_rate.py [--fmus DIR]     # DIR: built native FMUs (fmus/)
 
-For each component's thesis sine (fmu_components.signals.THESIS_SINES) at several
+For each component's thesis sine (fmu_components.lab.signals.THESIS_SINES) at several
 communication steps, the FMU is fed the deflection samples with (a) the secant rates the
 project's input CSVs carry, (b) no rate, derived by the FMU, (c) rate 0, what a host that
 leaves the rate unset gets. Each result is compared with
-the independent solve of the continuous input (fmu_components.reference.solve_smooth,
+the independent solve of the continuous input (fmu_components.verification.reference.solve_smooth,
 scipy Radau at rtol 1e-10): the largest difference in the first output over the run, in
 per cent of that output's peak-to-peak range.
 """
@@ -20,9 +20,9 @@ from pathlib import Path
 import numpy as np
 from fmpy import simulate_fmu
 
-from fmu_components import reference
+from fmu_components.verification import reference
 from fmu_components.runtime.catalog import COMPONENTS
-from fmu_components.signals import THESIS_SINES, input_table, time_grid
+from fmu_components.lab.signals import THESIS_SINES, input_table, time_grid
 
 STEPS = (1e-3, 1e-2)
 CYCLES = 2

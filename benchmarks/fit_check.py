@@ -25,10 +25,10 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
-from fmu_components import cases, synthetic
-from fmu_components.fit import fit, fitted_names
+from fmu_components.verification import cases, synthetic
+from fmu_components.lab.fit import fit, fitted_names
 from fmu_components.runtime.catalog import COMPONENTS
-from fmu_components.history import simulate
+from fmu_components.lab.history import simulate
 
 NOISE = 0.005
 # per component: the amplitude of II the fit sees (the thesis's preload level)
@@ -100,7 +100,7 @@ def figure(component, set_name, data, result, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from fmu_components.report import DISPLAY
+    from fmu_components.verification.report import DISPLAY
 
     (xf, xu), (ff, fu), _ = DISPLAY[component]
     seen = fit_names(component)

@@ -1,5 +1,5 @@
 """The cost of the fit's inner simulation: a deflection history through the compiled native
-co-simulation in one call (``fmu_components.history``), against the same FMU stepped
+co-simulation in one call (``fmu_components.lab.history``), against the same FMU stepped
 through fmpy and against the reference solver (scipy Radau).
 
     python benchmarks/fit_speed.py [--repeat 20]
@@ -14,10 +14,10 @@ import time
 from pathlib import Path
 
 
-from fmu_components import reference
-from fmu_components.build import build
-from fmu_components.history import simulate
-from fmu_components.signals import THESIS_SINES, input_table, secant_rates, sine, time_grid
+from fmu_components.verification import reference
+from fmu_components.export.build import build
+from fmu_components.lab.history import simulate
+from fmu_components.lab.signals import THESIS_SINES, input_table, secant_rates, sine, time_grid
 
 RUBBER = ("RoadWheelTyre", "TrackBushRadial", "TrackBushTorsion")
 STOP, STEP = 2.0, 1e-3

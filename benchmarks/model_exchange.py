@@ -28,7 +28,7 @@ sys.path[:0] = [str(ROOT / "tests"), str(ROOT / "src")]
 
 from fmpy import simulate_fmu  # noqa: E402
 
-from fmu_components import cases, reference  # noqa: E402
+from fmu_components.verification import cases, reference  # noqa: E402
 from fmu_components.runtime.catalog import COMPONENTS  # noqa: E402
 from me_host import (ModelExchangeRun, compare_directional_derivatives,  # noqa: E402
                      continuous_input)

@@ -21,9 +21,12 @@ import math
 import time
 
 
-from fmu_components import reference, rig
-from fmu_components.harmonics import first_harmonic
-from fmu_components.signals import THESIS_SINES
+from fmu_components.verification import reference
+
+
+from fmu_components.lab import rig
+from fmu_components.lab.harmonics import first_harmonic
+from fmu_components.lab.signals import THESIS_SINES
 
 MM = 1e-3
 SWEEP = dict(preloads=[0.3 * MM], amplitudes=[0.02 * MM, 0.05 * MM, 0.1 * MM, 0.2 * MM, 0.3 * MM],

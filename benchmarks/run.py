@@ -19,7 +19,7 @@ within a repetition, so a busy machine slows numerator and denominator alike.
   model compiled with its FMU's sources (``c_host/bench_model.c``).
 * Accuracy against cost for h = 1e-4 ... 1e-1 s (native FMUs; the Python ones give the same
   bits): the error against the independent reference solve of the same sampled input
-  (``fmu_components.reference.solve_held_rate``) and against the continuous-input solve
+  (``fmu_components.verification.reference.solve_held_rate``) and against the continuous-input solve
   (``solve_smooth``), and the cost per simulated second.
 * Vehicle scale: 370 instances (24 tyres, 170 bush radial, 170 bush torsion, 6 dampers)
   stepped together for 1 s at 1 ms, in the C host and in fmpy, each flavour; wall time and
@@ -46,10 +46,10 @@ sys.path[:0] = [str(ROOT / "tests"), str(ROOT / "src")]
 
 from fmpy import read_model_description, simulate_fmu  # noqa: E402
 
-from fmu_components import reference  # noqa: E402
+from fmu_components.verification import reference  # noqa: E402
 from fmu_components.runtime.catalog import COMPONENTS  # noqa: E402
 from fmu_components.runtime.cosim import CoSimulation  # noqa: E402
-from fmu_components.signals import THESIS_SINES, input_table, thesis_sine, time_grid  # noqa: E402
+from fmu_components.lab.signals import THESIS_SINES, input_table, thesis_sine, time_grid  # noqa: E402
 from fmu_runner import FmuRunner  # noqa: E402
 
 STEP = 1e-3

@@ -23,7 +23,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from fmu_components.signals import THESIS_SINES, thesis_sine  # noqa: E402
+from fmu_components.lab.signals import THESIS_SINES, thesis_sine  # noqa: E402
 from fmu_runner import FmuRunner  # noqa: E402
 
 STEP = 1e-3

@@ -3,7 +3,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fmu_components.build import build
+from fmu_components.export.build import build
 from fmu_components.runtime.catalog import COMPONENTS
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -1,5 +1,5 @@
 """Each FMU at a 1 ms communication step against the independent reference solve
-(fmu_components.reference: plain right-hand sides, scipy Radau at rtol 1e-10), for sine
+(fmu_components.verification.reference: plain right-hand sides, scipy Radau at rtol 1e-10), for sine
 inputs across the thesis ranges. The reference applies the same co-simulation input
 convention (spec section 4), so the difference is the FMU's own numerical error."""
 
@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from fmpy import simulate_fmu
 
-from fmu_components import reference
-from fmu_components.signals import input_table, secant_rates, sine, time_grid
+from fmu_components.verification import reference
+from fmu_components.lab.signals import input_table, secant_rates, sine, time_grid
 
 from conftest import peak_to_peak
 

@@ -9,8 +9,8 @@ import pytest
 from fmpy import read_model_description, simulate_fmu
 
 from fmu_components import cli
-from fmu_components.history import simulate
-from fmu_components.signals import dual_sine, input_table, secant_rates, time_grid
+from fmu_components.lab.history import simulate
+from fmu_components.lab.signals import dual_sine, input_table, secant_rates, time_grid
 
 VALUES = {"k1": 4.1e7, "c1": 5000.0, "xi3": 7e-3, "elastic.a1": 9.1e7, "geometric.h": 120.0}
 
@@ -70,7 +70,7 @@ def test_own_build_mistakes_are_one_line(tmp_path, capsys, argv, words):
 
 
 def test_own_fmu_runs_the_components_sine(own, capsys):
-    from fmu_components.build import run
+    from fmu_components.lab.build_command import run
 
     run({"native": {"MyBush": own / "MyBush.fmu"}}, "TrackBushRadial")
     (row,) = [line for line in capsys.readouterr().out.splitlines() if line.startswith("MyBush")]

@@ -16,7 +16,7 @@ import pytest
 from fmu_components.runtime.catalog import COMPONENTS
 
 from conftest import FMU_NAMES, ROOT, peak_to_peak
-from fmu_components.signals import THESIS_SINES
+from fmu_components.lab.signals import THESIS_SINES
 from fmu_runner import FmuRunner
 
 pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="needs gcc")

@@ -11,7 +11,7 @@ from fmu_components.runtime.catalog import (DAMPER_TABLE_RATES, DAMPER_TABLE_TOR
                                             ROTARY_DAMPER)
 from fmu_components.runtime.cosim import CoSimulation
 from fmu_components.runtime.hermite import MonotoneCubic
-from fmu_components.signals import input_table
+from fmu_components.lab.signals import input_table
 
 from conftest import ROOT, default_parameters
 

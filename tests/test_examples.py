@@ -9,8 +9,8 @@ import sys
 import numpy as np
 import pytest
 
-from fmu_components import reference
-from fmu_components.signals import secant_rates, sine, time_grid
+from fmu_components.verification import reference
+from fmu_components.lab.signals import secant_rates, sine, time_grid
 
 from conftest import ROOT, peak_to_peak
 

@@ -7,7 +7,7 @@ import re
 
 import pytest
 
-from fmu_components.cgen import CPrinter, ModelCode
+from fmu_components.export.cgen import CPrinter, ModelCode
 from fmu_components.runtime.catalog import COMPONENTS
 from fmu_components.runtime.expressions import (Assign, Element, GenerationError, Lookup,
                                                 Number, PythonPrinter, Require, Symbol, call,

@@ -8,8 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from fmu_components import cli, synthetic
-from fmu_components.history import simulate
+from fmu_components import cli
+
+from fmu_components.verification import synthetic
+from fmu_components.lab.history import simulate
 
 COMPONENT = "TrackBushRadial"
 MM = 1e-3
@@ -150,8 +152,8 @@ def test_rig_table_in_n_per_mm_is_caught(capsys, tmp_path):
 
 def test_a_rig_table_point_is_the_reference_steady_state():
     """The fit's simulation of a table row against the reference solver's steady sine."""
-    from fmu_components.fit import rig_point
-    from fmu_components.history import native_history
+    from fmu_components.lab.fit import rig_point
+    from fmu_components.lab.history import native_history
 
     for preload, amplitude, frequency in ((0.3 * MM, 0.05 * MM, 0.5), (0.1 * MM, 0.2 * MM, 10.0)):
         *_, stiffness, loss = steady_reference_row(preload, amplitude, frequency)
@@ -162,7 +164,7 @@ def test_a_rig_table_point_is_the_reference_steady_state():
 
 def steady_reference_row(preload, amplitude, frequency, cycles=10, per_cycle=200):
     """|K*| and loss angle of the reference solution's last cycle (independent of the FMUs)."""
-    from fmu_components.harmonics import first_harmonic
+    from fmu_components.lab.harmonics import first_harmonic
 
     times = sine_times(frequency, cycles, per_cycle)
     history, force = synthetic.measure_path(COMPONENT, "row", times,
@@ -174,8 +176,9 @@ def steady_reference_row(preload, amplitude, frequency, cycles=10, per_cycle=200
 def test_rig_table_round_trip(tmp_path):
     """|K*| and loss angle of four steady sines of the reference solution: k1, k3 and c3
     recovered from the thesis's values as the start, the others held at the truth."""
-    from fmu_components.fit import RigTable, fit, read_data
-    from fmu_components.history import component_definition
+    from fmu_components.lab.fit import fit
+    from fmu_components.lab.measured import RigTable, read_data
+    from fmu_components.lab.history import component_definition
 
     rows = [steady_reference_row(0.3 * MM, amplitude, frequency)
             for amplitude in (0.05 * MM, 0.2 * MM) for frequency in (0.5, 5.0)]

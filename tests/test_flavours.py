@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 
-from fmu_components import cases
+from fmu_components.verification import cases
 
 from conftest import FMU_NAMES
 from fmu_runner import FmuRunner

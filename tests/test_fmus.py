@@ -12,7 +12,7 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
 from fmu_components.runtime.catalog import COMPONENTS
-from fmu_components.signals import THESIS_SINES, input_table, thesis_sine, time_grid
+from fmu_components.lab.signals import THESIS_SINES, input_table, thesis_sine, time_grid
 
 from conftest import FMU_NAMES, peak_to_peak
 from fmu_runner import FmuRunner

@@ -1,4 +1,4 @@
-"""First-harmonic analysis (fmu_components.harmonics) against linear closed forms.
+"""First-harmonic analysis (fmu_components.lab.harmonics) against linear closed forms.
 
 * Kelvin element F = k x + c dx/dt under x = x0 + A sin(wt): |K*| = sqrt(k^2 + (c w)^2),
   tan(delta) = c w / k, energy per cycle pi c w A^2, secant stiffness k.
@@ -14,7 +14,7 @@ import math
 import numpy as np
 import pytest
 
-from fmu_components.harmonics import HarmonicError, first_harmonic
+from fmu_components.lab.harmonics import HarmonicError, first_harmonic
 
 K, C, A, X0, FREQUENCY = 2.0e6, 3.0e3, 1.0e-4, 3.0e-4, 1.7
 OMEGA = 2.0 * math.pi * FREQUENCY

@@ -1,14 +1,14 @@
-"""The fit's inner simulation (fmu_components.history) is the native FMU: the same forces, to the
+"""The fit's inner simulation (fmu_components.lab.history) is the native FMU: the same forces, to the
 bit, as the built FMU through fmpy, on an irregular history with parameters away from the thesis's."""
 
 import numpy as np
 import pytest
 from fmpy import simulate_fmu
 
-from fmu_components.build import build
-from fmu_components.history import HistoryError, simulate
+from fmu_components.export.build import build
+from fmu_components.lab.history import HistoryError, simulate
 from fmu_components.runtime.catalog import COMPONENTS
-from fmu_components.signals import dual_sine, input_table, secant_rates, time_grid
+from fmu_components.lab.signals import dual_sine, input_table, secant_rates, time_grid
 
 RUBBER = ("RoadWheelTyre", "TrackBushRadial", "TrackBushTorsion")
 # a mean, two sine components (amplitude, Hz) and a hold, inside each measured range

@@ -16,7 +16,7 @@ import pytest
 from fmpy import read_model_description
 from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 
-from fmu_components.signals import thesis_sine
+from fmu_components.lab.signals import thesis_sine
 
 from fmu_runner import ERROR, OK, FmuRunner
 

@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 
 from fmu_components.runtime.catalog import COMPONENTS
-from fmu_components.signals import thesis_sine
+from fmu_components.lab.signals import thesis_sine
 
 from conftest import FMU_NAMES, peak_to_peak
 from fmu_runner import FmuRunner

@@ -13,7 +13,7 @@ from fmu_components.runtime.expressions import Assign, Number, Symbol, total
 from fmu_components.runtime.integrator import ROS34PW2, Rosenbrock
 from fmu_components.runtime.model import Equations, Model
 from fmu_components.runtime.rubber import Branch, MaxwellElement, rubber_equations
-from fmu_components.signals import thesis_sine
+from fmu_components.lab.signals import thesis_sine
 
 
 def system(n, stage, jacobian, scale=1.0, region=None):

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 from fmpy import simulate_fmu
 
-from fmu_components import build
-from fmu_components.signals import thesis_sine
+from fmu_components.export import build
+from fmu_components.lab.signals import thesis_sine
 
 from conftest import ROOT
 from fmu_runner import FmuRunner

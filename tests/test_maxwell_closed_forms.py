@@ -20,7 +20,7 @@ from fmpy import simulate_fmu
 from fmu_components.runtime.cosim import CoSimulation
 from fmu_components.runtime.model import Model
 from fmu_components.runtime.rubber import Branch, MaxwellElement, rubber_equations
-from fmu_components.signals import input_table, ramp_and_hold
+from fmu_components.lab.signals import input_table, ramp_and_hold
 
 K, C = 1.5e5, 500.0  # the tyre's branch B (Appendix 4b, SI)
 

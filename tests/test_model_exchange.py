@@ -20,7 +20,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import (FMU2Model, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
                        fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 
-from fmu_components import cases, reference
+from fmu_components.verification import cases, reference
 from fmu_components.runtime.catalog import COMPONENTS
 
 from conftest import FMU_NAMES

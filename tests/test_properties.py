@@ -10,7 +10,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from fmu_components.runtime.catalog import COMPONENTS
-from fmu_components.signals import secant_rates
+from fmu_components.lab.signals import secant_rates
 
 from conftest import FMU_NAMES, default_parameters
 from fmu_runner import FmuRunner

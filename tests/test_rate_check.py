@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from fmu_components import reference
+from fmu_components.verification import reference
 from fmu_components.runtime.catalog import COMPONENTS
-from fmu_components.signals import THESIS_SINES, secant_rates, time_grid
+from fmu_components.lab.signals import THESIS_SINES, secant_rates, time_grid
 
 from conftest import FMU_NAMES, peak_to_peak
 from fmu_runner import OK, WARNING, FmuRunner

@@ -7,7 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from fmu_components.docs import all_tables
+from fmu_components.export.docs import all_tables
 
 from conftest import ROOT
 

@@ -13,7 +13,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2LastSuccessfulTime
 
 from fmu_components.runtime.catalog import COMPONENTS
-from fmu_components.signals import THESIS_SINES, thesis_sine
+from fmu_components.lab.signals import THESIS_SINES, thesis_sine
 
 from conftest import FMU_NAMES
 from fmu_runner import DISCARD, ERROR, OK, WARNING, FmuRunner

@@ -5,10 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from fmu_components import reference
+from fmu_components.verification import reference
 from fmu_components.runtime.catalog import COMPONENTS
 from fmu_components.runtime.cosim import CoSimulation
-from fmu_components.signals import THESIS_SINES, secant_rates, sine, thesis_sine, time_grid
+from fmu_components.lab.signals import THESIS_SINES, secant_rates, sine, thesis_sine, time_grid
 
 from conftest import default_parameters, peak_to_peak
 

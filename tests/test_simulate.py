@@ -11,9 +11,11 @@ import sys
 import numpy as np
 import pytest
 
-from fmu_components import cli, reference
+from fmu_components import cli
+
+from fmu_components.verification import reference
 from fmu_components.runtime.catalog import COMPONENTS
-from fmu_components.signals import input_table, sine, time_grid, write_csv
+from fmu_components.lab.signals import input_table, sine, time_grid, write_csv
 
 from conftest import ROOT, peak_to_peak
 

@@ -17,11 +17,11 @@ import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 
-from fmu_components import reference
-from fmu_components.build import build
+from fmu_components.verification import reference
+from fmu_components.export.build import build
 from fmu_components.runtime.catalog import (COMPONENTS, STRUCTURES, component_definition,
                                              structures_of)
-from fmu_components.signals import THESIS_SINES, input_table, secant_rates, sine, time_grid
+from fmu_components.lab.signals import THESIS_SINES, input_table, secant_rates, sine, time_grid
 
 from conftest import peak_to_peak
 from test_maxwell_closed_forms import drive
@@ -100,7 +100,7 @@ def test_structures_differ_where_the_thesis_says():
     Haupt and Sedlan model lacks. After a 0.1 s ramp 10 -> 25 deg, the four-element torque
     falls faster over the first 0.1 s of the hold than the final one's, and the Haupt and
     Sedlan one's slowest."""
-    from fmu_components import rig
+    from fmu_components.lab import rig
 
     drops = {}
     for structure in structures_of("TrackBushTorsion"):

@@ -15,9 +15,10 @@ import pytest
 from fmpy import simulate_fmu
 from fmpy.util import read_csv
 
-from fmu_components import cases, reference, validate
+from fmu_components import cli
+from fmu_components.verification import cases, reference, validate
 from fmu_components.runtime.catalog import COMPONENTS
-from fmu_components.signals import piecewise_linear_rate, write_csv
+from fmu_components.lab.signals import piecewise_linear_rate, write_csv
 
 from conftest import FMU_NAMES
 
@@ -273,9 +274,13 @@ SMALL_SELECTION = ["RoadWheelTyre/II_amplitude_1mm", "RoadWheelTyre/II_amplitude
                    "TrackBushTorsion/IV*", "RotaryDamper/A_*"]
 
 
+def validate_command(arguments):
+    return cli.main(["validate", *arguments])
+
+
 def _validate(built_fmus, report, *extra):
     arguments = [f"--fmus={built_fmus['RoadWheelTyre'].parent}", f"--report={report}"]
-    return validate.main(arguments + [f"--case={c}" for c in SMALL_SELECTION] + list(extra))
+    return validate_command(arguments + [f"--case={c}" for c in SMALL_SELECTION] + list(extra))
 
 
 def test_validation_command_passes_prints_the_table_and_writes_the_report(built_fmus, tmp_path,
@@ -314,7 +319,7 @@ def test_validation_command_fails_on_a_case_off_its_reference(built_fmus, tmp_pa
 
 def test_validation_command_refuses_missing_fmus(tmp_path):
     with pytest.raises(SystemExit) as stop:
-        validate.main([f"--fmus={tmp_path}", "--case=RotaryDamper/A_*"])
+        validate_command([f"--fmus={tmp_path}", "--case=RotaryDamper/A_*"])
     assert stop.value.code == 2
 
 
@@ -331,7 +336,8 @@ class _Shown:
 @pytest.mark.parametrize("case", [c for c in cases.CASES if (c.fmu, c.test) in SPEC_SINES],
                          ids=lambda c: c.key)
 def test_plot_titles_name_the_spec_preload_amplitude_and_frequency(case):
-    from fmu_components.report import DISPLAY, conditions
+    from fmu_components.lab.display import DISPLAY
+    from fmu_components.verification.report import conditions
 
     factor = DISPLAY[case.fmu][0][0]
     said = conditions(_Shown(case))
@@ -346,7 +352,7 @@ def test_plot_titles_name_the_spec_preload_amplitude_and_frequency(case):
 def test_report_plots_are_200_dpi(built_fmus, tmp_path):
     from PIL import Image
 
-    assert validate.main([f"--fmus={built_fmus['RotaryDamper'].parent}",
+    assert validate_command([f"--fmus={built_fmus['RotaryDamper'].parent}",
                           f"--report={tmp_path}", "--case=RotaryDamper/A_*"]) == 0
     for image in tmp_path.glob("*.png"):
         assert Image.open(image).info["dpi"] == pytest.approx((200, 200), abs=0.5)

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from conftest import FMU_NAMES, ROOT, peak_to_peak
-from fmu_components.signals import THESIS_SINES
+from fmu_components.lab.signals import THESIS_SINES
 
 MINGW = "x86_64-w64-mingw32-gcc"
 MISSING = [tool for tool in ("wine", "wineserver", MINGW, "gcc") if shutil.which(tool) is None]

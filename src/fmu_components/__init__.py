@@ -1,12 +1,17 @@
 """Tracked-vehicle running-gear components as FMI 2.0 FMUs, in two flavours from one
-definition of their equations: native C (``cgen`` prints the equations, ``c/`` is the
-runtime) and pythonfmu (``runtime``).
+definition of their equations: native C and pythonfmu.
 
-The run-time code that travels inside the Python FMUs lives in ``fmu_components.runtime``
-and imports only the Python standard library; it also holds the one definition of the
-equations. Everything else in this package (building, reference solves, validation) runs
-on the engineer's machine and may use numpy, scipy and fmpy.
+The layers, each importing only those above it in this list:
 
+* ``runtime``: the one definition of the equations (expressions, rubber, damper, catalog)
+  and the Python runtime that travels inside the Python FMUs (standard library only);
+  ``c/``, the native runtime that travels as sources inside the native FMUs;
+* ``export``: building the FMUs (the C printer, the modelDescription writer, the build);
+* ``lab``: the tools an engineer runs (signals, simulate, rig, fit, the build command);
+* ``verification``: the FMUs against an independent solve of the same equations;
+* ``cli``: the command line over all of them.
+
+This file travels inside the Python FMUs too, so it imports nothing.
 "Spec section N" in comments refers to the model specification, docs/model-spec.md.
 """
 

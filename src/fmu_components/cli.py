@@ -4,32 +4,32 @@
 
 Each subcommand lives in its own module, which provides ``configure(parser)`` (its
 arguments, with an example in ``EXAMPLES``) and ``run_command(args)`` (returns the exit
-status). A module's own ``main`` runs the same subcommand on its own
-(``python -m fmu_components.validate``). A mistake the user can fix raises ``UsageError``:
-one line that says what to do, exit status 2, no traceback.
+status). A mistake the user can fix raises ``errors.UsageError``: one line that says what to
+do, exit status 2, no traceback.
+
+This is the top layer: it imports the command modules (lazily, only the one asked for) and
+nothing imports it.
 """
 
 import argparse
 import importlib
 import sys
 
+from .errors import UsageError
+
 # name -> (module, one line of help). Modules are imported only when their command runs.
 COMMANDS = {
-    "build": ("fmu_components.build", "build the FMUs of both flavours and run each once"),
-    "validate": ("fmu_components.validate",
+    "build": ("fmu_components.lab.build_command", "build the FMUs of both flavours and run each once"),
+    "validate": ("fmu_components.verification.validate",
                  "run the thesis test programme through the built FMUs against the references"),
-    "signal": ("fmu_components.signals", "write an input CSV for an FMU (SI units)"),
-    "simulate": ("fmu_components.simulate",
+    "signal": ("fmu_components.lab.signals", "write an input CSV for an FMU (SI units)"),
+    "simulate": ("fmu_components.lab.simulate",
                  "simulate an FMU on an input CSV: result CSV and the force-deflection loop"),
-    "rig": ("fmu_components.rig", "virtual test rig: dynamic stiffness, loss angle, energy per "
+    "rig": ("fmu_components.lab.rig", "virtual test rig: dynamic stiffness, loss angle, energy per "
                                   "cycle and secant stiffness of a component at periodic steady "
                                   "state, and its step-and-hold relaxation"),
-    "fit": ("fmu_components.fit", "identify a rubber component's parameters from measured data"),
+    "fit": ("fmu_components.lab.fit", "identify a rubber component's parameters from measured data"),
 }
-
-
-class UsageError(Exception):
-    """A mistake on the user's side, said in one line with what to do about it."""
 
 
 def _add_command(subparsers, name):
@@ -68,10 +68,3 @@ def main(argv=None):
     args = parser.parse_args(argv)
     return _run(subparsers[args.command], args)
 
-
-def standalone(name, argv=None):
-    """The subcommand `name` as a program of its own (a module's ``main``)."""
-    _, subparsers = _parser([name])
-    parser = subparsers[name]
-    parser.prog = f"fmu-components {name}"
-    return _run(parser, parser.parse_args(argv))

@@ -1,6 +1,6 @@
 /*
  * A whole deflection history through the native co-simulation in one call: the fit's
- * inner simulation (fmu_components.history). Compiled with a component's generated
+ * inner simulation (fmu_components.lab.history). Compiled with a component's generated
  * model.c and the native runtime into one shared library, it makes exactly the FMI calls
  * a host makes (instantiate, setup, parameters and the first inputs in initialization
  * mode, then per sample fmi2SetReal of deflection and rate, fmi2DoStep, fmi2GetReal of

@@ -1,7 +1,7 @@
 /*
  * The interface between the hand-written runtime (this folder, the same for every
  * component) and one component's generated code: model_config.h (its sizes) and model.c
- * (MODEL_INFO and the model_* functions), which fmu_components.cgen prints at build time
+ * (MODEL_INFO and the model_* functions), which fmu_components.export.cgen prints at build time
  * from the same expression trees as the Python flavour's equations.
  *
  * Names follow the Python runtime (fmu_components.runtime.model): x the deflection at the

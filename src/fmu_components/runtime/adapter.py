@@ -4,7 +4,7 @@ This is the only module that knows pythonfmu. Each FMU's entry script subclasses
 ``ComponentSlave`` and names its definition from the catalog; everything else (variables,
 parameter checks, the FMI call sequence, the co-simulation step, state save and restore)
 is done here once for all four components. The modelDescription is the project's own
-(fmu_components.model_description), the same writer as the native flavour's.
+(fmu_components.export.model_description), the same writer as the native flavour's.
 
 How a call reports its outcome: the status it logs. pythonfmu itself can only return
 fmi2OK, fmi2Discard (do_step returned False) or fmi2Fatal (a Python exception, after which
@@ -139,7 +139,7 @@ class ComponentSlave(Fmi2Slave):
         self._variables = variables
         # Value references are catalog order. No variable is registered with pythonfmu: every
         # call that would read its registry is the adapter's own, and the modelDescription
-        # is the project's (fmu_components.model_description). A slave then holds no
+        # is the project's (fmu_components.export.model_description). A slave then holds no
         # reference cycle, and goes as soon as pythonfmu lets go of it.
         self._values = [v.start if v.start is not None else 0.0 for v in variables]
         self._output_vrs = range(2, 2 + len(definition.outputs))

@@ -5,7 +5,7 @@ habit, with none of sympy): arithmetic, comparisons, conditional expressions and
 whitelist of functions. A printer turns a tree into one language, one ``_print_<Node>``
 method per node class; a language overrides only what differs. ``PythonPrinter`` (here,
 because the pythonfmu flavour prints its equations at run time with the host's parameter
-values baked in as literals) and ``fmu_components.cgen.CPrinter`` (at build time, for the
+values baked in as literals) and ``fmu_components.export.cgen.CPrinter`` (at build time, for the
 native flavour) print the same tree, so both flavours compute the same operations in the
 same order: on the same libm the results agree to the bit.
 

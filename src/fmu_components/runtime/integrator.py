@@ -19,7 +19,7 @@ a message, never as an exception in the middle of a step.
 
 One step, its factorisation of W and its error norm are statements built here from the
 tableau and the system's equations (``factor_statements``, ``step_statements``), which
-either printer prints: as Python below, as C for the native flavour (``fmu_components.cgen``).
+either printer prints: as Python below, as C for the native flavour (``fmu_components.export.cgen``).
 The Python is straight-line code, once per system, so that a step of a two-state system
 costs about two microseconds in CPython rather than tens: no loops, no lists, and no
 function call per stage, which would cost more than the stage's arithmetic. A

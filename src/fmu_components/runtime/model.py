@@ -4,7 +4,7 @@ and those equations compiled to Python with the parameter values of one instance
 
 A component's physics (rubber.py, damper.py) builds one ``Equations``: the names below are
 what its statements read and write. The native flavour prints the same statements as C
-(``fmu_components.cgen``); the hand-written runtimes of both flavours (this module and
+(``fmu_components.export.cgen``); the hand-written runtimes of both flavours (this module and
 ``cosim``/``integrator`` here, ``c/`` there) drive them the same way.
 
 Names the statements use:

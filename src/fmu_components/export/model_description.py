@@ -9,8 +9,8 @@ variables, value references, units and structure.
 from xml.dom import minidom
 from xml.etree.ElementTree import Element, SubElement, tostring
 
-from . import __version__
-from .runtime.units import UNITS
+from .. import __version__
+from ..runtime.units import UNITS
 
 LOG_CATEGORIES = {
     "logStatusWarning": "Log messages with fmi2Warning status.",

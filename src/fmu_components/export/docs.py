@@ -1,12 +1,12 @@
 """Markdown tables of each FMU's variables, generated from the catalog.
 
-    python -m fmu_components.docs    # the tables in README.md come from here
+    python -m fmu_components.export.docs    # the tables in README.md come from here
 """
 
 import re
 
-from .runtime.catalog import COMPONENTS
-from .runtime.units import UNITS
+from ..runtime.catalog import COMPONENTS
+from ..runtime.units import UNITS
 
 TABLE_POINT = re.compile(r"^dashpot\.(rate|torque)\[(\d+)\]$")
 

@@ -8,18 +8,18 @@ and the only error left is that of the path itself, O(h^2). Feeding the rate at 
 of the step instead lags by half a step: at 1 ms that costs about 2.5 % of the peak-to-peak
 force at 20 Hz (see README). Every history here uses secant rates.
 
-    python -m fmu_components.signals RoadWheelTyre sine --mean 3.5e-3 --amplitude 1e-3 \\
+    fmu-components signal RoadWheelTyre sine --mean 3.5e-3 --amplitude 1e-3 \\
         --frequency 1 --stop-time 2 --step 1e-3 > tyre_in.csv
 """
 
-import argparse
 import csv
 import math
 import sys
 
 import numpy as np
 
-from .runtime.catalog import COMPONENTS
+from ..errors import UsageError
+from ..runtime.catalog import COMPONENTS
 
 # The standard test input of each component, a sine inside the range the thesis measured:
 # (mean, amplitude, frequency in Hz), SI units; the damper's is test A (Table 11.2-1).
@@ -137,8 +137,6 @@ def unit_mistake(fmu_name, deflection):
 
 
 def run_command(args):
-    from .cli import UsageError
-
     if not (args.step > 0 and args.stop_time >= args.step):
         raise UsageError("--step must be > 0 and --stop-time at least one step (seconds), "
                          "e.g. --stop-time 2 --step 1e-3")
@@ -156,12 +154,3 @@ def run_command(args):
         raise UsageError(mistake)
     write_csv(input_table(args.fmu, t, x), sys.stdout)
     return 0
-
-
-def main(argv=None):
-    from .cli import standalone
-    return standalone("signal", argv)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

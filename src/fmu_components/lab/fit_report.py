@@ -10,8 +10,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .fit import RELATIVE_CI_LIMIT, History, simulate_test  # noqa: E402
-from .report import DISPLAY  # noqa: E402
+from .display import DISPLAY  # noqa: E402
+from .measured import History  # noqa: E402
 
 DPI = 200
 
@@ -105,8 +105,7 @@ def write_report(result, out):
     """Markdown and plots beside `out` (PARAMS.json); returns the Markdown's path."""
     out = Path(out)
     stem = out.with_suffix("")
-    responses = [simulate_test(result.component, result.structure, test, result.values)
-                 for test in result.tests]
+    responses = result.responses()
     figures = {"responses": f"{stem.name}_responses.png",
                "residuals": f"{stem.name}_residuals.png",
                "correlation": f"{stem.name}_correlation.png"}
@@ -132,7 +131,7 @@ def write_report(result, out):
     for name, value in result.values.items():
         if name in confidence:
             low, high, relative = confidence[name]
-            flag = " **not identifiable**" if relative > RELATIVE_CI_LIMIT else ""
+            flag = " **not identifiable**" if result.too_wide(relative) else ""
             lines.append(f"| `{name}` | {result.thesis[name]:.5g} | {value:.5g} | "
                          f"{low:.4g} .. {high:.4g} | {relative * 100:.1f}{flag} |")
         else:

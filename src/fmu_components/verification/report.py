@@ -17,18 +17,10 @@ from scipy.interpolate import PchipInterpolator  # noqa: E402
 
 from . import cases as programme  # noqa: E402
 from . import reference  # noqa: E402
-from .runtime.catalog import COMPONENTS  # noqa: E402
-from .runtime.units import DEG  # noqa: E402  (display degrees per radian)
-from .validate import STRICT_LIMIT, rows  # noqa: E402
+from ..runtime.catalog import COMPONENTS  # noqa: E402
+from ..lab.display import DISPLAY  # noqa: E402
+from .outcome import STRICT_LIMIT, rows  # noqa: E402
 
-# Display units engineers read: (factor from SI, unit) of the deflection, load and rate.
-DISPLAY = {
-    "RoadWheelTyre": ((1e3, "mm"), (1e-3, "kN"), (1e3, "mm/s")),
-    "TrackBushRadial": ((1e3, "mm"), (1e-3, "kN"), (1e3, "mm/s")),
-    "TrackBushTorsion": ((DEG, "deg"), (1.0, "N.m"), (DEG, "deg/s")),
-    # The damper as the thesis reports it: Table 11.2-1 in rad, Table A6-1 in rad/s.
-    "RotaryDamper": ((1.0, "rad"), (1.0, "N.m"), (1.0, "rad/s")),
-}
 DPI = 200  # print quality
 REFERENCE_STYLE = dict(color="black", linewidth=1.0)
 # Dashed with open markers, so that the FMU shows where it lies exactly on the reference.

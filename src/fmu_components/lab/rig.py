@@ -9,7 +9,7 @@ Each point (preload P, amplitude A, frequency f; SI) drives the deflection
 x(t) = P + A sin(2 pi f t) from rest at the preload, with the component relaxed there, and
 runs whole cycles until it is periodic: until the first-harmonic result of a cycle changes
 from the last one's, and by the trend of those changes will change in all, by less than
---steady (relative), within --max-cycles. The last cycle gives (fmu_components.harmonics)
+--steady (relative), within --max-cycles. The last cycle gives (fmu_components.lab.harmonics)
 the dynamic stiffness |K*|, the loss angle, the energy per cycle and the secant stiffness:
 one row of DIR/rig.csv. For the damper (RotaryDamper, arm angle in) DIR/equivalent.csv adds
 the equivalent stiffness K' = |K*| cos(delta) and damping c_eq = |K*| sin(delta) / omega.
@@ -33,7 +33,6 @@ of either flavour through fmpy's FMU2Slave). Points run in parallel over --proce
 """
 
 import csv
-import json
 import math
 import os
 import sys
@@ -46,9 +45,11 @@ from pathlib import Path
 import numpy as np
 
 from .harmonics import first_harmonic
-from .runtime.catalog import COMPONENTS, STRUCTURES, component_definition, structures_of
-from .runtime.cosim import CoSimulation
-from .runtime.integrator import DEFAULT_RTOL
+from ..errors import UsageError
+from ..export.parameters import ParameterError, parameter_set
+from ..runtime.catalog import COMPONENTS, STRUCTURES, component_definition, structures_of
+from ..runtime.cosim import CoSimulation
+from ..runtime.integrator import DEFAULT_RTOL
 
 CSV_COLUMNS = ("preload", "amplitude", "frequency", "dynamic_stiffness", "loss_angle_deg",
                "energy_per_cycle", "secant_stiffness")
@@ -331,45 +332,6 @@ def relaxation_record(setup, preload, step, rise=RISE_TIME, hold=HOLD_TIME, per_
     return times, deflection, drive(setup, times, deflection, rates)
 
 
-# --- parameters ----------------------------------------------------------------------------
-
-def parameter_set(component, structure="final", params=None):
-    """The full parameter set: the thesis values, with those of `params` (a dict, or a
-    JSON file name, of FMU parameter names -> SI values) in their place."""
-    definition = component_definition(component, structure)
-    values = definition.default_parameters()
-    if params is None:
-        return values
-    if not isinstance(params, dict):
-        params = _read_params(params)
-    unknown = sorted(set(params) - set(values))
-    if unknown:
-        raise RigError(f"{component} ({structure}) has no parameter {', '.join(map(repr, unknown))}; "
-                       f"its parameters are: {', '.join(values)}")
-    for name, value in params.items():
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise RigError(f"parameter {name!r} = {value!r} must be a number (SI units)")
-        values[name] = float(value)
-    problem = definition.check_parameters(values)
-    if problem:
-        raise RigError(f"{problem}; correct it in the parameters file")
-    return values
-
-
-def _read_params(path):
-    try:
-        with open(path) as f:
-            params = json.load(f)
-    except OSError as error:
-        raise RigError(f"cannot read the parameters file {path}: {error.strerror}") from None
-    except json.JSONDecodeError as error:
-        raise RigError(f"{path} is not JSON ({error.msg}, line {error.lineno}); write an "
-                       f"object of parameter names to SI values") from None
-    if not isinstance(params, dict):
-        raise RigError(f"{path} must hold a JSON object of parameter names to SI values")
-    return params
-
-
 # --- the rig -------------------------------------------------------------------------------
 
 def make_setup(component, structure="final", params=None, engine="model", fmu=None,
@@ -380,7 +342,10 @@ def make_setup(component, structure="final", params=None, engine="model", fmu=No
     if structure not in structures_of(component):
         raise RigError(f"{component} comes in no {structure!r} structure; it has "
                        f"{', '.join(structures_of(component))}")
-    values = parameter_set(component, structure, params)
+    try:
+        values = parameter_set(component, structure, params)
+    except ParameterError as error:
+        raise RigError(str(error)) from None
     if rate not in RATES:
         raise RigError(f"rate {rate!r}: choose {' or '.join(RATES)}")
     if not max_step > 0.0:
@@ -746,8 +711,6 @@ def configure(parser):
 
 
 def run_command(args):
-    from .cli import UsageError
-
     try:
         return _run(args)
     except RigError as error:
@@ -803,12 +766,3 @@ def _print_rows(rows, component):
         print(f"{r.preload:10.4g} {r.amplitude:10.4g} {r.frequency:7.3g} "
               f"{r.dynamic_stiffness:16.6g} {r.loss_angle_deg:9.4f} {r.energy_per_cycle:11.5g} "
               f"{r.secant_stiffness:11.5g} {r.cycles:6d}")
-
-
-def main(argv=None):
-    from .cli import standalone
-    return standalone("rig", argv)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

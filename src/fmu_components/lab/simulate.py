@@ -18,8 +18,9 @@ import sys
 
 import numpy as np
 
-from .runtime.catalog import COMPONENTS
-from .runtime.units import UNITS
+from ..errors import UsageError
+from ..runtime.catalog import COMPONENTS
+from ..runtime.units import UNITS
 
 EXAMPLES = """examples:
   fmu-components signal RoadWheelTyre sine --mean 3.5e-3 --amplitude 1e-3 > tyre_in.csv
@@ -42,7 +43,6 @@ class Component:
     def __init__(self, path):
         from fmpy import read_model_description
 
-        from .cli import UsageError
         if not os.path.isfile(path):
             raise UsageError(f"{path}: no such FMU; build them with `fmu-components build` "
                              f"(into fmus/)")
@@ -65,7 +65,6 @@ class Component:
 
 def read_input(path):
     """(column names, values as an array of rows) of an input CSV, quoted headers or not."""
-    from .cli import UsageError
     try:
         with open(path, newline="") as file:
             rows = [row for row in csv.reader(file) if row]
@@ -87,7 +86,6 @@ def read_input(path):
 def check_columns(component, names, derive_rate, path):
     """The input columns to feed the FMU; a UsageError naming the FMU's inputs against the
     CSV's columns when they do not fit."""
-    from .cli import UsageError
     deflection, rate = component.inputs
     have = ", ".join(names)
     if names[0] != "time":
@@ -105,7 +103,6 @@ def check_columns(component, names, derive_rate, path):
 
 def check_units(component, names, values, path):
     """A UsageError when the deflection looks like mm (deg) where m (rad) is expected."""
-    from .cli import UsageError
     variable = component.definition.inputs[0]
     column = values[:, names.index(variable.name)]
     largest = float(np.max(np.abs(column)))
@@ -121,7 +118,6 @@ def check_units(component, names, values, path):
 
 def check_times(times, stop_time, step, path):
     """(stop time, step): the defaults from the CSV, and a UsageError past its end."""
-    from .cli import UsageError
     intervals = np.diff(times)
     if not np.all(intervals > 0.0):
         raise UsageError(f"{path}: the times must increase from row to row")
@@ -297,7 +293,6 @@ def configure(parser):
 
 
 def run_command(args):
-    from .cli import UsageError
     component = Component(args.fmu)
     names, values = read_input(args.input)
     feed = check_columns(component, names, args.derive_rate, args.input)
@@ -323,12 +318,3 @@ def run_command(args):
         plot_loop(args.plot, component, written)
         print(f"wrote {args.plot}")
     return 0
-
-
-def main(argv=None):
-    from .cli import standalone
-    return standalone("simulate", argv)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

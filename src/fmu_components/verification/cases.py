@@ -15,9 +15,9 @@ Numbers are written with ``repr``, which round-trips, so a regeneration is compa
 committed files column by column: every value within ``REPRODUCE_TOLERANCE`` of the
 column's peak-to-peak range (on the same machine the files come out byte-identical).
 
-    python -m fmu_components.cases --list
-    python -m fmu_components.cases --regenerate [--fmu NAME] [--case GLOB]
-    python -m fmu_components.cases --check [--fmu NAME] [--case GLOB]
+    python -m fmu_components.verification.cases --list
+    python -m fmu_components.verification.cases --regenerate [--fmu NAME] [--case GLOB]
+    python -m fmu_components.verification.cases --check [--fmu NAME] [--case GLOB]
 
 The reference comes from ``reference`` (scipy Radau on plain right-hand sides); the only
 thing taken from the FMU side is the variable names in the catalog.
@@ -36,11 +36,11 @@ import numpy as np
 from fmpy.util import read_csv
 
 from . import reference
-from .runtime.catalog import COMPONENTS
-from .signals import (dual_sine, input_table, piecewise_linear_rate, ramp_and_hold, sine,
+from ..runtime.catalog import COMPONENTS
+from ..lab.signals import (dual_sine, input_table, piecewise_linear_rate, ramp_and_hold, sine,
                       time_grid, write_csv)
 
-REFERENCE_DATA = Path(__file__).resolve().parents[2] / "reference_data"
+REFERENCE_DATA = Path(__file__).resolve().parents[3] / "reference_data"
 REPRODUCE_TOLERANCE = 1e-9  # of each column's peak-to-peak range
 MM = 1e-3
 RAD_PER_DEG = math.pi / 180.0

@@ -1,6 +1,6 @@
 """Validate the built FMUs against the thesis test programme.
 
-Every case of ``fmu_components.cases`` is simulated with ``fmpy.simulate_fmu`` at its step
+Every case of ``fmu_components.verification.cases`` is simulated with ``fmpy.simulate_fmu`` at its step
 size and tolerance (``<case>_ref.opt``), fed its ``<case>_in.csv``, and compared with its
 ``<case>_ref.csv`` (the independent solve) in two ways:
 
@@ -13,17 +13,15 @@ size and tolerance (``<case>_ref.opt``), fed its ``<case>_in.csv``, and compared
 * the strict norm: the largest |FMU - reference| of every output, in % of that output's
   peak-to-peak range in the reference; it must be <= 0.5 %.
 
-    python -m fmu_components.validate [--fmu NAME] [--case GLOB] [--report DIR]
+    fmu-components validate [--fmu NAME] [--case GLOB] [--report DIR]
 
 prints a table, writes PNG plots in the style of the thesis figures and a summary page to
 the report folder (default reports/validation), and exits non-zero if any case fails.
 """
 
-import argparse
 import math
 import sys
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -31,36 +29,10 @@ from fmpy import simulate_fmu
 from fmpy.util import validate_result
 from tqdm import tqdm
 
+from ..errors import UsageError
+from ..runtime.catalog import COMPONENTS
 from . import cases as programme
-from .runtime.catalog import COMPONENTS
-
-STRICT_LIMIT = 0.5  # % of the reference's peak-to-peak range
-CROSS_CHECK_LIMIT = 0.1  # share of samples outside the band
-
-
-@dataclass
-class Outcome:
-    case: programme.Case
-    errors: dict = field(default_factory=dict)  # output -> strict error, %
-    outliers: float = 1.0  # fraction of samples outside the cross-check band (worst output)
-    wall_time: float = 0.0
-    result: np.ndarray = None
-    reference: np.ndarray = None
-    inputs: np.ndarray = None
-    problem: str = ""  # why the case could not be compared at all
-
-    @property
-    def strict_error(self):
-        return max(self.errors.values()) if self.errors else float("inf")
-
-    @property
-    def worst_output(self):
-        return max(self.errors, key=self.errors.get) if self.errors else ""
-
-    @property
-    def passed(self):
-        return (not self.problem and self.strict_error <= STRICT_LIMIT
-                and self.outliers <= CROSS_CHECK_LIMIT)
+from .outcome import CROSS_CHECK_LIMIT, STRICT_LIMIT, Outcome, table
 
 
 def compare(result, reference, stop_time):
@@ -94,26 +66,6 @@ def run_case(case, fmu_path, reference_data=programme.REFERENCE_DATA):
     return Outcome(case, errors, outliers, wall, result, reference, inputs, problem)
 
 
-def rows(outcomes):
-    """The result table: a header and one row of strings per case."""
-    table = [("FMU", "case", "strict error %", "worst output", "cross-check inside band",
-              "result", "wall s")]
-    for o in outcomes:
-        table.append((o.case.fmu, o.case.name, f"{o.strict_error:.4f}" if o.errors else "-",
-                      o.worst_output, f"{100 * (1 - o.outliers):.2f} %",
-                      "pass" if o.passed else f"FAIL{': ' + o.problem if o.problem else ''}",
-                      f"{o.wall_time:.2f}"))
-    return table
-
-
-def table(outcomes):
-    lines = rows(outcomes)
-    widths = [max(len(row[i]) for row in lines) for i in range(len(lines[0]))]
-    return "\n".join("  ".join(cell.rjust(w) if i in (2, 4, 6) else cell.ljust(w)
-                               for i, (cell, w) in enumerate(zip(row, widths))).rstrip()
-                     for row in lines)
-
-
 EXAMPLES = """examples:
   fmu-components validate                                   every case, report in reports/validation
   fmu-components validate --fmu TrackBushTorsion --case 'II_*'
@@ -134,8 +86,6 @@ def configure(parser):
 
 
 def run_command(args):
-    from .cli import UsageError
-
     selected = programme.select(args.fmu, args.case)
     if not selected:
         raise UsageError("no case matches: see the case names in reference_data/<FMU>/")
@@ -170,12 +120,3 @@ def run_command(args):
           f"{STRICT_LIMIT:g} %, cross-check <= {100 * CROSS_CHECK_LIMIT:g} % outside the band); "
           f"report: {summary}")
     return 1 if failed else 0
-
-
-def main(argv=None):
-    from .cli import standalone
-    return standalone("validate", argv)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -17,10 +17,10 @@ component.
 import math
 import re
 
-from .runtime.expressions import FUNCTIONS, Format, GenerationError, Printer, Symbol, Tangent
-from .runtime import cosim, integrator
-from .runtime.catalog import LARGEST_PARAMETER, SMALLEST_PARAMETER
-from .runtime.integrator import ROS34PW2, factor_statements, step_statements
+from ..runtime.expressions import FUNCTIONS, Format, GenerationError, Printer, Symbol, Tangent
+from ..runtime import cosim, integrator
+from ..runtime.catalog import LARGEST_PARAMETER, SMALLEST_PARAMETER
+from ..runtime.integrator import ROS34PW2, factor_statements, step_statements
 
 C_KEYWORDS = set("""auto break case char const continue default do double else enum extern float
 for goto if inline int long register restrict return short signed sizeof static struct switch
@@ -163,7 +163,7 @@ class ModelCode:
         d, e = self.definition, self.equations
         table_points = max([len(t.abscissae) for t in e.tables], default=0)
         return "\n".join([
-            f"/* {d.name}: sizes of the generated model (fmu_components.cgen). Generated at build",
+            f"/* {d.name}: sizes of the generated model (fmu_components.export.cgen). Generated at build",
             "   time; do not edit. */",
             "#ifndef MODEL_CONFIG_H",
             "#define MODEL_CONFIG_H",
@@ -207,7 +207,7 @@ class ModelCode:
     def _preamble(self):
         return "\n".join([
             f"/* The {self.definition.name} model: its equations (fmu_components.runtime) and the",
-            f"   {self.tableau.name} step, printed as C by fmu_components.cgen at build time. Do not",
+            f"   {self.tableau.name} step, printed as C by fmu_components.export.cgen at build time. Do not",
             "   edit; the runtime that drives these functions is hand-written (c/). */",
             '#include "model.h"', "", "#include <math.h>", "#include <stdio.h>", "",
             "/* Every stage derivative is computed; the Jacobian reads only some of them, and a",

@@ -27,8 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .runtime import catalog
-from .runtime.catalog import component_definition
+from ..runtime import catalog
+from ..runtime.catalog import component_definition
 from .signals import secant_rates
 
 DRIVER = "history.c"
@@ -45,8 +45,8 @@ def cache_folder():
 
 
 def _content_key(definition):
-    from .build import C_FLAGS, C_SOURCE, RUNTIME_HEADERS, RUNTIME_SOURCES
-    from .cgen import ModelCode
+    from ..export.build import C_FLAGS, C_SOURCE, RUNTIME_HEADERS, RUNTIME_SOURCES
+    from ..export.cgen import ModelCode
 
     code = ModelCode(definition, "")
     digest = hashlib.sha256(" ".join(C_FLAGS).encode())
@@ -63,7 +63,7 @@ def compiled_library(definition):
     folder = cache_folder() / _content_key(definition)
     library = folder / "history.so"
     if not library.exists():
-        from .build import C_SOURCE, compile_native, native_sources
+        from ..export.build import C_SOURCE, compile_native, native_sources
 
         folder.parent.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryDirectory(dir=folder.parent) as tmp:

@@ -9,8 +9,9 @@ from pathlib import Path
 import numpy as np
 
 from . import reference
-from .fit import MAXWELL, History, maxwell_quantity
-from .runtime.catalog import STRUCTURES, component_definition
+from ..lab.fit import MAXWELL, maxwell_quantity
+from ..lab.measured import History
+from ..runtime.catalog import STRUCTURES, component_definition
 
 SAMPLES_PER_CYCLE = 200
 DIFFERENCE_STEP = 1e-7  # s, central difference of the programme's path for its rate

@@ -26,7 +26,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.interpolate import PchipInterpolator
 
-THESIS_DATA = Path(__file__).resolve().parents[2] / "reference_data" / "thesis"
+THESIS_DATA = Path(__file__).resolve().parents[3] / "reference_data" / "thesis"
 RTOL = 1e-10
 ATOL_FRACTION = 1e-10  # absolute tolerance as a fraction of each state's typical size
 

@@ -1,0 +1,158 @@
+"""fmu-components build: build both flavours of the FMUs (``export.build``) and simulate each
+once through fmpy, printing a summary.
+
+    fmu-components build            # build fmus/*.fmu (native) and fmus/python/*.fmu, then run
+    fmu-components build --no-run   # build only
+    fmu-components build --only RotaryDamper --flavour native
+    fmu-components build --structure four-element   # another of the thesis's model structures
+    fmu-components build --params bush.json --name MyBush --component TrackBushRadial
+
+(``python build_fmus.py`` in the repository root does the same.) Building needs gcc, and
+x86_64-w64-mingw32-gcc for the native FMUs' win64 binaries.
+"""
+
+import math
+import re
+import shutil
+import sys
+import time
+from importlib.util import find_spec
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import UsageError
+from ..export.build import FLAVOURS, Own, build
+from ..export.parameters import ParameterError, parameter_set
+from ..runtime.catalog import COMPONENTS, STRUCTURES, structures_of
+from .signals import THESIS_SINES, input_table, sine, time_grid
+
+
+def sine_input(name, stop_time, step):
+    """The thesis sine of component `name` with its exact (not secant) rate."""
+    mean, amplitude, frequency = THESIS_SINES[name]
+    omega = 2 * math.pi * frequency
+    t = time_grid(stop_time, step)
+    return input_table(name, t, sine(t, mean, amplitude, frequency),
+                       rate=amplitude * omega * np.cos(omega * t))
+
+
+def run(built, component=None):
+    """One thesis sine through each built FMU; component: what an own part is."""
+    from fmpy import simulate_fmu
+
+    print(f"\n{'FMU':18s} {'flavour':8s} {'output':12s} {'min':>11s} {'max':>11s} {'unit':>6s} "
+          f"{'steps':>6s} {'wall s':>7s} {'us/step':>8s}")
+    for flavour, paths in built.items():
+        for name, path in paths.items():
+            definition = COMPONENTS[component or name]
+            output = definition.outputs[0]
+            stop, step = 2.0, 1e-3
+            started = time.perf_counter()
+            result = simulate_fmu(str(path), stop_time=stop, output_interval=step,
+                                  input=sine_input(component or name, stop, step),
+                                  output=[output.name])
+            wall = time.perf_counter() - started
+            values = result[output.name]
+            steps = len(values) - 1
+            print(f"{name:18s} {flavour:8s} {output.name:12s} {values.min():11.5g} "
+                  f"{values.max():11.5g} {output.unit:>6s} {steps:6d} {wall:7.2f} "
+                  f"{wall / steps * 1e6:8.1f}")
+
+
+EXAMPLES = """examples:
+  fmu-components build                          both flavours of all four FMUs into fmus/, then run each
+  fmu-components build --no-run --only RotaryDamper --flavour native
+  fmu-components build --structure four-element  the torsion bush's four-element model (Appendix 4a)
+                                                into fmus/four-element/
+  fmu-components build --params bush.json --name MyBush --component TrackBushRadial
+                                                your part (fmu-components fit) as fmus/MyBush.fmu
+                                                and fmus/python/MyBush.fmu
+"""
+
+
+def configure(parser):
+    parser.add_argument("--dest", type=Path, default=Path("fmus"),
+                        help="where the native FMUs go; the Python ones go to DEST/python "
+                             "(default: fmus)")
+    parser.add_argument("--only", nargs="+", choices=sorted(COMPONENTS), default=None,
+                        help="these components (default: all four, or those that come in "
+                             "--structure)")
+    parser.add_argument("--structure", choices=list(STRUCTURES), default="final",
+                        help="the thesis's model structure of the rubber components: final "
+                             "(section 6.4, the default), four-element (Appendix 4a, torsion "
+                             "bush only) or haupt-sedlan (section 6.1); DEST defaults to "
+                             "fmus/STRUCTURE for all but final")
+    parser.add_argument("--flavour", nargs="+", choices=FLAVOURS, default=list(FLAVOURS))
+    parser.add_argument("--no-run", action="store_true", help="build only")
+    parser.add_argument("--params", type=Path, metavar="PARAMS.json",
+                        help="parameter start values (FMU names, SI; fmu-components fit writes "
+                             "them) for one FMU of your own: needs --name and --component")
+    parser.add_argument("--name", help="with --params: the FMU's model name, identifier and "
+                                       "file name (a C identifier)")
+    parser.add_argument("--component", choices=sorted(COMPONENTS),
+                        help="with --params: the component the values are for")
+
+
+def check_host(flavours, will_run):
+    """Everything the build needs, checked before it starts: one line on what to install."""
+    if shutil.which("gcc") is None:
+        raise UsageError("gcc not found: install a C compiler (Debian/Ubuntu: apt-get install gcc)")
+    needed = (["pythonfmu"] if "python" in flavours else []) + (["fmpy"] if will_run else [])
+    missing = [module for module in needed if find_spec(module) is None]
+    if missing:
+        raise UsageError(f"{', '.join(missing)} not installed in {sys.executable}: run inside the "
+                         f"project's environment (python3.11 -m venv .venv && "
+                         f'.venv/bin/pip install -e ".[test]")')
+
+
+def run_command(args):
+    structure = args.structure
+    check_host(args.flavour, not args.no_run)
+    if args.params or args.name or args.component:
+        return build_own(args)
+    names = args.only or [n for n in COMPONENTS if structure in structures_of(n)]
+    for name in names:
+        if structure not in structures_of(name):
+            raise UsageError(f"{name} comes in no {structure!r} structure (it has: "
+                             f"{', '.join(structures_of(name))}); choose another --only or "
+                             f"--structure")
+    destination = args.dest
+    if structure != "final" and args.dest == Path("fmus"):
+        destination = args.dest / structure
+    built = build(names, destination, args.flavour, structure)
+    for paths in built.values():
+        for path in paths.values():
+            print(f"built {path}")
+    if not args.no_run:
+        run(built)
+    return 0
+
+
+def read_own(path, name, component, structure):
+    """An Own from a PARAMS.json (read and checked as every tool reads it), every mistake said
+    in one line."""
+    if not (path and name and component):
+        raise UsageError("--params, --name and --component go together: give all three")
+    if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]{0,63}", name) or name in COMPONENTS:
+        raise UsageError(f"--name {name}: give a new name of letters, digits and _ that "
+                         f"starts with a letter (it names the FMU's C and Python identifiers)")
+    if structure not in structures_of(component):
+        raise UsageError(f"{component} comes in no {structure!r} structure (it has: "
+                         f"{', '.join(structures_of(component))})")
+    try:
+        values = parameter_set(component, structure, path)
+    except ParameterError as error:
+        raise UsageError(f"{path}: {error}") from None
+    return Own(name, component, structure, values)
+
+
+def build_own(args):
+    own = read_own(args.params, args.name, args.component, args.structure)
+    built = build([own.name], args.dest, args.flavour, args.structure, own)
+    for paths in built.values():
+        for path in paths.values():
+            print(f"built {path}")
+    if not args.no_run:
+        run(built, own.component)
+    return 0
