@@ -8,6 +8,7 @@ at t, the FMU holds the rate over the step and its outputs belong to t + h.
 """
 
 import math
+import warnings
 from ctypes import byref
 from pathlib import Path
 
@@ -68,12 +69,20 @@ class FmuComponent:
         description, unzip_dir = unpacked(path)
         self.name = instance_name
         self.unilateral = unilateral  # a contact: no load at x <= 0, never a pulling load
+        # explicit coupling lags the load of a component whose stiffness is no step tangent
+        self.stiffness_is_step_tangent = description.modelName not in LINEARISED_MODELS
         if step_model is None:
-            step_model = ("linearised" if description.modelName in LINEARISED_MODELS
-                          else "tangent")
+            step_model = "tangent" if self.stiffness_is_step_tangent else "linearised"
         if step_model not in ("tangent", "linearised"):
             raise ValueError(f"step_model {step_model!r}: 'tangent' or 'linearised'")
+        if step_model == "linearised" and description.modelExchange is None:
+            warnings.warn(f"{instance_name}: {Path(path).name} offers no Model Exchange to "
+                          f"linearise its step with; its `stiffness` output stands in",
+                          stacklevel=2)
+            step_model = "tangent"
         self.step_model = step_model
+        # the curvature of the load laws comes from the stiffness's directional derivative
+        self._curvature = bool(description.coSimulation.providesDirectionalDerivative)
         self.touch_stiffness = 0.0  # the last contact stiffness the FMU reported
         self.peak_load = 0.0  # largest |load| seen: the scale of load mismatches
         self.warnings_logged = 0
@@ -183,7 +192,7 @@ class FmuComponent:
         """The load law about the last accepted step, for a host that cannot repeat one:
         the `stiffness` output as the tangent where it is one over a step ("tangent"
         components), else the plain lagged load."""
-        stiffness = self.stiffness if self.step_model == "tangent" else 0.0
+        stiffness = self.stiffness if self.stiffness_is_step_tangent else 0.0
         return self._law(self.deflection, self.load, stiffness)
 
     def predicted_law(self, time):
@@ -203,8 +212,9 @@ class FmuComponent:
         time, deflection, secant = self._trial_point
         outputs = self.trial_outputs
         stiffness = outputs["stiffness"]
-        curvature = self._call(time, self._fmu.getDirectionalDerivative, self._stiffness_vr,
-                               self._deflection_vr, [1.0])[0]
+        curvature = (self._call(time, self._fmu.getDirectionalDerivative,
+                                self._stiffness_vr, self._deflection_vr, [1.0])[0]
+                     if self._curvature else 0.0)
         tangent = stiffness
         if self.step_model == "linearised":
             _, tangent = self._linearised_step(deflection, secant, time - self.time)
