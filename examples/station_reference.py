@@ -23,7 +23,7 @@ import numpy as np
 from fmu_components.verification.monolithic import ModelExchangeComponent, MonolithicSystem
 
 import road_wheel_station as station
-from fmu_coupling import fmu_path
+from example_fmus import fmu_path
 
 L = station.ARM_LENGTH
 ALPHA = station.ARM_STATIC_ANGLE
