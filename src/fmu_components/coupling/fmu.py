@@ -75,7 +75,8 @@ class FmuComponent:
             step_model = "tangent" if self.stiffness_is_step_tangent else "linearised"
         if step_model not in ("tangent", "linearised"):
             raise ValueError(f"step_model {step_model!r}: 'tangent' or 'linearised'")
-        if step_model == "linearised" and description.modelExchange is None:
+        if step_model == "linearised" and not (description.modelExchange is not None
+                                               and description.derivatives):
             warnings.warn(f"{instance_name}: {Path(path).name} offers no Model Exchange to "
                           f"linearise its step with; its `stiffness` output stands in",
                           stacklevel=2)
@@ -113,9 +114,10 @@ class FmuComponent:
         if parameters:
             self._call(0.0, self._fmu.setReal, [self._vr[n] for n in parameters],
                        list(parameters.values()))
-        self.linearisation = (Linearisation(description, unzip_dir,
-                                            f"{instance_name}.linearisation", parameters)
-                              if step_model == "linearised" else None)
+        self._linearisable = (description.modelExchange is not None
+                              and bool(description.derivatives))
+        self._unpacked, self._parameters = (description, unzip_dir), parameters
+        self._linearisation = None  # made when first needed
         self._state = fmi2FMUstate()  # NULL until the first save
         self.started = False
         self.time = None  # last accepted point
@@ -133,10 +135,11 @@ class FmuComponent:
 
     def _log(self, environment, instance, status, category, message):
         # The project's FMUs pass each message finished, with '%' doubled.
-        self.messages = self.messages[-4:] + [message.decode("utf-8", "replace")
-                                              .replace("%%", "%")]
-        if status >= fmi2Warning:
+        text = message.decode("utf-8", "replace").replace("%%", "%")
+        self.messages = self.messages[-4:] + [text]
+        if status == fmi2Warning:
             self.warnings_logged += 1
+            warnings.warn(f"{self.name}: {text}", stacklevel=2)
 
     def _said(self):
         return f": {self.messages[-1]}" if self.messages else ""
@@ -195,11 +198,14 @@ class FmuComponent:
         stiffness = self.stiffness if self.stiffness_is_step_tangent else 0.0
         return self._law(self.deflection, self.load, stiffness)
 
-    def predicted_law(self, time):
+    def predicted_law(self, time, linearised=None):
         """The load law for the first solve of a step to `time`: about the last accepted
         step with the `stiffness` output ("tangent"), or about the linearised answer to
-        the step continuing at the last rate ("linearised")."""
-        if self.step_model == "tangent":
+        the step continuing at the last rate ("linearised"; `linearised=True` asks for
+        it whatever the step model, where the FMU offers Model Exchange)."""
+        if linearised is None:
+            linearised = self.step_model == "linearised"
+        if not (linearised and self._linearisable):
             return self.lagged_law()
         step = time - self.time
         predicted, tangent = self._linearised_step(self.deflection, self.rate, step)
@@ -226,9 +232,12 @@ class FmuComponent:
         """(load after `step` at `rate`, its tangent by the end deflection), linearised
         at the FMU's current states and `deflection`: the accepted point's (a
         prediction) or a trial's end (the tangent for the next pass)."""
-        states = self._call(self.time, self._fmu.getReal, self.linearisation.state_vrs)
+        if self._linearisation is None:
+            self._linearisation = Linearisation(*self._unpacked, f"{self.name}.linearisation",
+                                                self._parameters)
+        states = self._call(self.time, self._fmu.getReal, self._linearisation.state_vrs)
         try:
-            return self.linearisation.step(states, deflection, rate, step)
+            return self._linearisation.step(states, deflection, rate, step)
         except FMICallException as error:
             raise CouplingError(self.name, self.time, f"the linearised step at deflection "
                                 f"{deflection!r}, rate {rate!r}: {error}") from None
@@ -334,8 +343,8 @@ class FmuComponent:
             self._fmu.freeFMUstate(state)
 
     def free(self):
-        if self.linearisation is not None:
-            self.linearisation.free()
+        if self._linearisation is not None:
+            self._linearisation.free()
         if self._state:
             self._fmu.freeFMUstate(self._state)
         # FMI 2.0 allows fmi2Terminate only once initialization is complete.

@@ -59,7 +59,7 @@ class KelvinElement:
     def lagged_law(self):
         return self.host_load
 
-    def predicted_law(self, time):
+    def predicted_law(self, time, linearised=None):
         return self.host_load
 
     def corrected_law(self):

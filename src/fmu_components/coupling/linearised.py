@@ -23,7 +23,10 @@ here steps the FMU: no fmi2DoStep, no state of the co-simulation instance touche
 import ctypes
 
 import numpy as np
-from fmpy.fmi2 import FMU2Model, fmi2Real, fmi2ValueReference
+from fmpy import calloc, free
+from fmpy.fmi2 import (FMU2Model, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2Real,
+                       fmi2ValueReference)
 
 
 
@@ -68,7 +71,12 @@ class Linearisation:
         self._fmu = fmu = FMU2Model(guid=description.guid, unzipDirectory=unzip_dir,
                                     modelIdentifier=description.modelExchange.modelIdentifier,
                                     instanceName=instance_name)
-        fmu.instantiate()
+        # Its messages repeat what the co-simulation instance says of the same inputs.
+        self._callbacks = fmi2CallbackFunctions()
+        self._callbacks.logger = fmi2CallbackLoggerTYPE(lambda *message: None)
+        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        fmu.instantiate(callbacks=self._callbacks)
         fmu.setupExperiment(startTime=0.0)
         fmu.enterInitializationMode()
         if parameters:

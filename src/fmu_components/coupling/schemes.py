@@ -14,8 +14,8 @@ For a host that cannot (one solve, one FMU step per host step):
 
     explicit    the law about the last accepted step: load and `stiffness` (for the
                 damper, whose `stiffness` is no tangent over a step, the plain load)
-    predicted   corrected's first solve alone: for the damper, its linearised answer
-                to the step
+    predicted   every component's linearised answer to the step (its Model Exchange
+                Jacobian along the step continuing at the last rate)
     nepce       explicit, plus the energy its lag put into the interface in the last
                 step given back in the next (NEPCE, Benedikt et al. 2013; Sadjina and
                 Pedersen 2019)
@@ -72,6 +72,9 @@ class Explicit(Scheme):
 
 class Predicted(Scheme):
     name = "predicted"
+
+    def first_law(self, component, time):
+        return component.predicted_law(time, linearised=True)
 
 
 class Nepce(Explicit):

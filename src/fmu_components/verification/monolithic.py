@@ -11,8 +11,9 @@ the integration where it crosses zero; the FMU's mode is switched in event mode
 import ctypes
 
 import numpy as np
-from fmpy import extract, read_model_description
-from fmpy.fmi2 import FMU2Model
+from fmpy import calloc, extract, free, read_model_description
+from fmpy.fmi2 import (FMU2Model, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 from scipy.integrate import solve_ivp
 
 
@@ -35,7 +36,16 @@ class ModelExchangeComponent:
         self._fmu = FMU2Model(guid=description.guid, unzipDirectory=self._directory,
                               modelIdentifier=description.modelExchange.modelIdentifier,
                               instanceName=instance_name)
-        self._fmu.instantiate()
+        # The solver's trial states are no one's business but its own: the FMU's messages
+        # about them (an input out of the measured range) are kept, not printed.
+        self.messages = []
+        self._callbacks = fmi2CallbackFunctions()
+        self._callbacks.logger = fmi2CallbackLoggerTYPE(
+            lambda env, instance, status, category, message:
+            self.messages.append(message.decode("utf-8", "replace")))
+        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        self._fmu.instantiate(callbacks=self._callbacks)
         self._fmu.setupExperiment(startTime=0.0)
         self._fmu.enterInitializationMode()
         if parameters:
