@@ -4,6 +4,7 @@ and the track span (10 links on 8e7 N/m bushes). Prints Markdown tables.
 
     python benchmarks/coupling_study.py                  # both examples (minutes)
     python benchmarks/coupling_study.py --only station --speed 3
+    python benchmarks/coupling_study.py --only station --damper-tangent
 
 For each scheme and host step: the total error against a fine reference (the station:
 its own equations of motion with the Model Exchange FMUs by Radau at rtol 1e-10; the
@@ -29,21 +30,30 @@ def progress(scheme, step):
     print(f"  {scheme} at {step * 1e3:g} ms done", file=sys.stderr, flush=True)
 
 
-def station(speed):
+def station(speed, damper_tangent=False, steps=None, end_time=None):
     import road_wheel_station as example
 
     profile = example.RoadProfile()
-    reference, agreement, table = example.coupling_study(speed, profile, progress=progress)
-    print(f"## Road-wheel station at {speed:g} m/s\n")
+    schemes = example.STUDY_SCHEMES
+    if damper_tangent:
+        example.DAMPER_STEP_MODEL = "tangent"
+        schemes = ("corrected", "converged")
+    reference, agreement, table = example.coupling_study(
+        speed, profile, steps=steps or example.STUDY_STEPS, schemes=schemes,
+        end_time=end_time, progress=progress)
+    print(f"## Road-wheel station at {speed:g} m/s"
+          f"{', the damper stepped by its stiffness' if damper_tangent else ''}\n")
     print(f"{example.describe_reference(reference, agreement)}.\n")
     print(format_table(table, example.STUDY_KEYS, example.STUDY_LABELS))
     print()
 
 
-def span():
+def span(steps=None, end_time=None):
     import track_span as example
 
-    reference, table = example.coupling_study(progress=progress)
+    reference, table = example.coupling_study(end_time=end_time or 1.0,
+                                              steps=steps or example.STUDY_STEPS,
+                                              progress=progress)
     print("## Track span, 10 links, end lifted 10 mm at 6 Hz\n")
     print(f"Reference: `converged` at {example.FINE_STEP * 1e3:g} ms "
           f"({reference['wall']:.0f} s); errors the worst over the links (joints).\n")
@@ -55,14 +65,20 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", choices=("station", "span"))
     parser.add_argument("--speed", type=float, default=8.0, help="station, m/s")
+    parser.add_argument("--damper-tangent", action="store_true",
+                        help="station: the damper's `stiffness` as its step tangent instead "
+                             "of its linearisation (corrected and converged only)")
+    parser.add_argument("--steps", type=float, nargs="+", help="host steps, s (default: "
+                        "4, 2, 1, 0.5 and 0.25 ms)")
+    parser.add_argument("--end-time", type=float, help="s; default: the examples' runs")
     args = parser.parse_args()
     started = time.perf_counter()
     print(f"Errors: max on a {STUDY_GRID * 1e3:g} ms grid, % of the reference's range. "
           f"Costs: per host step and FMU.\n")
     if args.only in (None, "station"):
-        station(args.speed)
+        station(args.speed, args.damper_tangent, args.steps, args.end_time)
     if args.only in (None, "span"):
-        span()
+        span(args.steps, args.end_time)
     print(f"wall time {time.perf_counter() - started:.0f} s")
 
 

@@ -65,6 +65,10 @@ TYRES_PER_WHEEL = 2
 TORSION_BAR_STIFFNESS = 15000.0  # N.m/rad
 TRACK_PITCH = 0.15  # m
 
+# How the coupling predicts the damper's answer to a step: None, the library's choice (its
+# Model Exchange linearisation); "tangent", its `stiffness` output (for a host without a
+# second instance: benchmarks/coupling_study.py --damper-tangent measures what it costs).
+DAMPER_STEP_MODEL = None
 DEFAULT_STEP = 1e-4  # s, host step: exudyn's own error small for the plots (0.3 % at 8 m/s)
 
 # The linear equivalents are fitted to each FMU's steady response to a sine about the
@@ -176,7 +180,8 @@ class Station:
             damper = KelvinElement("damper", "torque", stiffness, damping, 0.0, 0.0)
         else:
             tyre = FmuComponent(fmu_path("RoadWheelTyre", fmu_dir), "tyre", unilateral=True)
-            damper = FmuComponent(fmu_path("RotaryDamper", fmu_dir), "damper")
+            damper = FmuComponent(fmu_path("RotaryDamper", fmu_dir), "damper",
+                                  step_model=DAMPER_STEP_MODEL)
         self.tyre, self.damper = tyre, damper
         self.bar_preload = torsion_bar_preload(TYRES_PER_WHEEL * static_tyre_load)
 

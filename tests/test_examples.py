@@ -233,6 +233,21 @@ def test_station_study_against_its_independent_reference(native_fmus):
 
 
 @needs_exudyn
+def test_the_coupling_study_benchmark_prints_both_tables():
+    """benchmarks/coupling_study.py, cut to one host step and a short run."""
+    import subprocess
+
+    run = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "coupling_study.py"),
+                          "--steps", "2e-3", "--end-time", "0.04"],
+                         capture_output=True, text=True, timeout=600, cwd=ROOT)
+    assert run.returncode == 0, run.stderr[-2000:]
+    for heading in ("## Road-wheel station at 8 m/s", "## Track span"):
+        assert heading in run.stdout
+    rows = [line for line in run.stdout.splitlines() if line.startswith("| corrected | 2 ms")]
+    assert len(rows) == 2 and all("| 2.00 | 1.00 | 1.00 | 2.00 |" in row for row in rows)
+
+
+@needs_exudyn
 def test_station_csv_and_scheme_from_the_command_line(native_fmus, tmp_path):
     import road_wheel_station as station
 
