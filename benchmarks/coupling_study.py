@@ -23,11 +23,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "examples"), str(ROOT / "src")]
 
-from coupling_study import STUDY_GRID, format_table  # noqa: E402
-
-
-def progress(scheme, step):
-    print(f"  {scheme} at {step * 1e3:g} ms done", file=sys.stderr, flush=True)
+from coupling_study import STUDY_GRID, format_table, progress  # noqa: E402
 
 
 def station(speed, damper_tangent=False, steps=None, end_time=None):

@@ -14,12 +14,13 @@ Also the example scripts' `--csv`: each run's histories as CSV, SI units.
 
 import csv
 import math
+import sys
 import time
 import warnings
 
 import numpy as np
 
-from fmu_components.coupling import SCHEMES
+from fmu_components.coupling import DEFAULT_SCHEME, SCHEMES
 
 STUDY_STEPS = (4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4)
 STUDY_GRID = 4e-3  # s: on every host step's grid
@@ -129,3 +130,24 @@ def write_csv(path, result, columns):
         writer.writerow(names)
         for row in zip(*data):
             writer.writerow([repr(float(v)) if math.isfinite(v) else "nan" for v in row])
+
+
+# --- what both example scripts' command lines share ---------------------------------------
+
+def add_arguments(parser, study_help):
+    parser.add_argument("--coupling", choices=sorted(SCHEMES), default=DEFAULT_SCHEME,
+                        help=f"coupling scheme (default {DEFAULT_SCHEME}; docs/coupling.md)")
+    parser.add_argument("--csv", action="store_true",
+                        help="also write each run's histories to --out as CSV (SI units)")
+    parser.add_argument("--coupling-study", action="store_true", help=study_help)
+
+
+def progress(scheme, step):
+    """A study's progress, on stderr (the table goes to stdout)."""
+    print(f"  {scheme} at {step * 1e3:g} ms done", file=sys.stderr, flush=True)
+
+
+def write_study(out, text):
+    """Print the study and write it to out/coupling_study.md."""
+    print("\n" + text)
+    (out / "coupling_study.md").write_text(text)

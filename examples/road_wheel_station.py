@@ -41,12 +41,13 @@ from exudyn.itemInterface import (CoordinateConstraint, MarkerBodyPosition,
                                   ObjectConnectorCoordinateSpringDamper, ObjectGround,
                                   ObjectJointRevolute2D, ObjectRigidBody2D)
 
-from fmu_components.coupling import DEFAULT_SCHEME, SCHEMES, Coupling, FmuComponent
+from fmu_components.coupling import DEFAULT_SCHEME, Coupling, FmuComponent
 from fmu_components.coupling.exudyn_host import connector_state, solve
 from fmu_components.coupling.kelvin import KelvinElement, harmonic_kelvin_equivalent
 
-from coupling_study import (STUDY_GRID, STUDY_SCHEMES, STUDY_STEPS, format_table,
-                            history_error, study, write_csv)
+from coupling_study import (STUDY_GRID, STUDY_SCHEMES, STUDY_STEPS, add_arguments,
+                            format_table, history_error, progress, study, write_csv,
+                            write_study)
 from example_fmus import fmu_path
 
 GRAVITY = 9.81
@@ -462,9 +463,6 @@ def main(argv=None):
     parser.add_argument("--speeds", type=float, nargs="+", default=[3.0, 8.0, 15.0],
                         help="forward speeds, m/s")
     parser.add_argument("--step", type=float, default=DEFAULT_STEP, help="host step, s")
-    parser.add_argument("--coupling", choices=sorted(SCHEMES), default=DEFAULT_SCHEME,
-                        help=f"coupling scheme (default {DEFAULT_SCHEME}; "
-                             f"docs/coupling.md)")
     parser.add_argument("--bump-height", type=float, default=0.03, help="m")
     parser.add_argument("--bump-length", type=float, default=1.0, help="m")
     parser.add_argument("--ripple-depth", type=float, default=1e-3,
@@ -478,11 +476,8 @@ def main(argv=None):
     parser.add_argument("--end-time", type=float, help="s; default: bump passed + 1 s")
     parser.add_argument("--fmu-dir", type=Path, help="default: fmus/")
     parser.add_argument("--out", type=Path, default=Path("reports") / "road_wheel_station")
-    parser.add_argument("--csv", action="store_true",
-                        help="also write each run's histories to --out as CSV (SI units)")
-    parser.add_argument("--coupling-study", action="store_true",
-                        help="every scheme at host steps of 4 to 0.25 ms against the "
-                             "independent reference, at the first speed, instead of the runs")
+    add_arguments(parser, "every scheme at host steps of 4 to 0.25 ms against the "
+                          "independent reference, at the first speed, instead of the runs")
     args = parser.parse_args(argv)
     profile = RoadProfile(args.bump_height, args.bump_length, ripple_depth=args.ripple_depth)
     args.out.mkdir(parents=True, exist_ok=True)
@@ -490,18 +485,16 @@ def main(argv=None):
 
     if args.coupling_study:
         speed = args.speeds[0]
-        reference, agreement, table = coupling_study(
-            speed, profile, args.fmu_dir, end_time=args.end_time,
-            progress=lambda scheme, step: print(f"  {scheme} at {step * 1e3:g} ms done",
-                                                flush=True))
+        reference, agreement, table = coupling_study(speed, profile, args.fmu_dir,
+                                                     end_time=args.end_time,
+                                                     progress=progress)
         text = (f"Road-wheel station at {speed:g} m/s: every coupling scheme against the "
                 f"independent reference (total) and against `converged` at the same host "
                 f"step (own); history errors are max on a {STUDY_GRID * 1e3:g} ms grid in % "
                 f"of the reference's range; costs per host step and FMU.\n\n"
                 f"{describe_reference(reference, agreement)}.\n\n"
                 f"{format_table(table, STUDY_KEYS, STUDY_LABELS)}\n")
-        print("\n" + text)
-        (args.out / "coupling_study.md").write_text(text)
+        write_study(args.out, text)
         plot_study(args.out / "coupling_accuracy.png", table)
         print(f"wrote {args.out / 'coupling_study.md'} and coupling_accuracy.png; "
               f"wall time {time.perf_counter() - started:.1f} s")

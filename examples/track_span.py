@@ -40,11 +40,11 @@ from exudyn.itemInterface import (CoordinateConstraint, LoadForceVector, MarkerB
                                   ObjectConnectorCoordinateSpringDamper, ObjectGround,
                                   ObjectRigidBody2D)
 
-from fmu_components.coupling import DEFAULT_SCHEME, SCHEMES, Coupling, FmuComponent
+from fmu_components.coupling import DEFAULT_SCHEME, Coupling, FmuComponent
 from fmu_components.coupling.exudyn_host import connector_state, solve
 
-from coupling_study import (STUDY_GRID, STUDY_SCHEMES, STUDY_STEPS, format_table, study,
-                            write_csv)
+from coupling_study import (STUDY_GRID, STUDY_SCHEMES, STUDY_STEPS, add_arguments,
+                            format_table, progress, study, write_csv, write_study)
 from example_fmus import fmu_path
 
 GRAVITY = 9.81
@@ -310,23 +310,15 @@ def main(argv=None):
     parser.add_argument("--end-time", type=float, default=1.0, help="s")
     parser.add_argument("--step", type=float, default=DEFAULT_STEP, help="host step, s")
     parser.add_argument("--fmu-dir", type=Path, help="default: fmus/")
-    parser.add_argument("--coupling", choices=sorted(SCHEMES), default=DEFAULT_SCHEME,
-                        help=f"coupling scheme (default {DEFAULT_SCHEME}; "
-                             f"docs/coupling.md)")
     parser.add_argument("--out", type=Path, default=Path("reports") / "track_span")
-    parser.add_argument("--csv", action="store_true",
-                        help="also write the run's histories to --out as CSV (SI units)")
-    parser.add_argument("--coupling-study", action="store_true",
-                        help="every scheme at host steps of 4 to 0.25 ms against a fine "
-                             "reference, instead of the run")
+    add_arguments(parser, "every scheme at host steps of 4 to 0.25 ms against a fine "
+                          "reference, instead of the run")
     args = parser.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
     if args.coupling_study:
-        reference, table = coupling_study(
-            args.links, args.lift, args.frequency, args.fmu_dir, args.end_time,
-            progress=lambda scheme, step: print(f"  {scheme} at {step * 1e3:g} ms done",
-                                                flush=True))
+        reference, table = coupling_study(args.links, args.lift, args.frequency,
+                                          args.fmu_dir, args.end_time, progress=progress)
         text = (f"Track span, {args.links} links, end lifted {args.lift * 1e3:g} mm at "
                 f"{args.frequency:g} Hz: every coupling scheme against `converged` at "
                 f"{FINE_STEP * 1e3:g} ms (total; {reference['wall']:.0f} s) and against "
@@ -334,8 +326,7 @@ def main(argv=None):
                 f"the links (joints) and on a {STUDY_GRID * 1e3:g} ms grid, in % of the "
                 f"reference's range; costs per host step and FMU.\n\n"
                 f"{format_table(table, STUDY_KEYS, STUDY_LABELS)}\n")
-        print("\n" + text)
-        (args.out / "coupling_study.md").write_text(text)
+        write_study(args.out, text)
         print(f"wrote {args.out / 'coupling_study.md'}; wall time "
               f"{time.perf_counter() - started:.1f} s")
         return

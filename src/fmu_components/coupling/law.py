@@ -17,18 +17,17 @@ host iterate that presses in meets the contact instead of empty space.
 """
 
 
-class LoadLaw:
-    __slots__ = ("deflection", "load", "stiffness", "curvature", "unilateral",
-                 "touch_stiffness")
+from dataclasses import dataclass
 
-    def __init__(self, deflection, load, stiffness, curvature=0.0, unilateral=False,
-                 touch_stiffness=0.0):
-        self.deflection = deflection
-        self.load = load
-        self.stiffness = stiffness
-        self.curvature = curvature
-        self.unilateral = unilateral
-        self.touch_stiffness = touch_stiffness
+
+@dataclass(slots=True)
+class LoadLaw:
+    deflection: float  # x*
+    load: float  # F*
+    stiffness: float  # K
+    curvature: float = 0.0  # Q
+    unilateral: bool = False
+    touch_stiffness: float = 0.0  # a contact's stiffness from first touch
 
     def secant(self, deflection):
         """Slope of the law from x* to `deflection`."""
@@ -49,7 +48,3 @@ class LoadLaw:
                 return max(0.0, self.touch_stiffness * (deflection - max(self.deflection, 0.0)))
         load = self.load + self.secant(deflection) * (deflection - self.deflection)
         return max(load, 0.0) if self.unilateral else load
-
-    def __repr__(self):
-        return (f"LoadLaw(x*={self.deflection:.6g}, F*={self.load:.6g}, K={self.stiffness:.6g}, "
-                f"Q={self.curvature:.6g})")
