@@ -23,6 +23,9 @@ COMMANDS = {
     "verify": ("fmu_components.verification.verify",
                "verification: run the thesis test programme through the built FMUs against an "
                "independent solve of the same equations"),
+    "validate": ("fmu_components.verification.validate_command",
+                 "validation: the model against the thesis's measurements (measured, model, "
+                 "difference, source)"),
     "signal": ("fmu_components.lab.signals", "write an input CSV for an FMU (SI units)"),
     "simulate": ("fmu_components.lab.simulate",
                  "simulate an FMU on an input CSV: result CSV and the force-deflection loop"),
