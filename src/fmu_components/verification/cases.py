@@ -1,4 +1,4 @@
-"""The thesis test programme (spec section 5) as validation cases, and their reference data.
+"""The thesis test programme (spec section 5) as cases, and their reference data.
 
 Every case is one input history on a uniform communication grid (secant rates, see
 ``signals``) for one FMU. Its files in ``reference_data/<FMU>/`` follow the FMI cross-check
