@@ -37,6 +37,7 @@ from ..lab.simulate import main_frequency
 from ..runtime.catalog import COMPONENTS
 from ..runtime.units import UNITS
 from . import cases as programme
+from .outcome import aligned
 from .reference import THESIS_DATA
 from .verify import simulate_case
 
@@ -496,11 +497,7 @@ def rows(comparisons):
 
 
 def table(comparisons):
-    lines = rows(comparisons)
-    widths = [max(len(row[i]) for row in lines) for i in range(len(lines[0]))]
-    return "\n".join("  ".join(cell.rjust(w) if i in (2, 3, 4) else cell.ljust(w)
-                               for i, (cell, w) in enumerate(zip(row, widths))).rstrip()
-                     for row in lines)
+    return aligned(rows(comparisons), right=(2, 3, 4))
 
 
 def tally(comparisons):
