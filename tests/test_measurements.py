@@ -117,8 +117,9 @@ def test_si_values_are_given_in_the_rows_units():
 
 def _row(**values):
     fields = {name: "" for name in measurements.COLUMNS}
-    fields.update(id="x", component="RoadWheelTyre", quantity="q", basis="rig", metric="peak_torque",
-                  case="c", measured=None, thesis_model=None, at=None, scale=None)
+    fields.update(id="x", component="RoadWheelTyre", quantity="q", basis="rig",
+                  metric="peak_torque", case="c", measured=None, thesis_model=None, at=None,
+                  scale=None)
     fields.update(values)
     return Measurement(**fields)
 
@@ -208,11 +209,13 @@ def test_steady_torques_are_table_a6_1s_smoothed_curve(compared):
     solver's monotone spline through it."""
     for c in compared["native"]:
         if c.measurement.id.startswith("damper-A6-1-"):
-            assert c.model == pytest.approx(c.measurement.thesis_model, rel=5e-3), c.measurement.id
+            assert c.model == pytest.approx(c.measurement.thesis_model, rel=5e-3), \
+                c.measurement.id
     spec = reference.damper_spec()
-    (transition,) = [c for c in compared["native"] if c.measurement.id == "damper-transition-torque"]
-    assert transition.model == pytest.approx(float(PchipInterpolator(spec.rates, spec.torques)(0.25)),
-                                             rel=1e-3)
+    (transition,) = [c for c in compared["native"]
+                     if c.measurement.id == "damper-transition-torque"]
+    spline = PchipInterpolator(spec.rates, spec.torques)
+    assert transition.model == pytest.approx(float(spline(0.25)), rel=1e-3)
 
 
 def test_the_rotor_inertia_is_read_from_the_fmu(compared):

@@ -20,7 +20,7 @@ from ..runtime.catalog import COMPONENTS
 from .measurements import BAND, Runs, compare_all, read_measurements, table, tally
 
 EXAMPLES = """examples:
-  fmu-components validate                              every measured quantity, report in reports/validation
+  fmu-components validate                    every measured quantity, report in reports/validation
   fmu-components validate --fmu RotaryDamper --case 'damper-A6-1-*'
   fmu-components validate --fmus fmus/python --report reports/validation-python --strict
 """

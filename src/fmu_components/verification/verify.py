@@ -5,9 +5,9 @@ This checks that the FMUs solve the model's equations right, not that the model 
 the real parts: ``measurements`` (``fmu-components validate``) compares the model with what
 the thesis measured.
 
-Every case of ``fmu_components.verification.cases`` is simulated with ``fmpy.simulate_fmu`` at its step
-size and tolerance (``<case>_ref.opt``), fed its ``<case>_in.csv``, and compared with its
-``<case>_ref.csv`` (the independent solve) in two ways:
+Every case of ``fmu_components.verification.cases`` is simulated with ``fmpy.simulate_fmu``
+at its step size and tolerance (``<case>_ref.opt``), fed its ``<case>_in.csv``, and compared
+with its ``<case>_ref.csv`` (the independent solve) in two ways:
 
 * the FMI cross-check rule: ``fmpy.util.validate_result`` resamples the reference at 1000
   points, draws a band around it (+-10 % of its range, +-10 resampled points in time) and
