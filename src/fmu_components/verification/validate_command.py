@@ -1,4 +1,4 @@
-"""``fmu-components validate``: the model against the thesis's measurements.
+"""Validate the model against every number the thesis measured on its rigs.
 
     fmu-components validate [--fmu NAME] [--case GLOB] [--fmus DIR] [--report DIR] [--strict]
 

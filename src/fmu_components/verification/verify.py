@@ -1,5 +1,6 @@
-"""Verify the built FMUs: the thesis test programme through each FMU, against an independent
-solve of the same equations.
+"""Verify the built FMUs against an independent solve of the same equations.
+
+The thesis test programme runs through each FMU and is compared with the solve.
 
 This checks that the FMUs solve the model's equations right, not that the model describes
 the real parts: ``measurements`` (``fmu-components validate``) compares the model with what
