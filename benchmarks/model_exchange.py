@@ -1,5 +1,5 @@
 """Model Exchange figures: accuracy against the continuous-input solve and cost against
-co-simulation on the validation cases, and the directional derivatives against finite
+co-simulation on the verification cases, and the directional derivatives against finite
 differences. Prints Markdown tables.
 
     python benchmarks/model_exchange.py                  # every smooth case (minutes)
@@ -8,7 +8,7 @@ differences. Prints Markdown tables.
 * ME: the native FMU on fmpy's CVode (rtol 1e-6, nominals used) with continuous inputs
   (tests/me_host.py), against ``reference.solve_smooth`` of the same x(t), v(t): the largest
   error of any output in % of its peak-to-peak range; wall time per simulated second.
-* CS: the same FMU in fmpy at the case's step with secant rates (the validation's run):
+* CS: the same FMU in fmpy at the case's step with secant rates (the verification's run):
   wall time per simulated second, for comparison.
 * Directional derivatives: at random points (both flavours of every kink), in both
   interfaces, the largest relative difference to central finite differences where the

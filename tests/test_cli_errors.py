@@ -71,13 +71,13 @@ def test_signal_timing_mistakes_are_one_line(options, words):
     one_line_error(result, *words)
 
 
-def test_validate_before_building_says_to_build(tmp_path):
-    result = run(["-m", "fmu_components", "validate", "--fmu", "RotaryDamper", "--fmus",
+def test_verify_before_building_says_to_build(tmp_path):
+    result = run(["-m", "fmu_components", "verify", "--fmu", "RotaryDamper", "--fmus",
                   str(tmp_path), "--report", str(tmp_path / "report")])
     one_line_error(result, "fmu-components build")
 
 
-def test_validate_with_no_matching_case_says_where_the_names_are(tmp_path):
-    result = run(["-m", "fmu_components", "validate", "--case", "no_such_case", "--fmus",
+def test_verify_with_no_matching_case_says_where_the_names_are(tmp_path):
+    result = run(["-m", "fmu_components", "verify", "--case", "no_such_case", "--fmus",
                   str(tmp_path), "--report", str(tmp_path / "report")])
     one_line_error(result, "reference_data")

@@ -29,7 +29,7 @@ def run_case(path, case):
 
 
 @pytest.mark.parametrize("case", cases.CASES, ids=lambda c: c.key)
-def test_native_reproduces_python_bit_for_bit_on_every_validation_case(all_fmus, case):
+def test_native_reproduces_python_bit_for_bit_on_every_verification_case(all_fmus, case):
     native = run_case(all_fmus["native"][case.fmu], case)
     python = run_case(all_fmus["python"][case.fmu], case)
     for name in native.dtype.names:

@@ -1,7 +1,7 @@
 """Model Exchange and directional derivatives of the native FMUs (spec section 7).
 
 * On fmpy's CVode (rtol 1e-6, nominals used) with continuous inputs (tests/me_host.py), every
-  validation case agrees with the independent continuous-input solve
+  verification case agrees with the independent continuous-input solve
   (reference.solve_smooth) within 0.5 % of each output's peak-to-peak range; the damper
   runs through its 8 Hz blow-off.
 * Directional derivatives, in both interfaces, agree with central finite differences of

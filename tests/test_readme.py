@@ -30,6 +30,7 @@ RUN_ELSEWHERE = {
     ".venv/bin/python examples/road_wheel_station.py": ".ci/run",
     ".venv/bin/python examples/track_span.py": ".ci/run",
     ".venv/bin/fmu-components validate": ".ci/run",
+    ".venv/bin/fmu-components verify": ".ci/run",
     ".venv/bin/python benchmarks/run.py": "tests/test_benchmark.py",
     ".venv/bin/python benchmarks/coupling_study.py": "tests/test_examples.py",
 }
@@ -52,8 +53,9 @@ def where_run(command):
     """Where a command that is not run here is run, else None."""
     for start, place in RUN_ELSEWHERE.items():
         if command == start or command.startswith(start + " "):
-            # the full validation; the README's narrower one (a case selection) runs here
-            if "validate" in start and command != start:
+            # the full validation and verification; the README's narrower ones (a selection)
+            # run here
+            if start.startswith(".venv/bin/fmu-components") and command != start:
                 return None
             return place
     return None
@@ -88,7 +90,7 @@ def test_the_readme_quick_start_commands_run_as_written(all_fmus, tmp_path):
         output = None
         if ">" in words:
             words, output = words[:words.index(">")], tmp_path / words[words.index(">") + 1]
-        words = [str(tmp_path / "hf") if w == "/tmp/hf" else w for w in words]
+        words = [str(tmp_path / w[len("/tmp/"):]) if w.startswith("/tmp/") else w for w in words]
         run = subprocess.run(words, cwd=tmp_path, capture_output=True, text=True, timeout=900)
         assert run.returncode == 0, (command, run.stderr[-2000:])
         if output:
@@ -97,7 +99,7 @@ def test_the_readme_quick_start_commands_run_as_written(all_fmus, tmp_path):
     assert len(ran) >= 6, ran
     for written in ("tyre_in.csv", "tyre_out.csv", "tyre_loop.png", "rig_radial/rig.csv",
                     "fitted/bush.json", "fmus/MyBush.fmu", "fmus/python/MyBush.fmu",
-                    "hf/summary.md"):
+                    "hf/summary.md", "damper/summary.md"):
         assert (tmp_path / written).stat().st_size > 0, written
     header = (tmp_path / "tyre_out.csv").read_text().splitlines()[0].replace('"', "")
     assert header.split(",")[:3] == ["time", "compression", "compression_rate"]

@@ -1,6 +1,6 @@
 """fmu-components: the project's command-line tool.
 
-    fmu-components build | validate | signal | simulate | rig | fit --help
+    fmu-components build | verify | validate | signal | simulate | rig | fit --help
 
 Each subcommand lives in its own module, which provides ``configure(parser)`` (its
 arguments, with an example in ``EXAMPLES``) and ``run_command(args)`` (returns the exit
@@ -20,8 +20,12 @@ from .errors import UsageError
 # name -> (module, one line of help). Modules are imported only when their command runs.
 COMMANDS = {
     "build": ("fmu_components.lab.build_command", "build the FMUs of both flavours and run each once"),
-    "validate": ("fmu_components.verification.validate",
-                 "run the thesis test programme through the built FMUs against the references"),
+    "verify": ("fmu_components.verification.verify",
+               "verification: run the thesis test programme through the built FMUs against an "
+               "independent solve of the same equations"),
+    "validate": ("fmu_components.verification.validate_command",
+                 "validation: the model against the thesis's measurements (measured, model, "
+                 "difference, source)"),
     "signal": ("fmu_components.lab.signals", "write an input CSV for an FMU (SI units)"),
     "simulate": ("fmu_components.lab.simulate",
                  "simulate an FMU on an input CSV: result CSV and the force-deflection loop"),
@@ -48,7 +52,7 @@ def _parser(names):
     parser = argparse.ArgumentParser(
         prog="fmu-components",
         description="Tracked-vehicle running-gear components as FMI 2.0 FMUs: build, "
-                    "validate and drive them.")
+                    "verify, validate and drive them.")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     return parser, {name: _add_command(subparsers, name) for name in names}
 

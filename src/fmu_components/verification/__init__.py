@@ -1,8 +1,9 @@
-"""Verification: the FMUs against an independent solve of the same equations. The thesis
-test programme as cases (``cases``), the independent solver (``reference``: scipy Radau on
-plain right-hand sides, no code shared with the FMUs), the comparison (``validate``,
-``outcome``) and its report (``report``); synthetic measurements that check the fit
-(``synthetic``).
+"""Verification and validation. Verification: the FMUs against an independent solve of the
+same equations. The thesis test programme as cases (``cases``), the independent solver
+(``reference``: scipy Radau on plain right-hand sides, no code shared with the FMUs), the
+comparison (``verify``, ``outcome``) and its report (``report``); synthetic measurements
+that check the fit (``synthetic``). Validation: the model against the thesis's own
+measurements (``measurements``, report in ``measurements_report``).
 
 Imports ``runtime``, ``export`` and ``lab``; nothing imports it but the command line.
 """

@@ -1,4 +1,4 @@
-"""The thesis test programme (spec section 5) as validation cases, and their reference data.
+"""The thesis test programme (spec section 5) as cases, and their reference data.
 
 Every case is one input history on a uniform communication grid (secant rates, see
 ``signals``) for one FMU. Its files in ``reference_data/<FMU>/`` follow the FMI cross-check
@@ -223,20 +223,25 @@ def _damper_cases():
                           # from rest at -0.21 rad, as a rig starts: no start-up transient
                           lambda t, f=frequency: sine(t, 0.0, 0.21, f, phase=-math.pi / 2),
                           (cycles - 1) / frequency))
-    # Every positive rate of Table A6-1; the zigzag gives the negative ones. 0.6 s settles the
-    # slowest plateau (0.4 rad/s: dashpot slope over gas-spring stiffness, c/k ~ 2600/76000 s,
-    # 17 time constants); the angle stays inside the +-45 deg the damper turns (section 9.1);
-    # 500 rad/s2 is about the peak acceleration of the 8 Hz test.
-    rates = [float(r) for r in reference.damper_spec().rates if r > 0]
-    path, plateaus, stop = velocity_plateaus(rates, 2e-3, 0.6, 0.7, 500.0)
     # Where Table A6-1 is flat (rebound beyond -11, compression 11-12 and 13-14 rad/s) the dashpot
     # has zero slope, so nothing damps the rotor on the stiff gas spring (~800 Hz at
     # -8050 N.m): the exact solution keeps ringing after each change of rate. At the default
     # tolerance 1e-4 the FMU's integrator damps that ringing numerically (1.3 % of the torque
     # range, 1.8 % of the rotor rate's); at 1e-5 it follows it (0.17 %, 0.22 %).
-    cases.append(Case("RotaryDamper", "constant_velocity_sweep", "sweep",
-                      "+-0.1 to +-14 rad/s", 2e-3, stop, path, 0.0, plateaus, rtol=1e-5))
+    cases.append(constant_velocity_case(
+        "constant_velocity_sweep", "+-0.1 to +-14 rad/s",
+        [float(r) for r in reference.damper_spec().rates if r > 0], rtol=1e-5))
     return cases
+
+
+def constant_velocity_case(name, label, rates, rtol=None):
+    """The damper at constant angular velocities (+w, -w, +w for each rate w > 0, see
+    velocity_plateaus): the test behind Table A6-1. 0.6 s settles the slowest plateau of the
+    table (0.4 rad/s: dashpot slope over gas-spring stiffness, c/k ~ 2600/76000 s, 17 time
+    constants); the angle stays inside the +-45 deg the damper turns (section 9.1); 500
+    rad/s2 is about the peak acceleration of the 8 Hz test."""
+    path, plateaus, stop = velocity_plateaus(rates, 2e-3, 0.6, 0.7, 500.0)
+    return Case("RotaryDamper", name, "sweep", label, 2e-3, stop, path, 0.0, plateaus, rtol=rtol)
 
 
 CASES = (

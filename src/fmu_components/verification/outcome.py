@@ -49,8 +49,13 @@ def rows(outcomes):
 
 
 def table(outcomes):
-    lines = rows(outcomes)
+    return aligned(rows(outcomes), right=(2, 4, 6))
+
+
+def aligned(lines, right=()):
+    """Rows of strings as a plain-text table: columns padded to their widest cell, the
+    `right` ones (numbers) flush right."""
     widths = [max(len(row[i]) for row in lines) for i in range(len(lines[0]))]
-    return "\n".join("  ".join(cell.rjust(w) if i in (2, 4, 6) else cell.ljust(w)
+    return "\n".join("  ".join(cell.rjust(w) if i in right else cell.ljust(w)
                                for i, (cell, w) in enumerate(zip(row, widths))).rstrip()
                      for row in lines)

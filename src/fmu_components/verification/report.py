@@ -1,5 +1,6 @@
-"""The validation report: PNG plots in the style of the thesis figures (FMU and reference
-overlaid, the elastic force as a grey line as in section 7.2) and a summary page.
+"""The verification report (the FMUs against the independent solve): PNG plots in the
+style of the thesis figures (FMU and reference overlaid, the elastic force as a grey line as
+in section 7.2) and a summary page.
 
 One figure per test of each component (spec section 5), plus one plot per case of its
 output against time with the FMU's error.
@@ -296,7 +297,7 @@ def write_report(outcomes, folder, progress=None):
     groups = {}
     for outcome in (o for o in outcomes if o.reference is not None):  # those that ran
         groups.setdefault((outcome.case.fmu, outcome.case.test), []).append(outcome)
-    lines = ["# Validation against the thesis test programme", "",
+    lines = ["# Verification: the FMUs against an independent solve of the test programme", "",
              f"{sum(o.passed for o in outcomes)} of {len(outcomes)} cases pass. Each case is "
              f"simulated with `fmpy.simulate_fmu` and compared with the independent reference "
              f"(`reference_data/<FMU>/<case>_ref.csv`): the strict error is the largest "

@@ -1,7 +1,7 @@
-"""Validation against the thesis test programme (spec section 5): the case definitions
-cover the programme, the committed reference data are what the independent solver gives,
-every case runs through the `fmpy simulate` command line and matches its reference, and the
-validation command passes, reports and fails when it should."""
+"""Verification on the thesis test programme (spec section 5): the case definitions cover
+the programme, the committed reference data are what the independent solver gives, every
+case runs through the `fmpy simulate` command line and matches its reference, and the
+verification command passes, reports and fails when it should."""
 
 import math
 import re
@@ -16,7 +16,7 @@ from fmpy import simulate_fmu
 from fmpy.util import read_csv
 
 from fmu_components import cli
-from fmu_components.verification import cases, reference, validate
+from fmu_components.verification import cases, reference, verify
 from fmu_components.runtime.catalog import COMPONENTS
 from fmu_components.lab.signals import piecewise_linear_rate, write_csv
 
@@ -213,32 +213,32 @@ def test_strict_error_is_the_largest_deviation_in_percent_of_the_range():
     expected = _tables(np.concatenate([rising, rising[::-1][1:]]))  # range exactly 100
     result = expected.copy()
     result["force"][300] += 0.4
-    errors, outliers, problem = validate.compare(result, expected, expected["time"][-1])
+    errors, outliers, problem = verify.compare(result, expected, expected["time"][-1])
     assert errors["force"] == pytest.approx(0.4) and outliers == 0 and not problem
     result["force"][300] += 0.2
-    errors, _, _ = validate.compare(result, expected, expected["time"][-1])
-    assert errors["force"] == pytest.approx(0.6) and errors["force"] > validate.STRICT_LIMIT
+    errors, _, _ = verify.compare(result, expected, expected["time"][-1])
+    assert errors["force"] == pytest.approx(0.6) and errors["force"] > verify.STRICT_LIMIT
 
 
 def test_cross_check_counts_samples_outside_the_band():
     expected = _tables(np.sin(np.linspace(0, 6, 1001)))
     result = expected.copy()
     result["force"][:200] += 0.5  # a quarter of the range, for a fifth of the record
-    _, outliers, _ = validate.compare(result, expected, expected["time"][-1])
-    assert outliers == pytest.approx(0.2, abs=0.01) and outliers > validate.CROSS_CHECK_LIMIT
+    _, outliers, _ = verify.compare(result, expected, expected["time"][-1])
+    assert outliers == pytest.approx(0.2, abs=0.01) and outliers > verify.CROSS_CHECK_LIMIT
 
 
 def test_a_non_finite_output_fails():
     expected = _tables(np.sin(np.linspace(0, 6, 1001)))
     result = expected.copy()
     result["force"][10] = np.nan
-    errors, _, _ = validate.compare(result, expected, expected["time"][-1])
+    errors, _, _ = verify.compare(result, expected, expected["time"][-1])
     assert errors["force"] == math.inf
 
 
 def test_a_result_of_the_wrong_length_is_not_compared():
     expected = _tables(np.sin(np.linspace(0, 6, 1001)))
-    errors, outliers, problem = validate.compare(expected[:500], expected, expected["time"][-1])
+    errors, outliers, problem = verify.compare(expected[:500], expected, expected["time"][-1])
     assert not errors and outliers == 1.0 and "samples" in problem
 
 
@@ -262,30 +262,30 @@ def test_case_runs_through_fmpy_simulate_and_matches_its_reference(built_fmus, t
     completed = subprocess.run(command, capture_output=True, text=True, timeout=300)
     assert completed.returncode == 0, completed.stderr
     result = read_csv(output)
-    errors, outliers, problem = validate.compare(result, expected, options["StopTime"])
+    errors, outliers, problem = verify.compare(result, expected, options["StopTime"])
     assert not problem
-    assert max(errors.values()) <= validate.STRICT_LIMIT, errors
-    assert outliers <= validate.CROSS_CHECK_LIMIT
+    assert max(errors.values()) <= verify.STRICT_LIMIT, errors
+    assert outliers <= verify.CROSS_CHECK_LIMIT
 
 
-# --- the validation command --------------------------------------------------------------
+# --- the verification command ------------------------------------------------------------
 
 SMALL_SELECTION = ["RoadWheelTyre/II_amplitude_1mm", "RoadWheelTyre/II_amplitude_2mm",
                    "TrackBushTorsion/IV*", "RotaryDamper/A_*"]
 
 
-def validate_command(arguments):
-    return cli.main(["validate", *arguments])
+def verify_command(arguments):
+    return cli.main(["verify", *arguments])
 
 
-def _validate(built_fmus, report, *extra):
+def _verify(built_fmus, report, *extra):
     arguments = [f"--fmus={built_fmus['RoadWheelTyre'].parent}", f"--report={report}"]
-    return validate_command(arguments + [f"--case={c}" for c in SMALL_SELECTION] + list(extra))
+    return verify_command(arguments + [f"--case={c}" for c in SMALL_SELECTION] + list(extra))
 
 
-def test_validation_command_passes_prints_the_table_and_writes_the_report(built_fmus, tmp_path,
-                                                                          capsys):
-    assert _validate(built_fmus, tmp_path) == 0
+def test_verification_command_passes_prints_the_table_and_writes_the_report(built_fmus,
+                                                                            tmp_path, capsys):
+    assert _verify(built_fmus, tmp_path) == 0
     printed = capsys.readouterr().out
     for key in ("II_amplitude_1mm", "II_amplitude_2mm", "IV_relaxation_25deg", "A_0.75Hz"):
         assert re.search(rf"{key}\s+\d+\.\d+\s+\w+\s+[\d.]+ %\s+pass", printed), key
@@ -298,7 +298,7 @@ def test_validation_command_passes_prints_the_table_and_writes_the_report(built_
         assert (tmp_path / image).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
-def test_validation_command_fails_on_a_case_off_its_reference(built_fmus, tmp_path, capsys):
+def test_verification_command_fails_on_a_case_off_its_reference(built_fmus, tmp_path, capsys):
     data = tmp_path / "reference_data"
     for case in cases.select(patterns=SMALL_SELECTION):
         (data / case.fmu).mkdir(parents=True, exist_ok=True)
@@ -311,15 +311,15 @@ def test_validation_command_fails_on_a_case_off_its_reference(built_fmus, tmp_pa
     table["force"] *= 1.01
     with open(cases.case_paths(case, data)["ref.csv"], "w") as f:
         write_csv(table, f)
-    assert _validate(built_fmus, tmp_path / "report", f"--reference-data={data}") == 1
+    assert _verify(built_fmus, tmp_path / "report", f"--reference-data={data}") == 1
     printed = capsys.readouterr().out
     assert re.search(r"II_amplitude_1mm\s+0\.9\d+\s+force\s+[\d.]+ %\s+FAIL", printed)
     assert "3 of 4 cases pass" in printed
 
 
-def test_validation_command_refuses_missing_fmus(tmp_path):
+def test_verification_command_refuses_missing_fmus(tmp_path):
     with pytest.raises(SystemExit) as stop:
-        validate_command([f"--fmus={tmp_path}", "--case=RotaryDamper/A_*"])
+        verify_command([f"--fmus={tmp_path}", "--case=RotaryDamper/A_*"])
     assert stop.value.code == 2
 
 
@@ -352,7 +352,7 @@ def test_plot_titles_name_the_spec_preload_amplitude_and_frequency(case):
 def test_report_plots_are_200_dpi(built_fmus, tmp_path):
     from PIL import Image
 
-    assert validate_command([f"--fmus={built_fmus['RotaryDamper'].parent}",
+    assert verify_command([f"--fmus={built_fmus['RotaryDamper'].parent}",
                           f"--report={tmp_path}", "--case=RotaryDamper/A_*"]) == 0
     for image in tmp_path.glob("*.png"):
         assert Image.open(image).info["dpi"] == pytest.approx((200, 200), abs=0.5)

@@ -1,8 +1,14 @@
-"""Validate the built FMUs against the thesis test programme.
+"""Verify the built FMUs against an independent solve of the same equations.
 
-Every case of ``fmu_components.verification.cases`` is simulated with ``fmpy.simulate_fmu`` at its step
-size and tolerance (``<case>_ref.opt``), fed its ``<case>_in.csv``, and compared with its
-``<case>_ref.csv`` (the independent solve) in two ways:
+The thesis test programme runs through each FMU and is compared with the solve.
+
+This checks that the FMUs solve the model's equations right, not that the model describes
+the real parts: ``measurements`` (``fmu-components validate``) compares the model with what
+the thesis measured.
+
+Every case of ``fmu_components.verification.cases`` is simulated with ``fmpy.simulate_fmu``
+at its step size and tolerance (``<case>_ref.opt``), fed its ``<case>_in.csv``, and compared
+with its ``<case>_ref.csv`` (the independent solve) in two ways:
 
 * the FMI cross-check rule: ``fmpy.util.validate_result`` resamples the reference at 1000
   points, draws a band around it (+-10 % of its range, +-10 resampled points in time) and
@@ -13,10 +19,10 @@ size and tolerance (``<case>_ref.opt``), fed its ``<case>_in.csv``, and compared
 * the strict norm: the largest |FMU - reference| of every output, in % of that output's
   peak-to-peak range in the reference; it must be <= 0.5 %.
 
-    fmu-components validate [--fmu NAME] [--case GLOB] [--report DIR]
+    fmu-components verify [--fmu NAME] [--case GLOB] [--report DIR]
 
 prints a table, writes PNG plots in the style of the thesis figures and a summary page to
-the report folder (default reports/validation), and exits non-zero if any case fails.
+the report folder (default reports/verification), and exits non-zero if any case fails.
 """
 
 import math
@@ -54,22 +60,27 @@ def compare(result, reference, stop_time):
     return errors, outliers, ""
 
 
-def run_case(case, fmu_path, reference_data=programme.REFERENCE_DATA):
-    inputs, reference, options = programme.read(case, reference_data)
-    outputs = list(reference.dtype.names[1:])
+def simulate_case(fmu_path, inputs, options, outputs):
+    """(fmpy's result, wall time in s) of one case's input table run through an FMU with the
+    case's options (StartTime, StopTime, StepSize, RelTol): the output interval is the step."""
     started = time.perf_counter()
     result = simulate_fmu(str(fmu_path), start_time=options["StartTime"],
                           stop_time=options["StopTime"], output_interval=options["StepSize"],
                           relative_tolerance=options["RelTol"], input=inputs, output=outputs)
-    wall = time.perf_counter() - started
+    return result, time.perf_counter() - started
+
+
+def run_case(case, fmu_path, reference_data=programme.REFERENCE_DATA):
+    inputs, reference, options = programme.read(case, reference_data)
+    result, wall = simulate_case(fmu_path, inputs, options, list(reference.dtype.names[1:]))
     errors, outliers, problem = compare(result, reference, options["StopTime"])
     return Outcome(case, errors, outliers, wall, result, reference, inputs, problem)
 
 
 EXAMPLES = """examples:
-  fmu-components validate                                   every case, report in reports/validation
-  fmu-components validate --fmu TrackBushTorsion --case 'II_*'
-  fmu-components validate --fmus fmus/python --report reports/validation-python
+  fmu-components verify                                   every case, report in reports/verification
+  fmu-components verify --fmu TrackBushTorsion --case 'II_*'
+  fmu-components verify --fmus fmus/python --report reports/verification-python
 """
 
 
@@ -78,8 +89,8 @@ def configure(parser):
                         help="only this FMU (repeatable)")
     parser.add_argument("--case", action="append", metavar="GLOB",
                         help="only cases whose name or FMU/name matches (repeatable)")
-    parser.add_argument("--report", type=Path, default=Path("reports") / "validation",
-                        help="folder for the plots and summary.md (default reports/validation)")
+    parser.add_argument("--report", type=Path, default=Path("reports") / "verification",
+                        help="folder for the plots and summary.md (default reports/verification)")
     parser.add_argument("--fmus", type=Path, default=Path("fmus"),
                         help="folder holding the built <FMU>.fmu files (default fmus/)")
     parser.add_argument("--reference-data", type=Path, default=programme.REFERENCE_DATA)

@@ -1,0 +1,79 @@
+"""Validate the model against every number the thesis measured on its rigs.
+
+    fmu-components validate [--fmu NAME] [--case GLOB] [--fmus DIR] [--report DIR] [--strict]
+
+Runs every selected row of ``reference_data/thesis/measurements.csv`` that names a metric
+through the built FMUs (``measurements``), prints the table of measured and model values,
+and writes the report (``measurements_report``: summary.md and plots, default
+reports/validation). Exit status 0 when every row ran, 1 when an FMU failed to run; with
+``--strict`` also 1 when a judged row lies outside the +-10 % band or breaks its bound.
+``fmu-components verify`` is the other check: the FMUs against an independent solve of the
+same equations.
+"""
+
+import fnmatch
+import sys
+from pathlib import Path
+
+from ..errors import UsageError
+from ..runtime.catalog import COMPONENTS
+from .measurements import BAND, Runs, compare_all, read_measurements, table, tally
+
+EXAMPLES = """examples:
+  fmu-components validate                    every measured quantity, report in reports/validation
+  fmu-components validate --fmu RotaryDamper --case 'damper-A6-1-*'
+  fmu-components validate --fmus fmus/python --report reports/validation-python --strict
+"""
+
+
+def configure(parser):
+    parser.add_argument("--fmu", action="append", choices=sorted(COMPONENTS),
+                        help="only this FMU's measurements (repeatable)")
+    parser.add_argument("--case", action="append", metavar="GLOB",
+                        help="only rows whose id matches (repeatable; the ids are in "
+                             "reference_data/thesis/measurements.csv)")
+    parser.add_argument("--fmus", type=Path, default=Path("fmus"),
+                        help="folder holding the built <FMU>.fmu files (default fmus/, the "
+                             "native flavour; fmus/python for the Python one)")
+    parser.add_argument("--report", type=Path, default=Path("reports") / "validation",
+                        help="folder for the plots and summary.md (default reports/validation)")
+    parser.add_argument("--strict", action="store_true",
+                        help=f"exit 1 also when a measured quantity lies outside +-{BAND:g} %% "
+                             f"(or its bound); see docs/validation.md")
+
+
+def select(measurements, fmus=None, patterns=None):
+    return [m for m in measurements
+            if (not fmus or m.component in fmus)
+            and (not patterns or any(fnmatch.fnmatchcase(m.id, p) for p in patterns))]
+
+
+def run_command(args):
+    from tqdm import tqdm
+
+    selected = select(read_measurements(), args.fmu, args.case)
+    if not selected:
+        raise UsageError("no measured quantity matches: the ids are in "
+                         "reference_data/thesis/measurements.csv (the cases of the test "
+                         "programme against the independent solve are run by "
+                         "`fmu-components verify`)")
+    needed = sorted({m.component for m in selected if m.metric})
+    missing = [str(args.fmus / f"{name}.fmu") for name in needed
+               if not (args.fmus / f"{name}.fmu").exists()]
+    if missing:
+        raise UsageError(f"not built: {', '.join(missing)} (run fmu-components build first)")
+    runs = Runs(args.fmus)
+    cases = {c.key for m in selected if m.metric for c in runs.select(m)}
+    progress = tqdm(total=len(cases), desc="simulating", unit="case", file=sys.stderr,
+                    disable=None)
+    runs.progress = progress
+    comparisons = compare_all(selected, runs)
+    progress.close()
+
+    from .measurements_report import write_report  # matplotlib only once there is a result
+    summary = write_report(comparisons, runs, args.report)
+    print(table(comparisons))
+    print(f"\n{tally(comparisons)}\nreport: {summary}")
+    failed = any(c.problem for c in comparisons)
+    outside = any(c.inside is False for c in comparisons)
+    return 1 if failed or (args.strict and outside) else 0
