@@ -23,7 +23,14 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "examples"), str(ROOT / "src")]
 
-from coupling_study import STUDY_GRID, format_table, progress  # noqa: E402
+from coupling_study import STUDY_GRID, STUDY_STEPS, format_table, progress, tightness  # noqa: E402
+
+
+def print_tightness(run, keys, steps):
+    found = tightness(run, keys, steps or STUDY_STEPS)
+    print("\n`converged` (to 1e-9 of the load) against `converged` to 1e-12, the worst "
+          "history: " + ", ".join(f"{value:.1e} % at {step * 1e3:g} ms"
+                                  for step, value in found.items()) + "\n")
 
 
 def station(speed, damper_tangent=False, steps=None, end_time=None):
@@ -41,6 +48,10 @@ def station(speed, damper_tangent=False, steps=None, end_time=None):
           f"{', the damper stepped by its stiffness' if damper_tangent else ''}\n")
     print(f"{example.describe_reference(reference, agreement)}.\n")
     print(format_table(table, example.STUDY_KEYS, example.STUDY_LABELS))
+    if not damper_tangent:
+        print_tightness(lambda scheme, step: example.simulate(
+            speed, profile, step, end_time=end_time, coupling=scheme), example.STUDY_KEYS,
+            steps)
     print()
 
 
@@ -54,6 +65,9 @@ def span(steps=None, end_time=None):
     print(f"Reference: `converged` at {example.FINE_STEP * 1e3:g} ms "
           f"({reference['wall']:.0f} s); errors the worst over the links (joints).\n")
     print(format_table(table, example.STUDY_KEYS, example.STUDY_LABELS))
+    print_tightness(lambda scheme, step: example.simulate(step, end_time=end_time or 1.0,
+                                                          coupling=scheme),
+                    example.STUDY_KEYS, steps)
     print()
 
 

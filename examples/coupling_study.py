@@ -83,6 +83,19 @@ def study(run, reference, keys, steps=STUDY_STEPS, schemes=STUDY_SCHEMES, progre
     return table
 
 
+def tightness(run, keys, steps=STUDY_STEPS, tolerance=1e-12):
+    """How converged `converged` is: at each host step, its histories against the same
+    scheme converged to `tolerance` (% of the latter's range, the worst over `keys`)."""
+    from fmu_components.coupling.schemes import Converged
+
+    found = {}
+    for step in steps:
+        default, tight = (timed_run(run, scheme, step)
+                          for scheme in ("converged", Converged(tolerance=tolerance, passes=50)))
+        found[step] = max(history_error(default, tight, key) for key in keys)
+    return found
+
+
 def format_table(table, keys, labels=None):
     """The study as a Markdown table: errors in %, costs per host step and FMU."""
     labels = labels or {k: k.replace("_", " ") for k in keys}
