@@ -14,6 +14,8 @@ function, which may ask for the step to be solved again from its start (a
 exudyn is imported here only, and only when these functions run.
 """
 
+import math
+
 from .master import Coupling
 
 
@@ -90,8 +92,9 @@ class ExudynCoupling:
 def solve(mbs, coupling, end_time, step, start_time=0.0, settings=None):
     """Start the components at the host's initial state, then integrate with exudyn's
     implicit generalized-alpha at `step` (shortened only where a component asks for a
-    retry), coupling the components by the coupling's scheme. Frees the components.
-    Returns the ExudynCoupling (its `attempts` against coupling.steps count retries)."""
+    retry) to the first multiple of it at or after end_time, coupling the components by
+    the coupling's scheme. Frees the components. Returns the ExudynCoupling (its
+    `attempts` against coupling.steps count retries)."""
     import exudyn as exu
 
     host = ExudynCoupling(mbs, coupling)
@@ -100,9 +103,10 @@ def solve(mbs, coupling, end_time, step, start_time=0.0, settings=None):
         settings.timeIntegration.verboseMode = 0
         settings.solution.file.write = False
         settings.solution.sensors.active = False
+    steps = math.ceil((end_time - start_time) / step - 1e-9)
     settings.timeIntegration.startTime = start_time
-    settings.timeIntegration.endTime = end_time
-    settings.timeIntegration.numberOfSteps = int(round((end_time - start_time) / step))
+    settings.timeIntegration.endTime = start_time + steps * step
+    settings.timeIntegration.numberOfSteps = steps
     host.install(settings)
     try:
         coupling.start(start_time)
