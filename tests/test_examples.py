@@ -279,3 +279,40 @@ def test_an_fmu_error_in_exudyn_reaches_the_caller_with_its_own_message(native_f
     model.tyre.trial = failing
     with pytest.raises(CouplingError, match=r"tyre at t = 0.01\d* s: fmi2DoStep"):
         model.run(0.05, 1e-3)
+
+
+@needs_exudyn
+def test_a_discarded_fmu_step_makes_exudyn_retry_it_shorter(native_fmus):
+    """A rotor-like coordinate held still for 2 ms, then driven at 100 rad/s through the
+    damper: its integrator cannot finish that 1 ms step (fmi2Discard), the coupling asks
+    exudyn for a shorter one, exudyn retries, and the run goes on to the end."""
+    from exudyn.itemInterface import (CoordinateConstraint, MarkerNodeCoordinate,
+                                      NodeGenericODE2, NodePointGround, ObjectGenericODE2,
+                                      ObjectConnectorCoordinateSpringDamper)
+
+    from fmu_components.coupling import Coupling
+    from fmu_components.coupling.exudyn_host import connector_state, solve
+
+    mbs = exudyn.SystemContainer().AddSystem()
+    ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
+    node = mbs.AddNode(NodeGenericODE2(referenceCoordinates=[0.0], initialCoordinates=[0.0],
+                                       initialCoordinates_t=[0.0], numberOfODE2Coordinates=1))
+    mbs.AddObject(ObjectGenericODE2(nodeNumbers=[node], massMatrix=[[0.5]],
+                                    stiffnessMatrix=[[0.0]], dampingMatrix=[[0.0]]))
+    held = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
+    moved = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=0))
+    mbs.AddObject(CoordinateConstraint(
+        markerNumbers=[held, moved],
+        offsetUserFunction=lambda mbs, t, item, offset: max(0.0, 100.0 * (t - 2e-3))))
+    damper = FmuComponent(native_fmus["RotaryDamper"], "damper")
+    connector = mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
+        markerNumbers=[held, moved],
+        springForceUserFunction=lambda mbs, t, item, u, v, *_: damper.host_load(u, v)))
+    times = []
+    coupling = Coupling("corrected", record=times.append)
+    coupling.add(damper, lambda: tuple(float(v) for v in connector_state(mbs, connector)))
+    mbs.Assemble()
+    host = solve(mbs, coupling, 6e-3, 1e-3)
+    assert coupling.retries >= 1 and host.attempts > coupling.steps
+    assert min(np.diff(times)) < 1e-3 and times[-1] == pytest.approx(6e-3)
+    assert math.isfinite(damper.load) and damper.load > 0.0
