@@ -67,6 +67,7 @@ class Linearisation:
         self.n = n = len(self.state_vrs)
         self._inputs = [v.valueReference for v in variables if v.causality == "input"]
         load = [v.valueReference for v in variables if v.causality == "output"][0]
+        stiffness = vr["stiffness"]
         self._contact_events = description.numberOfEventIndicators > 0
         self._fmu = fmu = FMU2Model(guid=description.guid, unzipDirectory=unzip_dir,
                                     modelIdentifier=description.modelExchange.modelIdentifier,
@@ -86,12 +87,12 @@ class Linearisation:
         fmu.enterContinuousTimeMode()
         self._contact = None
         # One directional derivative per known (each state, then deflection and rate), of
-        # every unknown (the derivatives, then the load).
-        self._unknowns = (fmi2ValueReference * (n + 1))(
-            *[d.variable.valueReference for d in description.derivatives], load)
+        # every unknown (the derivatives, then the load and the stiffness).
+        self._unknowns = (fmi2ValueReference * (n + 2))(
+            *[d.variable.valueReference for d in description.derivatives], load, stiffness)
         self._knowns = [(fmi2ValueReference * 1)(k) for k in self.state_vrs + self._inputs]
         self._seed = (fmi2Real * 1)(1.0)
-        self._column = (fmi2Real * (n + 1))()
+        self._column = (fmi2Real * (n + 2))()
         self._states = (fmi2Real * n)()
         self._derivatives = (fmi2Real * n)()
         self._load = (fmi2ValueReference * 1)(load)
@@ -114,9 +115,9 @@ class Linearisation:
             self._contact = contact
         self._states[:] = states
         fmu.fmi2SetContinuousStates(fmu.component, self._states, n)
-        jacobian = np.empty((n + 1, n + 2))
+        jacobian = np.empty((n + 2, n + 2))
         for j, known in enumerate(self._knowns):
-            fmu.fmi2GetDirectionalDerivative(fmu.component, self._unknowns, n + 1, known, 1,
+            fmu.fmi2GetDirectionalDerivative(fmu.component, self._unknowns, n + 2, known, 1,
                                              self._seed, self._column)
             jacobian[:, j] = self._column
         fmu.fmi2GetDerivatives(fmu.component, self._derivatives, n)
@@ -124,13 +125,16 @@ class Linearisation:
         return jacobian, np.array(self._derivatives), self._value[0]
 
     def step(self, states, deflection, rate, step):
-        """(load after the step at the held `rate`, d load / d end deflection): the
-        linearised answer of the component at (states, deflection) to a step of length
-        `step` along x0 + v s, and its sensitivity to the end point."""
+        """(load after the step at the held `rate`, d load / d end deflection,
+        d stiffness / d end deflection): the linearised answer of the component at
+        (states, deflection) to a step of length `step` along x0 + v s, and the
+        sensitivities of its load and its `stiffness` output to the end point (the
+        latter through the states too: the curvature the step really has)."""
         n = self.n
         jacobian, derivatives, load = self._at(states, deflection, rate)
         a, b_x, b_v = jacobian[:n, :n], jacobian[:n, n], jacobian[:n, n + 1]
         c, d_x, d_v = jacobian[n, :n], jacobian[n, n], jacobian[n, n + 1]
+        c_k, dk_x, dk_v = jacobian[n + 1, :n], jacobian[n + 1, n], jacobian[n + 1, n + 1]
         # Augmented state [Y, P, s, 1]: Y the drift at rate v0, P = dY/dv.
         m = np.zeros((2 * n + 2, 2 * n + 2))
         m[:n, :n] = a
@@ -143,7 +147,8 @@ class Linearisation:
         end = expm(m * step)[:, 2 * n + 1]
         predicted = load + c @ end[:n] + d_x * rate * step
         by_rate = c @ end[n:2 * n] + d_x * step + d_v
-        return predicted, by_rate / step
+        stiffness_by_rate = c_k @ end[n:2 * n] + dk_x * step + dk_v
+        return predicted, by_rate / step, stiffness_by_rate / step
 
     def free(self):
         self._fmu.terminate()
