@@ -1,10 +1,10 @@
 """One Warrior road-wheel station in 2D, in the exudyn multibody host, driven over a bump
 and the track-link ripple: RoadWheelTyre.fmu at the wheel-track contact, RotaryDamper.fmu
-at the arm pivot, each stepped once per accepted host step (fmu_coupling.py).
+at the arm pivot, coupled to the host by fmu_components.coupling (docs/coupling.md).
 
     python examples/road_wheel_station.py                  # speeds 3, 8 and 15 m/s
-    python examples/road_wheel_station.py --speeds 8 --step 5e-4
-    python examples/road_wheel_station.py --coupling-study # accuracy against host step
+    python examples/road_wheel_station.py --speeds 8 --step 1e-3 --coupling explicit --csv
+    python examples/road_wheel_station.py --speeds 8 --coupling-study  # accuracy and cost
 
 Every speed is run twice: with the FMUs, and with both components replaced by their linear
 Kelvin equivalents at the static point (Eqs. 10.1-2 and 10.1-3, thesis section 10.1). The
@@ -41,8 +41,14 @@ from exudyn.itemInterface import (CoordinateConstraint, MarkerBodyPosition,
                                   ObjectConnectorCoordinateSpringDamper, ObjectGround,
                                   ObjectJointRevolute2D, ObjectRigidBody2D)
 
-from fmu_coupling import (FmuComponent, HostCoupling, KelvinElement, connector_state,
-                          fmu_path, harmonic_kelvin_equivalent, solve_fixed_step)
+from fmu_components.coupling import DEFAULT_SCHEME, Coupling, FmuComponent
+from fmu_components.coupling.exudyn_host import connector_state, solve
+from fmu_components.coupling.kelvin import KelvinElement, harmonic_kelvin_equivalent
+
+from coupling_study import (STUDY_GRID, STUDY_SCHEMES, STUDY_STEPS, add_arguments,
+                            format_table, history_error, progress, study, write_csv,
+                            write_study)
+from example_fmus import fmu_path
 
 GRAVITY = 9.81
 STATIONS = 12
@@ -60,14 +66,11 @@ TYRES_PER_WHEEL = 2
 TORSION_BAR_STIFFNESS = 15000.0  # N.m/rad
 TRACK_PITCH = 0.15  # m
 
-# Components whose `stiffness` output goes into the host's Jacobian (fmu_coupling.py). The
-# tyre needs it: its contact stiffness (2 x 1e7 N/m) against the wheel makes the plain
-# one-step lag unstable at millisecond host steps. The damper must not use it at these
-# steps: its output is the gas-spring stiffness, which holds only until the rotor follows
-# the arm (a fraction of a millisecond; up to 7e6 N.m/rad near blow-off), so as a step
-# tangent it over-predicts the torque by about K w h / 2 (README: coupling accuracy).
-STIFFNESS_COUPLED = ("tyre",)
-DEFAULT_STEP = 1e-4  # s, host step (README: coupling accuracy)
+# How the coupling predicts the damper's answer to a step: None, the library's choice (its
+# Model Exchange linearisation); "tangent", its `stiffness` output (for a host without a
+# second instance: benchmarks/coupling_study.py --damper-tangent measures what it costs).
+DAMPER_STEP_MODEL = None
+DEFAULT_STEP = 1e-4  # s, host step: exudyn's own error small for the plots (0.3 % at 8 m/s)
 
 # The linear equivalents are fitted to each FMU's steady response to a sine about the
 # static point, at the amplitudes the station shows over the default bump (tyre
@@ -160,8 +163,7 @@ class Linearisation:
 class Station:
     """The station in exudyn with its two components; `run` drives it at one speed."""
 
-    def __init__(self, speed, profile, fmu_dir=None, linear=None,
-                 stiffness_coupled=STIFFNESS_COUPLED):
+    def __init__(self, speed, profile, fmu_dir=None, linear=None, coupling=DEFAULT_SCHEME):
         """linear: a Linearisation, whose Kelvin elements replace both components; without
         it both components are the FMUs."""
         self.speed = speed
@@ -178,10 +180,9 @@ class Station:
             stiffness, damping, _ = linear.damper
             damper = KelvinElement("damper", "torque", stiffness, damping, 0.0, 0.0)
         else:
-            tyre = FmuComponent(fmu_path("RoadWheelTyre", fmu_dir), "tyre", unilateral=True,
-                                use_stiffness="tyre" in stiffness_coupled)
+            tyre = FmuComponent(fmu_path("RoadWheelTyre", fmu_dir), "tyre", unilateral=True)
             damper = FmuComponent(fmu_path("RotaryDamper", fmu_dir), "damper",
-                                  use_stiffness="damper" in stiffness_coupled)
+                                  step_model=DAMPER_STEP_MODEL)
         self.tyre, self.damper = tyre, damper
         self.bar_preload = torsion_bar_preload(TYRES_PER_WHEEL * static_tyre_load)
 
@@ -250,7 +251,7 @@ class Station:
             springForceUserFunction=self._tyre_force))
 
         self.hull_node = hull_node
-        self.coupling = HostCoupling(record=self._record)
+        self.coupling = Coupling(coupling, record=self._record)
         self.coupling.add(tyre, self._tyre_state)
         self.coupling.add(damper, self._damper_state)
         mbs.Assemble()
@@ -290,7 +291,7 @@ class Station:
 
     def run(self, end_time, step):
         """Integrate to end_time with a fixed host step; returns the recorded histories."""
-        solve_fixed_step(self.mbs, self.coupling, end_time, step)
+        self.host = solve(self.mbs, self.coupling, end_time, step)
         names = ("time", "hull_acceleration", "hull_force", "arm_angle", "damper_torque",
                  "dashpot_torque", "rotor_rate", "tyre_compression", "tyre_force")
         data = np.array(self.records)
@@ -300,12 +301,14 @@ class Station:
 SETTLE_TIME = 1.0  # s after the bump: the body's bounce dies out
 
 
-def simulate(speed, profile, step, fmu_dir=None, linear=None,
-             stiffness_coupled=STIFFNESS_COUPLED, end_time=None):
+def simulate(speed, profile, step, fmu_dir=None, linear=None, end_time=None,
+             coupling=DEFAULT_SCHEME):
     """One drive at `speed` (m/s); histories plus the damper's energy balance."""
     if end_time is None:
         end_time = profile.end / speed + SETTLE_TIME
-    result = Station(speed, profile, fmu_dir, linear, stiffness_coupled).run(end_time, step)
+    station = Station(speed, profile, fmu_dir, linear, coupling)
+    result = station.run(end_time, step)
+    result["costs"] = station.coupling.costs()
     # Work done on the damper, and what its dashpot dissipated (FMU only): J.
     result["damper_work"] = cumulative_trapezoid(result["damper_torque"], result["arm_angle"],
                                                  initial=0)
@@ -388,91 +391,69 @@ def plot_difference(path, runs):
 
 # --- coupling accuracy --------------------------------------------------------------------
 
-STUDY_STEPS = (4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4, 1e-4)
-STUDY_REFERENCE_STEP = 3.125e-5
-STUDY_VARIANTS = {"FMUs: tyre stiffness to host, damper lagged (default)": ("tyre",),
-                  "FMUs: tyre and damper stiffness to host": ("tyre", "damper"),
-                  "FMUs: plain one-step lag for both": ()}
-LINEAR_VARIANT = "linear Kelvin components (exact: host error only)"
-STUDY_KEYS = ("hull_acceleration", "hull_force", "tyre_force", "damper_torque")
-STUDY_PEAKS = ("peak_hull_acceleration", "max_hull_force")
+STUDY_KEYS = ("hull_acceleration", "tyre_force", "damper_torque")
+STUDY_LABELS = {"hull_acceleration": "hull acceleration", "tyre_force": "tyre force",
+                "damper_torque": "damper torque"}
+FINE_STEP = 3.125e-5  # s: the co-simulation the independent reference is checked against
+REFERENCE_OUTPUT = 5e-4  # s: where the reference is sampled
 
 
-def coupling_study(speed, profile, linear, fmu_dir=None, steps=STUDY_STEPS,
-                   reference_step=STUDY_REFERENCE_STEP, end_time=None):
-    """Errors against a run at a host step far below every time scale of the station:
-    for each history its max error on the coarsest grid, and the error of the peaks, in %
-    of the reference's range (peaks: of the reference's peak). The FMU variants share one
-    reference (the default coupling); the linear Kelvin station, applied exactly by the
-    host, shows what the host's own integration contributes."""
-    def study(variants, reference):
-        grid = np.arange(0.0, reference["time"][-1] + 1e-12, max(steps))
-        reference_peaks = peaks(reference)
+def coupling_study(speed, profile, fmu_dir=None, steps=STUDY_STEPS, schemes=STUDY_SCHEMES,
+                   end_time=None, progress=None):
+    """The study at one speed (examples/coupling_study.py), against the independent
+    reference (station_reference.py: Radau on the station's own equations with the Model
+    Exchange FMUs). Returns (reference, agreement of the reference with the converged
+    co-simulation at FINE_STEP in % per history, study table)."""
+    from station_reference import solve_reference
 
-        def errors(result):
-            result_peaks = peaks(result)
-            found = {key: 100 * np.max(np.abs(np.interp(grid, result["time"], result[key])
-                                              - np.interp(grid, reference["time"],
-                                                          reference[key])))
-                     / np.ptp(reference[key]) for key in STUDY_KEYS}
-            found.update({key: 100 * abs(result_peaks[key] / reference_peaks[key] - 1)
-                          for key in STUDY_PEAKS})
-            return found
-
-        table = {}
-        for name, run in variants.items():
-            for step in steps:
-                try:
-                    table[name, step] = errors(run(step))
-                except (RuntimeError, exu.ExudynError) as failure:
-                    # A coupling that goes unstable: the motion it asks of a component
-                    # grows until the FMU refuses a step (exudyn passes the refusal on
-                    # as its own error).
-                    table[name, step] = str(failure).splitlines()[0]
-        return table
-
-    table = study({name: lambda step, coupled=coupled: simulate(
-        speed, profile, step, fmu_dir, stiffness_coupled=coupled, end_time=end_time)
-        for name, coupled in STUDY_VARIANTS.items()},
-        simulate(speed, profile, reference_step, fmu_dir, end_time=end_time))
-    table.update(study({LINEAR_VARIANT: lambda step: simulate(speed, profile, step, fmu_dir,
-                                                              linear, end_time=end_time)},
-                       simulate(speed, profile, reference_step, fmu_dir, linear,
-                                end_time=end_time)))
-    return table
+    if end_time is None:
+        end_time = profile.end / speed + SETTLE_TIME
+    t_eval = np.arange(0.0, end_time + 1e-12, REFERENCE_OUTPUT)
+    started = time.perf_counter()
+    reference = solve_reference(speed, profile, end_time, t_eval, fmu_dir)
+    reference["wall"] = time.perf_counter() - started
+    fine = simulate(speed, profile, FINE_STEP, fmu_dir, end_time=end_time,
+                    coupling="converged")
+    agreement = {key: history_error(fine, reference, key) for key in STUDY_KEYS}
+    table = study(lambda scheme, step: simulate(speed, profile, step, fmu_dir,
+                                                end_time=end_time, coupling=scheme),
+                  reference, STUDY_KEYS, steps, schemes, progress)
+    return reference, agreement, table
 
 
-def print_study(table):
-    columns = STUDY_KEYS + STUDY_PEAKS
-    print(f"\n{'coupling':54s} {'step ms':>7s} " + " ".join(f"{k[:14]:>14s}" for k in columns))
-    for (name, step), errors in table.items():
-        if isinstance(errors, str):
-            row = f"failed: {errors}"
-        else:
-            row = " ".join(f"{errors[k]:13.3g}%" for k in columns)
-        print(f"{name:54s} {step * 1e3:7.3g} {row}")
+def describe_reference(reference, agreement):
+    return (f"Independent reference: the station's equations of motion with the Model "
+            f"Exchange FMUs, Radau at rtol 1e-10 ({reference['evaluations']} evaluations, "
+            f"{reference['events']} contact events, {reference['wall']:.0f} s); against "
+            f"the converged co-simulation at {FINE_STEP * 1e3:g} ms it differs by "
+            + ", ".join(f"{agreement[k]:.2g} % ({STUDY_LABELS[k]})" for k in STUDY_KEYS)
+            + " of each history's range")
 
 
-def plot_study(path, table, steps=STUDY_STEPS):
+def plot_study(path, table, steps=STUDY_STEPS, key="hull_acceleration"):
     from plotting import plt, save_figure
 
-    figure, axes = plt.subplots(1, 3, figsize=(14, 4.8))
-    for axis, key in zip(axes, ("hull_acceleration", "damper_torque", "peak_hull_acceleration")):
-        for name in list(STUDY_VARIANTS) + [LINEAR_VARIANT]:
-            values = [(step * 1e3, table[name, step][key]) for step in steps
-                      if not isinstance(table[name, step], str) and table[name, step][key] > 0]
+    figure, axes = plt.subplots(1, 2, figsize=(12, 4.8))
+    for axis, kind in zip(axes, ("total", "own")):
+        for scheme in STUDY_SCHEMES:
+            values = [(step * 1e3, table[scheme, step][kind][key]) for step in steps
+                      if not isinstance(table[scheme, step], str)
+                      and table[scheme, step][kind].get(key, 0.0) > 0.0]
             if values:
-                axis.loglog(*zip(*values), "o-", label=name)
+                axis.loglog(*zip(*values), "o-", label=scheme)
         axis.set_xlabel("host step (ms)")
-        what = ("error of the peak |hull acceleration|\n(% of the peak)"
-                if key.startswith("peak") else
-                f"max error of {key.replace('_', ' ')}\n(% of its range)")
-        axis.set_ylabel(what)
+        axis.set_ylabel(f"max error of the {STUDY_LABELS[key]}\n(% of its range)")
+        axis.set_title("against the independent reference" if kind == "total" else
+                       "against `converged` at the same step (the coupling's own)")
         axis.grid(alpha=0.3, which="both")
-    axes[0].legend(fontsize=7)
-    figure.suptitle("Road-wheel station: FMU coupling error against host step (missing "
-                    "points: the run diverged)")
+    axes[0].legend(fontsize=8)
+    figure.suptitle("Road-wheel station: coupling error against host step (missing points: "
+                    "the run failed)")
     save_figure(figure, path)
+
+
+CSV_COLUMNS = ("time", "hull_acceleration", "hull_force", "tyre_force", "damper_torque",
+               "arm_angle", "tyre_compression", "dashpot_torque", "rotor_rate")
 
 
 # --- command line -------------------------------------------------------------------------
@@ -495,35 +476,43 @@ def main(argv=None):
     parser.add_argument("--end-time", type=float, help="s; default: bump passed + 1 s")
     parser.add_argument("--fmu-dir", type=Path, help="default: fmus/")
     parser.add_argument("--out", type=Path, default=Path("reports") / "road_wheel_station")
-    parser.add_argument("--coupling-study", action="store_true",
-                        help="errors against host step at the first speed, instead of the runs")
+    add_arguments(parser, "every scheme at host steps of 4 to 0.25 ms against the "
+                          "independent reference, at the first speed, instead of the runs")
     args = parser.parse_args(argv)
     profile = RoadProfile(args.bump_height, args.bump_length, ripple_depth=args.ripple_depth)
     args.out.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
 
-    linear = Linearisation(args.fmu_dir, static_tyre_point(args.fmu_dir)[0], args.tyre_sine,
-                           args.damper_sine)
     if args.coupling_study:
-        table = coupling_study(args.speeds[0], profile, linear, args.fmu_dir,
-                               end_time=args.end_time)
-        print(f"Road-wheel station at {args.speeds[0]:g} m/s: errors against host step "
-              f"{STUDY_REFERENCE_STEP * 1e3:g} ms")
-        print_study(table)
+        speed = args.speeds[0]
+        reference, agreement, table = coupling_study(speed, profile, args.fmu_dir,
+                                                     end_time=args.end_time,
+                                                     progress=progress)
+        text = (f"Road-wheel station at {speed:g} m/s: every coupling scheme against the "
+                f"independent reference (total) and against `converged` at the same host "
+                f"step (own); history errors are max on a {STUDY_GRID * 1e3:g} ms grid in % "
+                f"of the reference's range; costs per host step and FMU.\n\n"
+                f"{describe_reference(reference, agreement)}.\n\n"
+                f"{format_table(table, STUDY_KEYS, STUDY_LABELS)}\n")
+        write_study(args.out, text)
         plot_study(args.out / "coupling_accuracy.png", table)
-        print(f"\nwrote {args.out / 'coupling_accuracy.png'}; "
+        print(f"wrote {args.out / 'coupling_study.md'} and coupling_accuracy.png; "
               f"wall time {time.perf_counter() - started:.1f} s")
         return
 
+    linear = Linearisation(args.fmu_dir, static_tyre_point(args.fmu_dir)[0], args.tyre_sine,
+                           args.damper_sine)
     print(f"Linear Kelvin equivalents (Eqs. 10.1-2, 10.1-3): {linear.describe()}")
+    print(f"Coupling: {args.coupling}, host step {args.step * 1e3:g} ms")
     runs = {}
     print(f"\n{'speed':>6s} {'model':>7s} {'peak |a| hull':>14s} {'hull force max':>15s} "
           f"{'min':>8s} {'tyre max':>9s} {'damper |T|':>10s} {'damper work':>11s} "
           f"{'ripple: rms a':>14s} {'rms T':>7s}")
     for speed in args.speeds:
-        nonlinear = simulate(speed, profile, args.step, args.fmu_dir, end_time=args.end_time)
+        nonlinear = simulate(speed, profile, args.step, args.fmu_dir, end_time=args.end_time,
+                             coupling=args.coupling)
         linearised = simulate(speed, profile, args.step, args.fmu_dir, linear,
-                              end_time=args.end_time)
+                              end_time=args.end_time, coupling=args.coupling)
         runs[speed] = nonlinear, linearised
         for model, result in (("FMUs", nonlinear), ("linear", linearised)):
             p = peaks(result, ripple_from=profile.end / speed + RIPPLE_DELAY)
@@ -533,9 +522,14 @@ def main(argv=None):
                   f"{p['damper_work'] / 1e3:8.2f} kJ "
                   f"{p.get('ripple_rms_hull_acceleration', math.nan):9.2f} m/s2 "
                   f"{p.get('ripple_rms_damper_torque', math.nan):7.0f}")
+            if args.csv:
+                suffix = "" if model == "FMUs" else "_linear"
+                write_csv(args.out / f"station_{speed:g}mps{suffix}.csv", result,
+                          {name: result[name] for name in CSV_COLUMNS})
         plot_speed(args.out / f"station_{speed:g}mps.png", speed, profile, nonlinear, linearised)
     plot_difference(args.out / "station_difference.png", runs)
-    print(f"\nstatic hull force {HULL_MASS * GRAVITY / 1e3:.2f} kN; wrote plots to {args.out}/; "
+    print(f"\nstatic hull force {HULL_MASS * GRAVITY / 1e3:.2f} kN; wrote plots"
+          f"{' and CSV files' if args.csv else ''} to {args.out}/; "
           f"wall time {time.perf_counter() - started:.1f} s")
 
 

@@ -1,10 +1,12 @@
 """A span of Warrior track links in 2D, in the exudyn multibody host: ten links of 150 mm
 pitch under 13 kN tension, every joint a TrackBushRadial and a TrackBushTorsion FMU
-instance (22 instances of two FMUs in one process), each stepped once per accepted host
-step (fmu_coupling.py). One end of the span is lifted sinusoidally.
+instance (22 instances of two FMUs in one process), coupled to the host by
+fmu_components.coupling (docs/coupling.md). One end of the span is lifted sinusoidally.
 
     python examples/track_span.py                        # 10 links, 6 Hz, 10 mm lift, 1 s
     python examples/track_span.py --links 12 --frequency 4 --lift 0.02
+    python examples/track_span.py --step 1e-3 --coupling explicit --csv
+    python examples/track_span.py --coupling-study       # accuracy and cost
 
 The plots go to reports/track_span/ (or --out).
 
@@ -38,7 +40,12 @@ from exudyn.itemInterface import (CoordinateConstraint, LoadForceVector, MarkerB
                                   ObjectConnectorCoordinateSpringDamper, ObjectGround,
                                   ObjectRigidBody2D)
 
-from fmu_coupling import FmuComponent, HostCoupling, connector_state, fmu_path, solve_fixed_step
+from fmu_components.coupling import DEFAULT_SCHEME, Coupling, FmuComponent
+from fmu_components.coupling.exudyn_host import connector_state, solve
+
+from coupling_study import (STUDY_GRID, STUDY_SCHEMES, STUDY_STEPS, add_arguments,
+                            format_table, progress, study, write_csv, write_study)
+from example_fmus import fmu_path
 
 GRAVITY = 9.81
 TENSION = 13e3  # N, section 5.1.2
@@ -51,13 +58,14 @@ DEFAULT_STEP = 5e-4  # s
 
 
 class TrackSpan:
-    def __init__(self, links=10, lift=0.01, frequency=6.0, fmu_dir=None):
+    def __init__(self, links=10, lift=0.01, frequency=6.0, fmu_dir=None,
+                 coupling=DEFAULT_SCHEME):
         self.links, self.lift, self.frequency = links, lift, frequency
         SC = exu.SystemContainer()
         mbs = SC.AddSystem()
         self.SC, self.mbs = SC, mbs
         joints = links + 1
-        self.coupling = HostCoupling(record=self._record)
+        self.coupling = Coupling(coupling, record=self._record)
         self.radial = [FmuComponent(fmu_path("TrackBushRadial", fmu_dir), f"radial_{j}")
                        for j in range(joints)]
         self.torsion = [FmuComponent(fmu_path("TrackBushTorsion", fmu_dir), f"torsion_{j}")
@@ -178,7 +186,7 @@ class TrackSpan:
 
     def run(self, end_time, step):
         self.solve_static()
-        solve_fixed_step(self.mbs, self.coupling, end_time, step)
+        self.host = solve(self.mbs, self.coupling, end_time, step)
         t, torques, angles, forces, heights, accelerations = zip(*self.records)
         return {"time": np.array(t), "joint_torque": np.array(torques),
                 "joint_angle": np.array(angles), "radial_force": np.array(forces),
@@ -249,6 +257,51 @@ def plot_shapes(path, result, span):
     save_figure(figure, path)
 
 
+# --- coupling accuracy --------------------------------------------------------------------
+
+STUDY_KEYS = ("link_acceleration", "joint_torque", "radial_force")
+STUDY_LABELS = {"link_acceleration": "link acceleration", "joint_torque": "joint torque",
+                "radial_force": "pin force"}
+FINE_STEP = 3.125e-5  # s: the reference run, `converged` at this host step
+
+
+def simulate(step, links=10, lift=0.01, frequency=6.0, fmu_dir=None, end_time=1.0,
+             coupling=DEFAULT_SCHEME):
+    span = TrackSpan(links, lift, frequency, fmu_dir, coupling)
+    result = span.run(end_time, step)
+    result["costs"] = span.coupling.costs()
+    return result
+
+
+def coupling_study(links=10, lift=0.01, frequency=6.0, fmu_dir=None, end_time=1.0,
+                   steps=STUDY_STEPS, schemes=STUDY_SCHEMES, progress=None):
+    """The study (examples/coupling_study.py) against `converged` at FINE_STEP; errors of
+    each history are the worst over the links (joints)."""
+    def run(scheme, step):
+        return simulate(step, links, lift, frequency, fmu_dir, end_time, scheme)
+
+    started = time.perf_counter()
+    reference = run("converged", FINE_STEP)
+    reference["wall"] = time.perf_counter() - started
+    return reference, study(run, reference, STUDY_KEYS, steps, schemes, progress)
+
+
+def csv_columns(result):
+    joints = result["joint_torque"].shape[1]
+    links = result["link_height"].shape[1]
+    return {"time": result["time"], "lift": result["lift"],
+            "link_height": [(f"link_height_{i}", result["link_height"][:, i])
+                            for i in range(links)],
+            "link_acceleration": [(f"link_acceleration_{i}", result["link_acceleration"][:, i])
+                                  for i in range(links)],
+            "joint_angle": [(f"joint_angle_{j}", result["joint_angle"][:, j])
+                            for j in range(joints)],
+            "joint_torque": [(f"joint_torque_{j}", result["joint_torque"][:, j])
+                             for j in range(joints)],
+            "radial_force": [(f"radial_force_{j}", result["radial_force"][:, j])
+                             for j in range(joints)]}
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--links", type=int, default=10)
@@ -258,15 +311,32 @@ def main(argv=None):
     parser.add_argument("--step", type=float, default=DEFAULT_STEP, help="host step, s")
     parser.add_argument("--fmu-dir", type=Path, help="default: fmus/")
     parser.add_argument("--out", type=Path, default=Path("reports") / "track_span")
+    add_arguments(parser, "every scheme at host steps of 4 to 0.25 ms against a fine "
+                          "reference, instead of the run")
     args = parser.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
-    span = TrackSpan(args.links, args.lift, args.frequency, args.fmu_dir)
+    if args.coupling_study:
+        reference, table = coupling_study(args.links, args.lift, args.frequency,
+                                          args.fmu_dir, args.end_time, progress=progress)
+        text = (f"Track span, {args.links} links, end lifted {args.lift * 1e3:g} mm at "
+                f"{args.frequency:g} Hz: every coupling scheme against `converged` at "
+                f"{FINE_STEP * 1e3:g} ms (total; {reference['wall']:.0f} s) and against "
+                f"`converged` at the same host step (own); history errors are max over "
+                f"the links (joints) and on a {STUDY_GRID * 1e3:g} ms grid, in % of the "
+                f"reference's range; costs per host step and FMU.\n\n"
+                f"{format_table(table, STUDY_KEYS, STUDY_LABELS)}\n")
+        write_study(args.out, text)
+        print(f"wrote {args.out / 'coupling_study.md'}; wall time "
+              f"{time.perf_counter() - started:.1f} s")
+        return
+    span = TrackSpan(args.links, args.lift, args.frequency, args.fmu_dir, args.coupling)
     result = span.run(args.end_time, args.step)
     wall = time.perf_counter() - started
     torque, force = result["joint_torque"], result["radial_force"]
     print(f"{args.links} links, {2 * (args.links + 1)} FMU instances, "
-          f"{len(result['time']) - 1} host steps of {args.step * 1e3:g} ms")
+          f"{len(result['time']) - 1} host steps of {args.step * 1e3:g} ms, "
+          f"coupling {args.coupling}")
     print(f"static: pin forces {force[0].min() / 1e3:.2f} to {force[0].max() / 1e3:.2f} kN, "
           f"joint torques {torque[0].min():.1f} to {torque[0].max():.1f} N.m, mid-span sag "
           f"{-result['link_height'][0][args.links // 2] * 1e3:.2f} mm")
@@ -275,7 +345,10 @@ def main(argv=None):
           f"{result['link_height'].min() * 1e3:.1f} to {result['link_height'].max() * 1e3:.1f} mm")
     plot_span(args.out / "track_span.png", result, span)
     plot_shapes(args.out / "track_span_shapes.png", result, span)
-    print(f"wrote plots to {args.out}/; wall time {wall:.1f} s")
+    if args.csv:
+        write_csv(args.out / "track_span.csv", result, csv_columns(result))
+    print(f"wrote plots{' and CSV' if args.csv else ''} to {args.out}/; "
+          f"wall time {wall:.1f} s")
 
 
 if __name__ == "__main__":

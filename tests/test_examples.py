@@ -1,7 +1,8 @@
-"""The multibody-host examples (examples/): the coupling helper against the independent
-solve, and short runs of both exudyn examples checked for physical sanity. The exudyn
-runs need the `examples` extra (pip install -e ".[examples]"); without it they are
-skipped with that reason."""
+"""The multibody-host examples (examples/): the coupling library's stepping against the
+independent solve, the Kelvin helpers, and short runs of both exudyn examples checked for
+physical sanity, against the station's independent reference and for what the coupling
+study and --csv write. The exudyn runs need the `examples` extra (pip install -e
+".[examples]"); without it they are skipped with that reason."""
 
 import math
 import sys
@@ -9,13 +10,14 @@ import sys
 import numpy as np
 import pytest
 
-from fmu_components.verification import reference
+from fmu_components.coupling import CouplingError, FmuComponent
+from fmu_components.coupling.kelvin import harmonic_kelvin_equivalent, kelvin_coefficients
 from fmu_components.lab.signals import secant_rates, sine, time_grid
+from fmu_components.verification import reference
 
 from conftest import ROOT, peak_to_peak
 
-sys.path.insert(0, str(ROOT / "examples"))
-import fmu_coupling  # noqa: E402  (plain module beside the example scripts)
+sys.path.insert(0, str(ROOT / "examples"))  # the example scripts, imported as modules
 
 try:
     import exudyn  # noqa: F401
@@ -26,20 +28,23 @@ needs_exudyn = pytest.mark.skipif(
     not HAVE_EXUDYN, reason='exudyn is not installed: pip install -e ".[examples]"')
 
 
-# --- the coupling helper, without a host ---------------------------------------------------
+# --- the coupling library's stepping, without a host --------------------------------------
 
-def test_advance_along_the_secant_is_the_held_rate_cosimulation(built_fmus):
-    """advance(t, x) feeds x(t_prev) and the secant rate: after each step the FMU's output
-    is the independent solve's under that input convention."""
+def test_a_trial_steps_along_the_secant_as_the_held_rate_cosimulation(built_fmus):
+    """trial(t, x) feeds x(t_prev) and the secant rate: after each accepted step the FMU's
+    output is the independent solve's under that input convention."""
     t = time_grid(0.25, 1e-3)
     x = sine(t, 3.5e-3, 1e-3, 20.0)
     expected = reference.solve_held_rate("RoadWheelTyre", t, x, secant_rates(t, x))["force"]
-    tyre = fmu_coupling.FmuComponent(built_fmus["RoadWheelTyre"], "tyre")
+    tyre = FmuComponent(built_fmus["RoadWheelTyre"], "tyre")
     try:
         tyre.start(t[0], x[0])
         forces = [tyre.load]
         for ti, xi in zip(t[1:], x[1:]):
-            tyre.advance(ti, xi)
+            tyre.begin_step()
+            tyre.trial(ti, xi - 1e-4)  # a first solve's answer, thrown away
+            tyre.trial(ti, xi)
+            tyre.accept()
             forces.append(tyre.load)
     finally:
         tyre.free()
@@ -48,7 +53,7 @@ def test_advance_along_the_secant_is_the_held_rate_cosimulation(built_fmus):
 
 
 def test_host_load_relaxed_before_start_then_lagged_with_tangent(built_fmus):
-    tyre = fmu_coupling.FmuComponent(built_fmus["RoadWheelTyre"], "tyre", unilateral=True)
+    tyre = FmuComponent(built_fmus["RoadWheelTyre"], "tyre", unilateral=True)
     try:
         x0 = 3.24e-3
         relaxed = reference.solve_held_rate("RoadWheelTyre", [0.0, 1e-3], [x0, x0],
@@ -56,7 +61,10 @@ def test_host_load_relaxed_before_start_then_lagged_with_tangent(built_fmus):
         assert tyre.host_load(x0) == pytest.approx(relaxed, rel=1e-12)
         assert 10.5e3 < relaxed < 11.5e3  # the thesis: about 11 kN at 3.24 mm, section 5.1.1
         tyre.start(0.0, x0)
-        tyre.advance(1e-3, x0 + 1e-5)
+        tyre.begin_step()
+        tyre.trial(1e-3, x0 + 1e-5)
+        tyre.accept()
+        tyre.law = tyre.lagged_law()
         load, stiffness = tyre.load, tyre.stiffness
         assert stiffness > 0.0
         assert tyre.host_load(x0 + 2e-5) == pytest.approx(load + stiffness * 1e-5, rel=1e-12)
@@ -73,7 +81,7 @@ def test_kelvin_coefficients_recover_a_kelvin_element():
     t = np.arange(2000) * 1e-3  # two cycles at 1 Hz
     x = 3e-3 + 1e-3 * np.sin(2 * np.pi * t)
     xdot = 2 * np.pi * 1e-3 * np.cos(2 * np.pi * t)
-    k, c = fmu_coupling.kelvin_coefficients(x, xdot, 500.0 + 2e6 * x + 3e4 * xdot)
+    k, c = kelvin_coefficients(x, xdot, 500.0 + 2e6 * x + 3e4 * xdot)
     assert k == pytest.approx(2e6, rel=1e-9)
     assert c == pytest.approx(3e4, rel=1e-9)
 
@@ -81,13 +89,13 @@ def test_kelvin_coefficients_recover_a_kelvin_element():
 def test_harmonic_equivalents_of_the_fmus_are_physical(built_fmus):
     """Tyre: k_eq between its elastic slope and the loop's steepest tangent, c_eq > 0.
     Damper: dissipative (c_eq > 0), and softer than its gas spring at small deflection."""
-    k, c, mean_load = fmu_coupling.harmonic_kelvin_equivalent(
+    k, c, mean_load = harmonic_kelvin_equivalent(
         built_fmus["RoadWheelTyre"], 3.24e-3, 1e-3, 10.0)
     elastic_slope = 2.17e6 - 2 * 2.14e8 * 3.24e-3 + 3 * 1.82e11 * 3.24e-3 ** 2  # Eq. 5.3.1-3
     assert elastic_slope < k < 3 * elastic_slope
     assert c > 0.0
     assert 9e3 < mean_load < 13e3
-    k, c, _ = fmu_coupling.harmonic_kelvin_equivalent(built_fmus["RotaryDamper"], 0.0, 0.1, 2.0)
+    k, c, _ = harmonic_kelvin_equivalent(built_fmus["RotaryDamper"], 0.0, 0.1, 2.0)
     assert c > 0.0
     assert 0.0 < k < 2 * 800.0 / 0.03  # gas-spring stiffness 2 C1 / C2 at zero deflection
 
@@ -101,7 +109,7 @@ def station_runs(built_fmus):
     fmu_dir = built_fmus["RoadWheelTyre"].parent
     profile = station.RoadProfile()
     speed = 8.0  # the bump lies between 0.125 and 0.25 s
-    tyre = fmu_coupling.FmuComponent(built_fmus["RoadWheelTyre"], "tyre_static")
+    tyre = FmuComponent(built_fmus["RoadWheelTyre"], "tyre_static")
     linear = station.Linearisation(fmu_dir, station.static_tyre_compression(tyre))
     tyre.free()
     runs = {"FMUs": station.simulate(speed, profile, 2.5e-4, fmu_dir, end_time=0.3),
@@ -195,3 +203,116 @@ def test_span_outputs_are_finite_and_the_lift_travels(span_run):
     rise = result["link_height"][:, -1] - result["link_height"][0, -1]  # link next to the wheel
     assert rise.max() > 0.5 * span.lift
     assert peak_to_peak(result["joint_torque"][:, -1]) > 5.0  # N.m at the lifted joint
+
+
+# --- coupling in exudyn: the study, the reference, errors, CSV ------------------------------
+
+@needs_exudyn
+def test_station_study_against_its_independent_reference(native_fmus):
+    """Over the first 0.2 s at 8 m/s: the station's own equations with the ME FMUs (Radau)
+    agree with the converged co-simulation at a fine step; the study's rows count what
+    each scheme costs, and `corrected` adds far less error of its own than `explicit`."""
+    import road_wheel_station as station
+
+    fmu_dir = native_fmus["RoadWheelTyre"].parent
+    reference, agreement, table = station.coupling_study(
+        8.0, station.RoadProfile(), fmu_dir, steps=(1e-3,),
+        schemes=("explicit", "corrected", "converged"), end_time=0.2)
+    assert reference["events"] >= 0 and reference["evaluations"] > 0
+    assert agreement["hull_acceleration"] < 0.05 and agreement["tyre_force"] < 0.1, agreement
+    explicit, corrected, converged = (table[s, 1e-3] for s in ("explicit", "corrected",
+                                                                "converged"))
+    assert explicit["costs"]["do_steps"] == 1.0 and explicit["costs"]["restores"] == 0.0
+    assert corrected["costs"]["do_steps"] == 2.0 and corrected["costs"]["restores"] == 1.0
+    assert converged["costs"]["do_steps"] > 2.0
+    assert corrected["own"]["hull_acceleration"] < explicit["own"]["hull_acceleration"] / 20
+    assert converged["own"]["hull_acceleration"] == 0.0
+    # What remains against the reference is exudyn's own step error, the same for both.
+    assert corrected["total"]["hull_acceleration"] == pytest.approx(
+        converged["total"]["hull_acceleration"], abs=0.1)
+
+
+@needs_exudyn
+def test_the_coupling_study_benchmark_prints_both_tables():
+    """benchmarks/coupling_study.py, cut to one host step and a short run."""
+    import subprocess
+
+    run = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "coupling_study.py"),
+                          "--steps", "2e-3", "--end-time", "0.04"],
+                         capture_output=True, text=True, timeout=600, cwd=ROOT)
+    assert run.returncode == 0, run.stderr[-2000:]
+    for heading in ("## Road-wheel station at 8 m/s", "## Track span"):
+        assert heading in run.stdout
+    rows = [line for line in run.stdout.splitlines() if line.startswith("| corrected | 2 ms")]
+    assert len(rows) == 2 and all("| 2.00 | 1.00 | 1.00 | 2.00 |" in row for row in rows)
+
+
+@needs_exudyn
+def test_station_csv_and_scheme_from_the_command_line(native_fmus, tmp_path):
+    import road_wheel_station as station
+
+    station.main(["--speeds", "8", "--step", "2e-3", "--end-time", "0.1", "--coupling",
+                  "explicit", "--csv", "--out", str(tmp_path),
+                  "--fmu-dir", str(native_fmus["RoadWheelTyre"].parent)])
+    data = np.genfromtxt(tmp_path / "station_8mps.csv", delimiter=",", names=True)
+    assert {"time", "hull_acceleration", "hull_force", "tyre_force",
+            "damper_torque"} <= set(data.dtype.names)
+    assert data["time"][-1] == pytest.approx(0.1)
+    assert data["tyre_force"][0] == pytest.approx(station.STATION_MASS * station.GRAVITY,
+                                                  rel=1e-9)  # N, both half-wheels
+
+
+@needs_exudyn
+def test_an_fmu_error_in_exudyn_reaches_the_caller_with_its_own_message(native_fmus):
+    """Raised in exudyn's hooks, the coupling's error stops the solve and comes back as
+    itself, naming the component and the time."""
+    import road_wheel_station as station
+
+    model = station.Station(8.0, station.RoadProfile(), native_fmus["RoadWheelTyre"].parent)
+    trial = model.tyre.trial
+
+    def failing(time, deflection, rate=None, pieces=1):
+        if time > 0.01:
+            raise CouplingError("tyre", time, "fmi2DoStep returned fmi2Error: test")
+        return trial(time, deflection, rate, pieces)
+
+    model.tyre.trial = failing
+    with pytest.raises(CouplingError, match=r"tyre at t = 0.01\d* s: fmi2DoStep"):
+        model.run(0.05, 1e-3)
+
+
+@needs_exudyn
+def test_a_discarded_fmu_step_makes_exudyn_retry_it_shorter(native_fmus):
+    """A rotor-like coordinate held still for 2 ms, then driven at 100 rad/s through the
+    damper: its integrator cannot finish that 1 ms step (fmi2Discard), the coupling asks
+    exudyn for a shorter one, exudyn retries, and the run goes on to the end."""
+    from exudyn.itemInterface import (CoordinateConstraint, MarkerNodeCoordinate,
+                                      NodeGenericODE2, NodePointGround, ObjectGenericODE2,
+                                      ObjectConnectorCoordinateSpringDamper)
+
+    from fmu_components.coupling import Coupling
+    from fmu_components.coupling.exudyn_host import connector_state, solve
+
+    mbs = exudyn.SystemContainer().AddSystem()
+    ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
+    node = mbs.AddNode(NodeGenericODE2(referenceCoordinates=[0.0], initialCoordinates=[0.0],
+                                       initialCoordinates_t=[0.0], numberOfODE2Coordinates=1))
+    mbs.AddObject(ObjectGenericODE2(nodeNumbers=[node], massMatrix=[[0.5]],
+                                    stiffnessMatrix=[[0.0]], dampingMatrix=[[0.0]]))
+    held = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
+    moved = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=0))
+    mbs.AddObject(CoordinateConstraint(
+        markerNumbers=[held, moved],
+        offsetUserFunction=lambda mbs, t, item, offset: max(0.0, 100.0 * (t - 2e-3))))
+    damper = FmuComponent(native_fmus["RotaryDamper"], "damper")
+    connector = mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
+        markerNumbers=[held, moved],
+        springForceUserFunction=lambda mbs, t, item, u, v, *_: damper.host_load(u, v)))
+    times = []
+    coupling = Coupling("corrected", record=times.append)
+    coupling.add(damper, lambda: tuple(float(v) for v in connector_state(mbs, connector)))
+    mbs.Assemble()
+    host = solve(mbs, coupling, 6e-3, 1e-3)
+    assert coupling.retries >= 1 and host.attempts > coupling.steps
+    assert min(np.diff(times)) < 1e-3 and times[-1] == pytest.approx(6e-3)
+    assert math.isfinite(damper.load) and damper.load > 0.0

@@ -32,6 +32,7 @@ RUN_ELSEWHERE = {
     ".venv/bin/fmu-components validate": ".ci/run",
     ".venv/bin/fmu-components verify": ".ci/run",
     ".venv/bin/python benchmarks/run.py": "tests/test_benchmark.py",
+    ".venv/bin/python benchmarks/coupling_study.py": "tests/test_examples.py",
 }
 
 

@@ -6,6 +6,9 @@ The layers, each importing only those above it in this list:
 * ``runtime``: the one definition of the equations (expressions, rubber, damper, catalog)
   and the Python runtime that travels inside the Python FMUs (standard library only);
   ``c/``, the native runtime that travels as sources inside the native FMUs;
+* ``coupling``: the host-side coupling library that steps the FMUs with a multibody host
+  (fmpy and numpy only; it imports nothing else of this package, so any Python host can
+  use it alone);
 * ``export``: building the FMUs (the C printer, the modelDescription writer, the build);
 * ``lab``: the tools an engineer runs (signals, simulate, rig, fit, the build command);
 * ``verification``: the FMUs against an independent solve of the same equations;

@@ -1,0 +1,23 @@
+"""What the coupling raises."""
+
+
+class CouplingError(RuntimeError):
+    """An FMU refused a call or returned something a host cannot use. The message names
+    the component, the time and what the FMU logged."""
+
+    def __init__(self, component, time, message):
+        super().__init__(f"{component} at t = {time:.9g} s: {message}")
+        self.component = component
+        self.time = time
+
+
+class StepDiscarded(Exception):
+    """fmi2DoStep answered fmi2Discard: the FMU could not complete the step it was given
+    and is back at the state saved at the step's start. The host retries a shorter step."""
+
+    def __init__(self, component, time, step, message):
+        super().__init__(f"{component}: the step from t = {time:.9g} s by {step:.3g} s was "
+                         f"discarded ({message}); retry a shorter host step")
+        self.component = component
+        self.time = time
+        self.step = step

@@ -1,0 +1,363 @@
+"""One co-simulation FMU instance as a host drives it: save the state at the start of a
+host step, step along the secant to the host's trial motion, restore, accept.
+
+An FMU here is a two-port element: inputs deflection and its rate, outputs its load
+(force or torque, the first output) and its `stiffness`, as the project's FMUs declare
+them (docs/model-spec.md section 4): the inputs set before fmi2DoStep(t, h) are the values
+at t, the FMU holds the rate over the step and its outputs belong to t + h.
+"""
+
+import math
+import warnings
+from ctypes import byref
+from pathlib import Path
+
+from fmpy import calloc, extract, free, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2Discard,
+                       fmi2FMUstate, fmi2Warning)
+
+from .errors import CouplingError, StepDiscarded
+from .law import LoadLaw
+from .linearised import Linearisation
+
+
+# One extraction per FMU file and process, shared by all its instances.
+_UNPACKED = {}
+
+
+def unpacked(path):
+    """(model description, unzip directory) of an FMU file, extracted once per process."""
+    path = Path(path).resolve()
+    if path not in _UNPACKED:
+        if not path.exists():
+            raise FileNotFoundError(f"{path} does not exist")
+        _UNPACKED[path] = (read_model_description(str(path)), extract(str(path)))
+    return _UNPACKED[path]
+
+
+# FMUs whose `stiffness` output is the instantaneous tangent while their internal dynamics
+# act within a host step: their answer to a step is linearised (linearised.py). The
+# damper's is its gas spring's, which its rotor relaxes in a fraction of a millisecond.
+LINEARISED_MODELS = {"RotaryDamper"}
+# Where the tangent changes by more than this over a step, the curvature of a "tangent"
+# component's law is the one along the step (its states' change included, linearised.py).
+CURVED = 0.01
+
+
+class FmuComponent:
+    """A co-simulation FMU with a deflection and a rate input, driven by a host.
+
+    Life cycle: construct (instantiated, in initialization mode, parameters set) ->
+    `relaxed_outputs(x)` for a host's static solve -> `start(t0, x0)` -> per host step
+    `begin_step()`, `trial(t, x)` (any number of times), `accept()` or `reject()` ->
+    `free()`. In between, the host applies `host_load(x, v)`, the component's current
+    load law (law.py), which the coupling scheme sets from the laws offered here.
+
+    `trial` steps the FMU from the last accepted point (time, deflection) along the
+    secant to (t, x), restoring the state saved by `begin_step` first if it has already
+    stepped in this host step. Counters (`do_steps`, `saves`, `restores`) say what it
+    cost; one FMU state is kept per instance and reused (fmi2GetFMUstate given the
+    existing state), and freed with the instance.
+
+    `step_model` says how the component's answer to a host step is predicted:
+    "tangent", its load and `stiffness` (the rubber components: their stiffness is the
+    rate-independent tangent in the direction of motion), or "linearised", its Model
+    Exchange Jacobian along the step (linearised.py; default for LINEARISED_MODELS).
+    """
+
+    def __init__(self, path, instance_name, parameters=None, tolerance=None,
+                 unilateral=False, step_model=None):
+        description, unzip_dir = unpacked(path)
+        self.name = instance_name
+        self.unilateral = unilateral  # a contact: no load at x <= 0, never a pulling load
+        # explicit coupling lags the load of a component whose stiffness is no step tangent
+        self.stiffness_is_step_tangent = description.modelName not in LINEARISED_MODELS
+        if step_model is None:
+            step_model = "tangent" if self.stiffness_is_step_tangent else "linearised"
+        if step_model not in ("tangent", "linearised"):
+            raise ValueError(f"step_model {step_model!r}: 'tangent' or 'linearised'")
+        if step_model == "linearised" and not (description.modelExchange is not None
+                                               and description.derivatives):
+            warnings.warn(f"{instance_name}: {Path(path).name} offers no Model Exchange to "
+                          f"linearise its step with; its `stiffness` output stands in",
+                          stacklevel=2)
+            step_model = "tangent"
+        self.step_model = step_model
+        # the curvature of the load laws comes from the stiffness's directional derivative
+        self._curvature = bool(description.coSimulation.providesDirectionalDerivative)
+        self.touch_stiffness = 0.0  # the last contact stiffness the FMU reported
+        self.peak_load = 0.0  # largest |load| seen: the scale of load mismatches
+        self.warnings_logged = 0
+        variables = description.modelVariables
+        self._vr = {v.name: v.valueReference for v in variables}
+        self.input_names = [v.name for v in variables if v.causality == "input"]
+        self.output_names = [v.name for v in variables if v.causality == "output"]
+        if len(self.input_names) != 2 or "stiffness" not in self.output_names:
+            raise ValueError(f"{path}: a coupled FMU has two inputs (deflection and rate) "
+                             f"and a `stiffness` output; this one has inputs "
+                             f"{self.input_names} and outputs {self.output_names}")
+        self.load_name = self.output_names[0]  # force or torque
+        self._input_vrs = [self._vr[n] for n in self.input_names]
+        self._output_vrs = [self._vr[n] for n in self.output_names]
+        self._stiffness_vr = [self._vr["stiffness"]]
+        self._deflection_vr = [self._input_vrs[0]]
+        self.messages = []  # what the FMU logged, newest last (a few kept)
+        self._callbacks = fmi2CallbackFunctions()
+        self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
+        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        self._fmu = FMU2Slave(guid=description.guid, unzipDirectory=unzip_dir,
+                              modelIdentifier=description.coSimulation.modelIdentifier,
+                              instanceName=instance_name)
+        self._fmu.instantiate(callbacks=self._callbacks)
+        self._fmu.setupExperiment(tolerance=tolerance, startTime=0.0)
+        self._fmu.enterInitializationMode()
+        if parameters:
+            self._call(0.0, self._fmu.setReal, [self._vr[n] for n in parameters],
+                       list(parameters.values()))
+        self._linearisable = (description.modelExchange is not None
+                              and bool(description.derivatives))
+        self._unpacked, self._parameters = (description, unzip_dir), parameters
+        self._linearisation = None  # made when first needed
+        self._state = fmi2FMUstate()  # NULL until the first save
+        self.started = False
+        self.time = None  # last accepted point
+        self.deflection = 0.0
+        self.rate = 0.0  # the secant rate of the last accepted step
+        self.outputs = {}  # after the last accepted step
+        self.trial_outputs = None  # after the last trial, until accept or reject
+        self._trial_point = None
+        self._stepped = False  # stepped since the state was saved
+        self._saved = False
+        self.law = None
+        self.do_steps = self.saves = self.restores = 0
+
+    # --- FMI calls ------------------------------------------------------------------------
+
+    def _log(self, environment, instance, status, category, message):
+        # The project's FMUs pass each message finished, with '%' doubled.
+        text = message.decode("utf-8", "replace").replace("%%", "%")
+        self.messages = self.messages[-4:] + [text]
+        if status == fmi2Warning:
+            self.warnings_logged += 1
+            warnings.warn(f"{self.name}: {text}", stacklevel=2)
+
+    def _said(self):
+        return f": {self.messages[-1]}" if self.messages else ""
+
+    def _call(self, time, function, *args):
+        try:
+            return function(*args)
+        except FMICallException as error:
+            raise CouplingError(self.name, time, f"{error.function} returned "
+                                f"{'fmi2Fatal' if error.status == 4 else 'fmi2Error'}"
+                                f"{self._said()}") from None
+
+    def _read(self, time):
+        values = self._call(time, self._fmu.getReal, self._output_vrs)
+        for name, value in zip(self.output_names, values):
+            if not math.isfinite(value):
+                raise CouplingError(self.name, time, f"output {name} = {value!r} is not "
+                                    f"finite{self._said()}")
+        return dict(zip(self.output_names, values))
+
+    # --- values ---------------------------------------------------------------------------
+
+    @property
+    def load(self):
+        """The FMU's force (torque) after the last accepted step."""
+        return self.outputs[self.load_name]
+
+    @property
+    def stiffness(self):
+        return self.outputs["stiffness"]
+
+    def relaxed_outputs(self, deflection):
+        """Outputs of the relaxed component at `deflection` (initialization mode only)."""
+        if self.started:
+            raise RuntimeError(f"{self.name}: relaxed outputs exist only before start()")
+        self._call(0.0, self._fmu.setReal, self._input_vrs, [deflection, 0.0])
+        return self._read(0.0)
+
+    def host_load(self, deflection, rate=0.0):
+        """The load the host applies at the deflection and rate of its current iterate:
+        before start the relaxed component's (a static solve), then the load law."""
+        if not self.started:
+            return self.relaxed_outputs(deflection)[self.load_name]
+        return self.law(deflection, rate)
+
+    # --- load laws (law.py) ------------------------------------------------------------
+
+    def _law(self, deflection, load, stiffness, curvature=0.0):
+        return LoadLaw(deflection, load, stiffness, curvature, unilateral=self.unilateral,
+                       touch_stiffness=self.touch_stiffness)
+
+    def lagged_law(self):
+        """The load law about the last accepted step, for a host that cannot repeat one:
+        the `stiffness` output as the tangent where it is one over a step ("tangent"
+        components), else the plain lagged load."""
+        stiffness = self.stiffness if self.stiffness_is_step_tangent else 0.0
+        return self._law(self.deflection, self.load, stiffness)
+
+    def predicted_law(self, time, linearised=None):
+        """The load law for the first solve of a step to `time`: about the last accepted
+        step with the `stiffness` output ("tangent"), or about the linearised answer to
+        the step continuing at the last rate ("linearised"; `linearised=True` asks for
+        it whatever the step model, where the FMU offers Model Exchange)."""
+        if linearised is None:
+            linearised = self.step_model == "linearised"
+        if not (linearised and self._linearisable):
+            return self.lagged_law()
+        step = time - self.time
+        predicted, tangent, _ = self._linearised_step(self.deflection, self.rate, step)
+        return self._law(self.deflection + self.rate * step, predicted, tangent)
+
+    def corrected_law(self):
+        """The load law about the FMU's answer to the last trial: its load, the step's
+        tangent (the `stiffness` output, or the linearised one) and the curvature of the
+        `stiffness` output (its directional derivative by the deflection)."""
+        time, deflection, secant = self._trial_point
+        outputs = self.trial_outputs
+        stiffness = outputs["stiffness"]
+        curvature = (self._call(time, self._fmu.getDirectionalDerivative,
+                                self._stiffness_vr, self._deflection_vr, [1.0])[0]
+                     if self._curvature else 0.0)
+        tangent = stiffness
+        if self.step_model == "linearised":
+            _, tangent, _ = self._linearised_step(deflection, secant, time - self.time)
+            # the same shape of the elastic force, reached through the step's tangent
+            curvature = curvature * (tangent / stiffness) ** 2 if stiffness else 0.0
+        elif (self._linearisable
+              and abs(curvature * (deflection - self.deflection)) > CURVED * abs(stiffness)):
+            # The tangent changes over the step (the tyre's over a 4 ms step of a hopping
+            # wheel, by a third): its change with the end point along the step, the
+            # states' change included, is what the second solve needs (the frozen one
+            # leaves twice the error at 4 ms).
+            _, _, curvature = self._linearised_step(deflection, secant, time - self.time)
+        return self._law(deflection, outputs[self.load_name], tangent, curvature)
+
+    def _linearised_step(self, deflection, rate, step):
+        """(load after `step` at `rate`, its tangent by the end deflection), linearised
+        at the FMU's current states and `deflection`: the accepted point's (a
+        prediction) or a trial's end (the tangent for the next pass)."""
+        if self._linearisation is None:
+            self._linearisation = Linearisation(*self._unpacked, f"{self.name}.linearisation",
+                                                self._parameters)
+        states = self._call(self.time, self._fmu.getReal, self._linearisation.state_vrs)
+        try:
+            return self._linearisation.step(states, deflection, rate, step)
+        except FMICallException as error:
+            raise CouplingError(self.name, self.time, f"the linearised step at deflection "
+                                f"{deflection!r}, rate {rate!r}: {error}") from None
+
+    def load_scale(self, load):
+        return max(self.peak_load, abs(load), 1e-12)
+
+    def _seen(self, outputs):
+        self.peak_load = max(self.peak_load, abs(outputs[self.load_name]))
+        if outputs["stiffness"] > 0.0:
+            self.touch_stiffness = outputs["stiffness"]
+
+    # --- stepping -------------------------------------------------------------------------
+
+    def start(self, time, deflection, rate=0.0):
+        """Leave initialization mode with the component relaxed at `deflection`."""
+        self._call(time, self._fmu.setReal, self._input_vrs, [deflection, rate])
+        self._call(time, self._fmu.exitInitializationMode)
+        self.started = True
+        self.time, self.deflection, self.rate = time, deflection, rate
+        self.outputs = self._read(time)
+        self._seen(self.outputs)
+        self.law = self.lagged_law()
+
+    def begin_step(self):
+        """The host starts a step from the last accepted point: undo any trial of a step
+        it gave up, and save the state for the trials to come."""
+        if self._stepped:
+            self._restore()
+        self._fmu.fmi2GetFMUstate(self._fmu.component, byref(self._state))
+        self.saves += 1
+        self._saved = True
+        self.trial_outputs = self._trial_point = None
+
+    def _restore(self):
+        self._call(self.time, self._fmu.setFMUstate, self._state)
+        self.restores += 1
+        self._stepped = False
+
+    def trial(self, time, deflection, rate=None, pieces=1):
+        """Outputs after stepping from the last accepted point along the secant to
+        (time, deflection), in `pieces` equal doSteps; the host's `rate` there is not
+        needed (the secant is the rate that matches the host's motion over the step).
+        Raises StepDiscarded (the state is restored) if the FMU cannot complete the
+        step, CouplingError if it refuses it."""
+        if not self._saved:
+            raise RuntimeError(f"{self.name}: begin_step() before trial()")
+        step = time - self.time
+        if step <= 0.0:
+            raise ValueError(f"{self.name}: trial to t = {time!r} s, not after the last "
+                             f"accepted t = {self.time!r} s")
+        if self._stepped:
+            self._restore()
+        secant = (deflection - self.deflection) / step
+        self._stepped = True
+        piece = step / pieces
+        for i in range(pieces):
+            start = self.time + i * piece
+            self._call(start, self._fmu.setReal, self._input_vrs,
+                       [self.deflection + secant * i * piece, secant])
+            self.do_steps += 1
+            try:
+                self._fmu.doStep(start, piece)
+            except FMICallException as error:
+                if error.status == fmi2Discard:
+                    message = self.messages[-1] if self.messages else "no message"
+                    self._restore()
+                    raise StepDiscarded(self.name, start, piece, message) from None
+                raise CouplingError(self.name, start, f"fmi2DoStep by {piece:.6g} s "
+                                    f"returned {'fmi2Fatal' if error.status == 4 else 'fmi2Error'}"
+                                    f"{self._said()}") from None
+        self.trial_outputs = self._read(time)
+        self._seen(self.trial_outputs)
+        self._trial_point = (time, deflection, secant)
+        return self.trial_outputs
+
+    def accept(self):
+        """The host accepted its step: the last trial becomes the accepted point."""
+        if self._trial_point is None:
+            raise RuntimeError(f"{self.name}: accept() without a trial")
+        self.time, self.deflection, self.rate = self._trial_point
+        self.outputs = self.trial_outputs
+        self.trial_outputs = self._trial_point = None
+        self._stepped = self._saved = False
+
+    def reject(self):
+        """The host gave up its step: back to the last accepted point."""
+        if self._stepped:
+            self._restore()
+        self.trial_outputs = self._trial_point = None
+
+    @property
+    def live_states(self):
+        """FMU states this instance holds (0 or 1: the one it reuses)."""
+        return 1 if self._state else 0
+
+    def serialized_state(self):
+        """The FMU's current state, serialized (bytes), e.g. to compare two states."""
+        state = self._fmu.getFMUstate()
+        try:
+            return self._fmu.serializeFMUstate(state)
+        finally:
+            self._fmu.freeFMUstate(state)
+
+    def free(self):
+        if self._linearisation is not None:
+            self._linearisation.free()
+        if self._state:
+            self._fmu.freeFMUstate(self._state)
+        # FMI 2.0 allows fmi2Terminate only once initialization is complete.
+        if self.started:
+            self._fmu.terminate()
+        self._fmu.freeInstance()
