@@ -186,3 +186,26 @@ def test_a_step_finer_than_the_samples_feeds_the_path_between_them(native_fmus, 
                                          values[:, 2])["torque"]
     torque = values[:, header.index("torque")]
     assert np.max(np.abs(torque - expected)) <= ACCEPTANCE * peak_to_peak(expected)
+
+
+@pytest.mark.parametrize("step", [3e-4, 3e-3])
+def test_a_step_that_does_not_divide_the_span_ends_on_the_stop_time(native_fmus, tmp_path,
+                                                                    capsys, step):
+    """fmpy ends with a shorter step to the stop time: the last row is that time's, its
+    times strictly increase, and every row's inputs are the input's at that row's time."""
+    source, out = tmp_path / "in.csv", tmp_path / "out.csv"
+    table = write_input(source, "RoadWheelTyre", duration=2.0)
+    status, _, _ = run(capsys, native_fmus["RoadWheelTyre"], source, "--out", out,
+                       "--step", step)
+    assert status == 0
+    _, values = read_result(out)
+    assert np.all(np.diff(values[:, 0]) > 0.0)
+    assert values[-1, 0] == 2.0
+    assert np.allclose(values[:, 1], np.interp(values[:, 0], table["time"], table["compression"]),
+                       rtol=0, atol=1e-12)
+    # the last row's force is the force at 2.0 s: the same as a run that stops there on
+    # a dividing step
+    status, _, _ = run(capsys, native_fmus["RoadWheelTyre"], source, "--out",
+                       tmp_path / "whole.csv", "--step", "1e-3")
+    _, whole = read_result(tmp_path / "whole.csv")
+    assert values[-1, 3] == pytest.approx(whole[-1, 3], rel=2e-3)

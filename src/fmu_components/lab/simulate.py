@@ -209,6 +209,10 @@ def finer_grid(times, columns, stop_time, step, deflection, rate):
     if step >= np.min(np.diff(times)) * (1 - 1e-9):
         return times, columns
     grid = times[0] + np.arange(int(math.floor((stop_time - times[0]) / step * (1 + 1e-12))) + 1) * step
+    if stop_time - grid[-1] > 1e-9 * step:
+        # The step does not divide the span: fmpy ends with a shorter step to the stop time,
+        # whose outputs belong to the stop time, so the grid ends there too.
+        grid = np.append(grid, stop_time)
     segment = np.clip(np.searchsorted(times, grid, side="right") - 1, 0, len(times) - 2)
     x = columns[deflection]
     slopes = (np.diff(x) / np.diff(times))[segment]
@@ -221,6 +225,8 @@ def finer_grid(times, columns, stop_time, step, deflection, rate):
 def write_result(path, component, result, times, columns, derive_rate):
     """time, deflection, rate, then every output, at fmpy's output times."""
     t = result["time"]
+    if not np.all(np.diff(t) > 0.0):
+        raise RuntimeError("fmpy's output times do not increase")  # never written as rows
     deflection, rate = component.inputs
     x = columns[deflection]
     v = derived_rates(times, x) if derive_rate else columns[rate]
