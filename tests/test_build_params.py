@@ -91,3 +91,87 @@ def test_own_part_in_another_structure(tmp_path):
                           input=input_table("TrackBushRadial", t, x, secant_rates(t, x)))
     np.testing.assert_array_equal(
         result["force"], simulate("TrackBushRadial", values, t, x, structure="haupt-sedlan"))
+
+
+# --- every tool takes an own part: it is identified by what the FMU carries ---------------
+
+def test_the_fmu_says_what_it_is(own, native_fmus):
+    from fmu_components.export.identity import read_identity
+
+    for path in (own / "MyBush.fmu", own / "python" / "MyBush.fmu"):
+        identity = read_identity(path)
+        assert (identity.name, identity.component, identity.structure) == \
+            ("MyBush", "TrackBushRadial", "final")
+        assert identity.own and all(identity.values[n] == v for n, v in VALUES.items())
+    thesis = read_identity(native_fmus["TrackBushRadial"])
+    assert thesis.component == "TrackBushRadial" and not thesis.own
+
+
+def test_own_descriptions_do_not_quote_the_thesis_as_their_value(own):
+    descriptions = {v.name: v.description
+                    for v in read_model_description(str(own / "MyBush.fmu")).modelVariables}
+    assert descriptions["k1"].endswith("this part's own value (the thesis's is 6e+07 N/m)")
+    assert "Appendix 4b: 60000 N/mm" in descriptions["k1"]  # the thesis's, named as such
+    assert "own value" not in descriptions["k2"]  # a thesis value it keeps
+
+
+@pytest.mark.parametrize("flavour", ["native", "python"])
+def test_simulate_runs_an_own_part_with_its_values(own, tmp_path, capsys, flavour):
+    from fmu_components.lab.signals import sine, write_csv
+
+    path = own / "MyBush.fmu" if flavour == "native" else own / "python" / "MyBush.fmu"
+    t = time_grid(1.0, 1e-3)
+    table = input_table("TrackBushRadial", t, sine(t, 0.3e-3, 0.1e-3, 2.0))
+    with open(tmp_path / "in.csv", "w") as f:
+        write_csv(table, f)
+    assert cli.main(["simulate", str(path), str(tmp_path / "in.csv"),
+                     "--out", str(tmp_path / "out.csv")]) == 0
+    result = np.genfromtxt(tmp_path / "out.csv", delimiter=",", names=True)
+    # (fmpy sums its steps, so it reads the input a few ulps off the sample times)
+    np.testing.assert_allclose(result["force"], simulate("TrackBushRadial", VALUES, t,
+                                                         table["deflection"]), rtol=1e-9)
+    # --param and --params change the run, starting from the part's own values
+    (tmp_path / "p.json").write_text(json.dumps({"c1": 2500.0}))
+    assert cli.main(["simulate", str(path), str(tmp_path / "in.csv"), "--out",
+                     str(tmp_path / "p.csv"), "--params", str(tmp_path / "p.json"),
+                     "--param", "xi3=9e-3"]) == 0
+    changed = np.genfromtxt(tmp_path / "p.csv", delimiter=",", names=True)
+    np.testing.assert_allclose(
+        changed["force"], simulate("TrackBushRadial", dict(VALUES, c1=2500.0, xi3=9e-3), t,
+                                   table["deflection"]), rtol=1e-9)
+    assert np.max(np.abs(changed["force"] - result["force"])) > 100.0
+
+
+def test_rig_drives_an_own_part_and_names_a_wrong_component(own, tmp_path, capsys):
+    arguments = ["rig", "--engine", "fmu", "--fmu", str(own / "MyBush.fmu"), "--preload",
+                 "3e-4", "--amplitude", "1e-4", "--frequency", "1", "--relaxation", "1e-4",
+                 "--hold", "1", "--out", str(tmp_path / "rig")]
+    assert cli.main([*arguments, "--component", "TrackBushRadial"]) == 0
+    with pytest.raises(SystemExit) as stop:
+        cli.main([*arguments, "--component", "TrackBushTorsion"])
+    assert stop.value.code == 2
+    assert "is MyBush: TrackBushRadial in the 'final' structure" in capsys.readouterr().err
+
+
+def test_verify_checks_an_own_part_against_a_solve_with_its_own_values(own, tmp_path, capsys):
+    from fmu_components.verification import cases, reference
+
+    assert cli.main(["verify", "--fmus", str(own), "--fmu", "MyBush", "--case",
+                     "II_amplitude_0.1mm", "--report", str(tmp_path)]) == 0
+    assert "MyBush  II_amplitude_0.1mm" in capsys.readouterr().out
+    # the check has teeth: against the thesis's reference the part is far off
+    (case,) = cases.select(["TrackBushRadial"], ["II_amplitude_0.1mm"])
+    inputs = case.inputs()
+    spec = reference.spec_from_parameters("TrackBushRadial", VALUES)
+    own_force = cases.reference_table(case, inputs, spec)["force"]
+    thesis_force = cases.reference_table(case, inputs)["force"]
+    assert np.max(np.abs(own_force - thesis_force)) > 0.05 * np.ptp(thesis_force)
+
+
+def test_a_unit_slip_in_the_parameters_is_named(tmp_path, capsys):
+    (tmp_path / "slip.json").write_text(json.dumps({"k1": 60000.0}))  # N/mm typed as N/m
+    assert cli.main(["build", "--params", str(tmp_path / "slip.json"), "--name", "Slip",
+                     "--component", "TrackBushRadial", "--flavour", "native",
+                     "--dest", str(tmp_path), "--no-run"]) == 0
+    assert ("warning: parameter k1 = 60000 N/m is 1/1e+03 of the thesis's 6e+07 N/m: it looks "
+            "like N/mm (give N/m: 60000 N/mm = 6e+07 N/m)") in capsys.readouterr().err

@@ -47,7 +47,7 @@ def test_build_without_gcc_says_to_install_it(tmp_path):
 def test_signal_in_the_wrong_unit_is_refused(fmu, mean, amplitude, meant):
     result = run(["-m", "fmu_components", "signal", fmu, "sine", "--mean", mean,
                   "--amplitude", amplitude])
-    one_line_error(result, f"look like {meant}")
+    one_line_error(result, f"looks like {meant}")
     assert result.stdout == ""
 
 
@@ -67,7 +67,7 @@ def test_signal_in_si_units_is_written(fmu, mean, amplitude):
 ])
 def test_signal_timing_mistakes_are_one_line(options, words):
     result = run(["-m", "fmu_components", "signal", "RoadWheelTyre", "sine", "--mean", "3.5e-3",
-                  *options])
+                  "--amplitude", "1e-3", *options])
     one_line_error(result, *words)
 
 

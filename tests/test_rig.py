@@ -197,7 +197,7 @@ def test_wrong_params_file_is_one_line(tmp_path, capsys, content, message):
     (["--component", "Track"], "no component 'Track'"),
     (["--component", "RotaryDamper", "--structure", "four-element"], "no 'four-element' structure"),
     (["--component", "TrackBushRadial", "--engine", "fmu"], "needs --fmu PATH"),
-    (["--component", "TrackBushRadial", "--engine", "fmu", "--fmu", "missing.fmu"], "no FMU at"),
+    (["--component", "TrackBushRadial", "--engine", "fmu", "--fmu", "missing.fmu"], "missing.fmu: no such FMU"),
 ])
 def test_wrong_requests_are_one_line(tmp_path, capsys, arguments, message):
     with pytest.raises(SystemExit) as stop:

@@ -202,6 +202,22 @@ def test_input_outside_the_measured_range_simulates_with_one_warning(built_fmus,
     runner.free()
 
 
+@pytest.mark.parametrize("degrees, warned", [(40.0, True), (-20.0, True), (30.0, False),
+                                             (-10.0, False)])
+def test_torsion_warns_outside_the_live_angle_plus_or_minus_the_largest_torsion(
+        built_fmus, degrees, warned):
+    """The message, the threshold and the spec agree: 10 +- 23 deg (section 5.1.2)."""
+    runner = FmuRunner(built_fmus["TrackBushTorsion"])
+    runner.initialize(math.radians(10.0), 0.0)
+    runner.set_real_status(runner.inputs, [math.radians(degrees), 0.0])
+    warnings = [text for status, text in runner.messages if status == WARNING]
+    if warned:
+        assert len(warnings) == 1 and "-13 to 33 deg" in warnings[0], warnings
+    else:
+        assert warnings == []
+    runner.free()
+
+
 def test_damper_refuses_an_angle_jump_beyond_the_gas_spring_limit(built_fmus):
     runner = FmuRunner(built_fmus["RotaryDamper"])
     runner.initialize(0.0, 0.0)

@@ -20,8 +20,6 @@ step's tangent, in which the rotor's inertia and the dashpot's slope appear). No
 here steps the FMU: no fmi2DoStep, no state of the co-simulation instance touched.
 """
 
-import ctypes
-
 import numpy as np
 from fmpy import calloc, free
 from fmpy.fmi2 import (FMU2Model, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,

@@ -12,6 +12,8 @@ from xml.etree.ElementTree import Element, SubElement, tostring
 from .. import __version__
 from ..runtime.units import UNITS
 
+TOOL = "fmu-components"  # the VendorAnnotations tool that says which component an FMU is
+
 LOG_CATEGORIES = {
     "logStatusWarning": "Log messages with fmi2Warning status.",
     "logStatusDiscard": "Log messages with fmi2Discard status.",
@@ -69,6 +71,10 @@ def model_description(definition, *, guid, model_identifier, native, source_file
         SubElement(categories, "Category", name=name, description=description)
     SubElement(root, "DefaultExperiment",
                {k: repr(float(v)) for k, v in definition.default_experiment.items()})
+    # What the FMU is, for the project's tools (export/identity.py): whatever its name.
+    tool = SubElement(SubElement(root, "VendorAnnotations"), "Tool", name=TOOL)
+    SubElement(tool, "Component", name=definition.component,
+               structure=definition.structure_name)
     variables = SubElement(root, "ModelVariables")
     index = {v.name: i + 1 for i, v in enumerate(definition.variables)}
     nominal = dict(zip((v.name for v in definition.states), nominals))

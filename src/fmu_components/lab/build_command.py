@@ -129,6 +129,10 @@ def run_command(args):
     return 0
 
 
+def warn(message):
+    print(f"warning: {message}", file=sys.stderr)
+
+
 def read_own(path, name, component, structure):
     """An Own from a PARAMS.json (read and checked as every tool reads it), every mistake said
     in one line."""
@@ -141,7 +145,7 @@ def read_own(path, name, component, structure):
         raise UsageError(f"{component} comes in no {structure!r} structure (it has: "
                          f"{', '.join(structures_of(component))})")
     try:
-        values = parameter_set(component, structure, path)
+        values = parameter_set(component, structure, path, warn=warn)
     except ParameterError as error:
         raise UsageError(f"{path}: {error}") from None
     return Own(name, component, structure, values)

@@ -46,6 +46,7 @@ import numpy as np
 
 from .harmonics import first_harmonic
 from ..errors import UsageError
+from ..export.identity import NotOurFmu, read_identity
 from ..export.parameters import ParameterError, parameter_set
 from ..runtime.catalog import COMPONENTS, STRUCTURES, component_definition, structures_of
 from ..runtime.cosim import CoSimulation
@@ -336,49 +337,57 @@ def relaxation_record(setup, preload, step, rise=RISE_TIME, hold=HOLD_TIME, per_
 
 def make_setup(component, structure="final", params=None, engine="model", fmu=None,
                rtol=RIG_RTOL, rate="secant", max_step=MAX_STEP):
-    """Check the request and gather what each worker needs."""
+    """Check the request and gather what each worker needs. With the FMU engine the
+    parameters start from the FMU's own values (an engineer's own part keeps its own)."""
     if component not in COMPONENTS:
         raise RigError(f"no component {component!r}; choose one of {', '.join(sorted(COMPONENTS))}")
     if structure not in structures_of(component):
         raise RigError(f"{component} comes in no {structure!r} structure; it has "
                        f"{', '.join(structures_of(component))}")
+    folder = base = None
+    if engine == "fmu":
+        base = _fmu_identity(fmu, component, structure).values
+    elif engine != "model":
+        raise RigError(f"engine {engine!r}: choose model or fmu")
     try:
-        values = parameter_set(component, structure, params)
+        values = parameter_set(component, structure, params, base=base,
+                               warn=lambda message: print(f"warning: {message}",
+                                                          file=sys.stderr))
     except ParameterError as error:
         raise RigError(str(error)) from None
     if rate not in RATES:
         raise RigError(f"rate {rate!r}: choose {' or '.join(RATES)}")
     if not max_step > 0.0:
         raise RigError(f"the longest step {max_step!r} s must be positive")
-    folder = None
     if engine == "fmu":
-        folder = _extract_fmu(fmu, component, structure)
-    elif engine != "model":
-        raise RigError(f"engine {engine!r}: choose model or fmu")
+        folder = _extract_fmu(fmu)
     return Setup(component, structure, values, engine, folder, rtol, rate, max_step)
 
 
-def _extract_fmu(path, component, structure):
+def _fmu_identity(path, component, structure):
+    """The FMU's identity (export/identity.py): it must be `component` in `structure`,
+    whatever its name (an own part built with fmu-components build --params)."""
+    if path is None:
+        raise RigError("--engine fmu needs --fmu PATH, the built FMU to drive")
+    try:
+        identity = read_identity(path)
+    except NotOurFmu as error:
+        raise RigError(str(error)) from None
+    if (identity.component, identity.structure) != (component, structure):
+        raise RigError(f"{path} is {identity.name}: {identity.component} in the "
+                       f"{identity.structure!r} structure, not {component} in the "
+                       f"{structure!r} one; give --component {identity.component} --structure "
+                       f"{identity.structure}")
+    return identity
+
+
+def _extract_fmu(path):
     import atexit
     import shutil
     import tempfile
 
-    from fmpy import extract, read_model_description
+    from fmpy import extract
 
-    if path is None:
-        raise RigError("--engine fmu needs --fmu PATH, the built FMU to drive")
-    if not Path(path).is_file():
-        raise RigError(f"no FMU at {path}; build one with `fmu-components build`")
-    description = read_model_description(str(path))
-    if description.modelName != component:
-        raise RigError(f"{path} is {description.modelName}, not {component}")
-    # the Real parameters tell the structures apart (every structure has the same switches)
-    names = {v.name for v in description.modelVariables
-             if v.causality == "parameter" and v.type == "Real"}
-    wanted = set(component_definition(component, structure).default_parameters())
-    if names != wanted:
-        raise RigError(f"{path} is not {component} in the {structure!r} structure; build it "
-                       f"with `fmu-components build --structure {structure}`")
     folder = tempfile.mkdtemp(prefix="fmu_components_rig_")
     atexit.register(shutil.rmtree, folder, ignore_errors=True)
     return extract(str(path), folder)

@@ -20,6 +20,7 @@ import numpy as np
 
 from ..errors import UsageError
 from ..runtime.catalog import COMPONENTS
+from ..runtime.units import UNITS
 
 # The standard test input of each component, a sine inside the range the thesis measured:
 # (mean, amplitude, frequency in Hz), SI units; the damper's is test A (Table 11.2-1).
@@ -107,33 +108,52 @@ EXAMPLES = """examples:
 
 
 def configure(parser):
-    parser.add_argument("fmu", choices=sorted(COMPONENTS))
-    parser.add_argument("shape", choices=["sine", "ramp"])
-    parser.add_argument("--mean", type=float, default=0.0, help="sine mean, or ramp start")
-    parser.add_argument("--amplitude", type=float, default=0.0, help="sine amplitude, or ramp rise")
+    parser.add_argument("fmu", choices=sorted(COMPONENTS), help="the component the input is for")
+    parser.add_argument("shape", choices=["sine", "ramp"],
+                        help="sine: mean + amplitude sin(2 pi f t); ramp: from mean, rising "
+                             "by amplitude over the ramp time, then held")
+    parser.add_argument("--mean", type=float, required=True,
+                        help="sine mean, or ramp start (m or rad)")
+    parser.add_argument("--amplitude", type=float, required=True,
+                        help="sine amplitude, or ramp rise (m or rad)")
     parser.add_argument("--frequency", type=float, default=1.0, help="sine frequency (Hz)")
     parser.add_argument("--ramp-time", type=float, default=0.1, help="ramp duration (s)")
-    parser.add_argument("--stop-time", type=float, default=2.0)
-    parser.add_argument("--step", type=float, default=1e-3)
+    parser.add_argument("--stop-time", type=float, default=2.0, help="end of the signal (s)")
+    parser.add_argument("--step", type=float, default=1e-3,
+                        help="sample interval, the communication step to feed it at (s)")
 
 
-# A deflection this many times the thesis's measured range is a unit mistake, not a test.
+# A deflection this many times the largest the thesis measured is a unit mistake, not a test.
 UNIT_MISTAKE_FACTOR = 10.0
 
 
-def unit_mistake(fmu_name, deflection):
-    """One line saying the values look like mm (or deg) where m (or rad) are expected, or None."""
-    definition = COMPONENTS[fmu_name]
+def deflection_slip(definition, deflection):
+    """(kind, message) when a deflection history looks typed in the display unit (mm or deg)
+    rather than SI: "error" beyond UNIT_MISTAKE_FACTOR times the largest the thesis measured,
+    "warning" for an angle beyond that largest (an angle in deg is 57 times its value in
+    rad, so a small one can pass the first test); else None."""
     variable = definition.inputs[0]
-    low, high, _ = definition.measured_ranges[variable.name]
-    span = max(abs(bound) for bound in (low, high) if math.isfinite(bound))
+    span = definition.deflection_scale
     largest = float(np.max(np.abs(deflection))) if len(deflection) else 0.0
-    if largest <= UNIT_MISTAKE_FACTOR * span:
-        return None
-    scale, meant = (1e-3, "mm") if variable.unit == "m" else (math.pi / 180, "deg")
-    return (f"{variable.name} reaches {largest:g} {variable.unit}, far beyond the measured range "
-            f"(about {span:.3g} {variable.unit}): the values look like {meant}; give "
-            f"{variable.unit} (e.g. {largest:g} {meant} = {largest * scale:.4g} {variable.unit})")
+    display, factor = UNITS[variable.unit][1][0]
+    convert = (f"Convert to SI ({variable.unit}, and its rate in {variable.unit}/s): divide "
+               f"by {factor:.6g} ({largest:g} {display} = {largest / factor:.4g} "
+               f"{variable.unit})")
+    if largest > UNIT_MISTAKE_FACTOR * span:
+        return "error", (f"{variable.name} reaches {largest:g} {variable.unit}, far beyond the "
+                         f"{span:.3g} {variable.unit} the thesis measured: it looks like "
+                         f"{display}. {convert}")
+    if variable.unit == "rad" and largest > span:
+        return "warning", (f"{variable.name} reaches {largest:g} rad ({largest * factor:.3g} "
+                           f"deg), beyond the {span:.3g} rad ({span * factor:.3g} deg) the "
+                           f"thesis measured; if the values are in deg, {convert[0].lower()}"
+                           f"{convert[1:]}")
+    return None
+
+
+def thesis_sine_options(fmu_name):
+    mean, amplitude, frequency = THESIS_SINES[fmu_name]
+    return f"--mean {mean:.6g} --amplitude {amplitude:.6g} --frequency {frequency:g}"
 
 
 def run_command(args):
@@ -149,8 +169,14 @@ def run_command(args):
         x = sine(t, args.mean, args.amplitude, args.frequency)
     else:
         x = ramp_and_hold(t, args.mean, args.mean + args.amplitude, args.ramp_time)
-    mistake = unit_mistake(args.fmu, x)
-    if mistake:
-        raise UsageError(mistake)
+    if args.shape == "sine" and args.amplitude == 0.0:
+        raise UsageError("--amplitude 0 makes the sine a constant; give the amplitude (m or "
+                         "rad), e.g. the thesis sine of this component: "
+                         + thesis_sine_options(args.fmu))
+    slip = deflection_slip(COMPONENTS[args.fmu], x)
+    if slip and slip[0] == "error":
+        raise UsageError(slip[1])
+    if slip:
+        print(f"warning: {slip[1]}", file=sys.stderr)
     write_csv(input_table(args.fmu, t, x), sys.stdout)
     return 0

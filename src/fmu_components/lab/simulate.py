@@ -19,8 +19,10 @@ import sys
 import numpy as np
 
 from ..errors import UsageError
-from ..runtime.catalog import COMPONENTS
+from ..export.identity import NotOurFmu, read_identity
+from ..export.parameters import ParameterError, parameter_set, read_parameters, settings
 from ..runtime.units import UNITS
+from .signals import deflection_slip
 
 EXAMPLES = """examples:
   fmu-components signal RoadWheelTyre sine --mean 3.5e-3 --amplitude 1e-3 > tyre_in.csv
@@ -32,35 +34,39 @@ The CSV's first column is time (s); the others are named as the FMU's inputs, in
 from the deflection samples (parameter rate_from_deflection; it lags by about one step).
 """
 
-# A deflection this many times the largest bound of the thesis's measured range is taken
-# for a value in the display unit (mm or deg) rather than SI.
-UNIT_MISTAKE_FACTOR = 10.0
-
-
 class Component:
-    """What simulate needs to know of an FMU: its component, inputs and outputs."""
+    """What simulate needs to know of an FMU this project built (either flavour, any name):
+    its component, inputs and outputs, read from the FMU (export/identity.py)."""
 
     def __init__(self, path):
         from fmpy import read_model_description
 
-        if not os.path.isfile(path):
-            raise UsageError(f"{path}: no such FMU; build them with `fmu-components build` "
-                             f"(into fmus/)")
         try:
-            description = read_model_description(path)
-        except Exception as exc:
-            raise UsageError(f"{path} cannot be read as an FMU ({exc}); give a .fmu file "
-                             f"that `fmu-components build` wrote") from None
+            self.identity = read_identity(path)
+        except NotOurFmu as error:
+            raise UsageError(str(error)) from None
         self.path = path
-        self.description = description
-        self.name = description.modelName
-        self.definition = COMPONENTS.get(self.name)
-        if self.definition is None:
-            raise UsageError(f"{path} is an FMU of {self.name!r}, not one of this project's "
-                             f"components ({', '.join(sorted(COMPONENTS))})")
-        self.flavour = "pythonfmu" if description.coSimulation.needsExecutionTool else "native C"
+        self.description = read_model_description(path)
+        self.name = self.identity.name
+        self.definition = self.identity.definition
+        self.flavour = self.identity.flavour
         self.inputs = [v.name for v in self.definition.inputs]
         self.outputs = [v.name for v in self.definition.outputs]
+
+    def parameters(self, params_file=None, settings_=None):
+        """{name: value} of the parameters to set: those of the file, then the NAME=VALUE
+        settings, checked against the FMU's own values; unit slips are warned about."""
+        given = dict(read_parameters(params_file)) if params_file else {}
+        given.update(settings(settings_))
+        if not given:
+            return {}
+        identity = self.identity
+        values = parameter_set(identity.component, identity.structure, given,
+                               base=identity.values,
+                               warn=lambda message: print(f"warning: {message}",
+                                                          file=sys.stderr))
+        self.definition = identity.thesis.with_values(self.name, values)
+        return {name: values[name] for name in given}
 
 
 def read_input(path):
@@ -102,18 +108,14 @@ def check_columns(component, names, derive_rate, path):
 
 
 def check_units(component, names, values, path):
-    """A UsageError when the deflection looks like mm (deg) where m (rad) is expected."""
-    variable = component.definition.inputs[0]
-    column = values[:, names.index(variable.name)]
-    largest = float(np.max(np.abs(column)))
-    scale = component.definition.deflection_scale
-    if largest > UNIT_MISTAKE_FACTOR * scale:
-        display, factor = UNITS[variable.unit][1][0]
-        raise UsageError(
-            f"{path}: {variable.name} reaches {largest:.6g} {variable.unit}, far beyond the "
-            f"{scale:.6g} {variable.unit} the thesis measured; it looks like {display}. "
-            f"Convert to SI ({variable.unit}, and its rate in {variable.unit}/s): divide by "
-            f"{factor:.6g}")
+    """A UsageError when the deflection looks like mm (deg) where m (rad) is expected; a
+    warning on stderr where an angle may be in deg."""
+    column = values[:, names.index(component.inputs[0])]
+    slip = deflection_slip(component.definition, column)
+    if slip and slip[0] == "error":
+        raise UsageError(f"{path}: {slip[1]}")
+    if slip:
+        print(f"warning: {path}: {slip[1]}", file=sys.stderr)
 
 
 def check_times(times, stop_time, step, path):
@@ -136,7 +138,7 @@ def check_times(times, stop_time, step, path):
 
 
 def simulate(component, times, columns, stop_time, step, tolerance=None, derive_rate=False,
-             warnings=None, errors=None):
+             warnings=None, errors=None, parameters=None):
     """fmpy's result (a structured array: time and the outputs); the FMU's warnings and
     errors are appended to those lists."""
     from fmpy import calloc, extract, free, simulate_fmu
@@ -175,7 +177,8 @@ def simulate(component, times, columns, stop_time, step, tolerance=None, derive_
                 output_interval=step, relative_tolerance=tolerance, input=inputs,
                 output=component.outputs, model_description=component.description,
                 fmu_instance=fmu,
-                start_values={"rate_from_deflection": True} if derive_rate else {})
+                start_values={**(parameters or {}),
+                              **({"rate_from_deflection": True} if derive_rate else {})})
     finally:
         shutil.rmtree(directory, ignore_errors=True)
     expected = f'missing input for variable "{component.inputs[1]}"'
@@ -296,10 +299,19 @@ def configure(parser):
                         help="communication step (s); default: the input's sample interval")
     parser.add_argument("--tolerance", type=float, metavar="TOL",
                         help="the FMU integrator's relative tolerance (default: the FMU's)")
+    parser.add_argument("--params", metavar="PARAMS.json",
+                        help="parameter values to run with (FMU names, SI; fmu-components fit "
+                             "writes them); the others keep the FMU's own")
+    parser.add_argument("--param", action="append", metavar="NAME=VALUE",
+                        help="one parameter value to run with, SI (repeatable; after --params)")
 
 
 def run_command(args):
     component = Component(args.fmu)
+    try:
+        parameters = component.parameters(args.params, args.param)
+    except ParameterError as error:
+        raise UsageError(str(error)) from None
     names, values = read_input(args.input)
     feed = check_columns(component, names, args.derive_rate, args.input)
     check_units(component, names, values, args.input)
@@ -312,7 +324,7 @@ def run_command(args):
     warnings, errors = [], []
     try:
         result = simulate(component, times, columns, stop_time, step, args.tolerance,
-                          args.derive_rate, warnings, errors)
+                          args.derive_rate, warnings, errors, parameters)
     except Exception as exc:
         said = errors[-1] if errors else str(exc)
         raise UsageError(f"{component.name} stopped the simulation: {said}") from None

@@ -281,12 +281,12 @@ def case_paths(case, root=REFERENCE_DATA):
     return {kind: folder / f"{case.name}_{kind}" for kind in ("in.csv", "ref.csv", "ref.opt")}
 
 
-def reference_table(case, inputs):
+def reference_table(case, inputs, spec=None):
     """The independent solve of the case's input: time and the FMU's outputs, in the
-    catalog's order."""
+    catalog's order. spec: a part's own values (reference.spec_from_parameters)."""
     deflection_name, rate_name = inputs.dtype.names[1:]
     outputs = reference.solve_held_rate(case.fmu, inputs["time"], inputs[deflection_name],
-                                        inputs[rate_name])
+                                        inputs[rate_name], spec=spec)
     names = [v.name for v in COMPONENTS[case.fmu].outputs if v.name in outputs]
     assert set(names) == set(outputs), (names, list(outputs))
     table = np.zeros(len(inputs), dtype=[("time", float)] + [(n, float) for n in names])
@@ -309,10 +309,11 @@ def read_options(path):
     return options
 
 
-def generate(case):
-    """(input table, reference table, .opt text) of one case, computed afresh."""
+def generate(case, spec=None):
+    """(input table, reference table, .opt text) of one case, computed afresh (for a part's
+    own values: spec)."""
     inputs = case.inputs()
-    return inputs, reference_table(case, inputs), options_text(case.options())
+    return inputs, reference_table(case, inputs, spec), options_text(case.options())
 
 
 def write(case, generated, root=REFERENCE_DATA):

@@ -21,6 +21,12 @@ class Outcome:
     reference: np.ndarray = None
     inputs: np.ndarray = None
     problem: str = ""  # why the case could not be compared at all
+    part: str = ""  # an engineer's own part run through its component's cases: its name
+
+    @property
+    def name(self):
+        """The FMU's model name: the component's, or an own part's."""
+        return self.part or self.case.fmu
 
     @property
     def strict_error(self):
@@ -41,7 +47,7 @@ def rows(outcomes):
     table = [("FMU", "case", "strict error %", "worst output", "cross-check inside band",
               "result", "wall s")]
     for o in outcomes:
-        table.append((o.case.fmu, o.case.name, f"{o.strict_error:.4f}" if o.errors else "-",
+        table.append((o.name, o.case.name, f"{o.strict_error:.4f}" if o.errors else "-",
                       o.worst_output, f"{100 * (1 - o.outliers):.2f} %",
                       "pass" if o.passed else f"FAIL{': ' + o.problem if o.problem else ''}",
                       f"{o.wall_time:.2f}"))

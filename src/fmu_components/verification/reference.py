@@ -250,6 +250,28 @@ class DamperEquations:
                 "rotor_rate": y[1], "dashpot_torque": self.dashpot(y[1])}
 
 
+def spec_from_parameters(component, values, structure="final"):
+    """The spec of a part given by FMU parameter values (name -> SI; the names are the only
+    thing taken from the FMUs' side), for an engineer's own part; names left out keep the
+    thesis values."""
+    from ..runtime.catalog import STRUCTURES, component_definition
+
+    v = dict(component_definition(component, structure).default_parameters(), **values)
+    if component == "RotaryDamper":
+        points = range(1, sum(1 for name in v if name.startswith("dashpot.rate[")) + 1)
+        return DamperSpec(v["C1"], v["C2"], v["I"],
+                          np.array([v[f"dashpot.rate[{i}]"] for i in points]),
+                          np.array([v[f"dashpot.torque[{i}]"] for i in points]))
+    numbers = [number for number, _ in STRUCTURES[structure].elements]
+    index = {number: i for i, number in enumerate(numbers)}
+    return RubberSpec(
+        elements=[(v[f"k{i}"], v[f"c{i}"], v[f"xi{i}"]) for i in numbers],
+        elastic=tuple(v[f"elastic.a{p}"] for p in range(4)), h=v["geometric.h"],
+        x_ref=v["geometric.x_ref"], unilateral=rubber_spec(component).unilateral,
+        branches=tuple((index[outer], None if inner is None else index[inner])
+                       for outer, inner in STRUCTURES[structure].branches))
+
+
 def equations_for(fmu_name, structure="final", spec=None):
     """The equations of a component in one of the thesis's structures with the thesis's
     values, or with `spec` (a RubberSpec or DamperSpec of other values)."""
@@ -277,7 +299,8 @@ def _integrate(equations, y, t_points, x_of_t, rate):
     return states
 
 
-def solve_held_rate(fmu_name, times, deflection, rate, structure="final", read_after_set=False):
+def solve_held_rate(fmu_name, times, deflection, rate, structure="final", read_after_set=False,
+                    spec=None):
     """Outputs at every sample time under the co-simulation input convention.
 
     Row 0 is the initial output (inputs at t_0, relaxed state); row k+1 the output after
@@ -285,9 +308,9 @@ def solve_held_rate(fmu_name, times, deflection, rate, structure="final", read_a
     the sample deflection x_k+1 set before reading (what a host reads after fmi2SetReal).
     Consecutive steps that share the same rate along a continuous path (a hold, a ramp) are
     one interval of the held-rate input, so they are integrated in one call, which changes
-    nothing but cost.
+    nothing but cost. spec: other values than the thesis's (see equations_for).
     """
-    equations = equations_for(fmu_name, structure)
+    equations = equations_for(fmu_name, structure, spec)
     times = np.asarray(times, dtype=float)
     deflection = np.asarray(deflection, dtype=float)
     rate = np.asarray(rate, dtype=float)

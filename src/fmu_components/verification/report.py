@@ -242,7 +242,7 @@ def plot_test(outcomes, path):
     else:
         plot_loops(fig.subplots(), outcomes)
     shared = describe(outcomes)
-    _save(fig, f"{case.fmu}: {programme.TESTS[case.test].title}{', ' + shared if shared else ''}"
+    _save(fig, f"{outcomes[0].name}: {programme.TESTS[case.test].title}{', ' + shared if shared else ''}"
                f"\nthesis {case.figure}; FMU dashed with markers over the reference (black)", path)
 
 
@@ -285,7 +285,7 @@ def _save(fig, title, path):
 def plot_count(outcomes):
     """How many PNGs write_report draws for these outcomes (for a progress bar)."""
     ran = [o for o in outcomes if o.reference is not None]
-    return len(ran) + len({(o.case.fmu, o.case.test) for o in ran})
+    return len(ran) + len({(o.name, o.case.test) for o in ran})
 
 
 def write_report(outcomes, folder, progress=None):
@@ -296,7 +296,7 @@ def write_report(outcomes, folder, progress=None):
     folder.mkdir(parents=True, exist_ok=True)
     groups = {}
     for outcome in (o for o in outcomes if o.reference is not None):  # those that ran
-        groups.setdefault((outcome.case.fmu, outcome.case.test), []).append(outcome)
+        groups.setdefault((outcome.name, outcome.case.test), []).append(outcome)
     lines = ["# Verification: the FMUs against an independent solve of the test programme", "",
              f"{sum(o.passed for o in outcomes)} of {len(outcomes)} cases pass. Each case is "
              f"simulated with `fmpy.simulate_fmu` and compared with the independent reference "
@@ -317,7 +317,7 @@ def write_report(outcomes, folder, progress=None):
               "| " + " | ".join(header) + " | plot |",
               "|---" * (len(header) + 1) + "|"]
     for outcome, row in zip(outcomes, table):
-        name = f"case_{outcome.case.fmu}_{outcome.case.name}.png"
+        name = f"case_{outcome.name}_{outcome.case.name}.png"
         if outcome.reference is not None:
             plot_case(outcome, folder / name)
             advance(1)

@@ -11,24 +11,10 @@ import numpy as np
 from . import reference
 from ..lab.fit import MAXWELL, maxwell_quantity
 from ..lab.measured import History
-from ..runtime.catalog import STRUCTURES, component_definition
+from ..runtime.catalog import component_definition
 
 SAMPLES_PER_CYCLE = 200
 DIFFERENCE_STEP = 1e-7  # s, central difference of the programme's path for its rate
-
-
-def reference_spec(component, values, structure="final"):
-    """The reference solver's RubberSpec for FMU parameter values (name -> SI) of a
-    component in one of the thesis's structures; names left out keep the thesis values."""
-    v = dict(component_definition(component, structure).default_parameters(), **values)
-    numbers = [number for number, _ in STRUCTURES[structure].elements]
-    index = {number: i for i, number in enumerate(numbers)}
-    return reference.RubberSpec(
-        elements=[(v[f"k{i}"], v[f"c{i}"], v[f"xi{i}"]) for i in numbers],
-        elastic=tuple(v[f"elastic.a{p}"] for p in range(4)), h=v["geometric.h"],
-        x_ref=v["geometric.x_ref"], unilateral=reference.rubber_spec(component).unilateral,
-        branches=tuple((index[outer], None if inner is None else index[inner])
-                       for outer, inner in STRUCTURES[structure].branches))
 
 
 def scaled(component, factors, structure="final"):
@@ -74,7 +60,7 @@ def measure_path(component, label, times, path, values, noise=0.005, seed=0,
         return (path(t + DIFFERENCE_STEP) - path(t - DIFFERENCE_STEP)) / (2 * DIFFERENCE_STEP)
 
     solution = reference.solve_smooth(component, times, path, rate, structure,
-                                      spec=reference_spec(component, values, structure))
+                                      spec=reference.spec_from_parameters(component, values, structure))
     force = solution[reference.LOAD_NAMES[component]]
     generator = np.random.default_rng(seed)
     noisy = force + generator.normal(0.0, noise * np.ptp(force), len(force))

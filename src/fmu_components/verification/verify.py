@@ -37,7 +37,9 @@ from tqdm import tqdm
 
 from ..errors import UsageError
 from ..runtime.catalog import COMPONENTS
+from ..export.identity import NotOurFmu, read_identity
 from . import cases as programme
+from . import reference
 from .outcome import CROSS_CHECK_LIMIT, STRICT_LIMIT, Outcome, table
 
 
@@ -70,11 +72,35 @@ def simulate_case(fmu_path, inputs, options, outputs):
     return result, time.perf_counter() - started
 
 
-def run_case(case, fmu_path, reference_data=programme.REFERENCE_DATA):
-    inputs, reference, options = programme.read(case, reference_data)
-    result, wall = simulate_case(fmu_path, inputs, options, list(reference.dtype.names[1:]))
-    errors, outliers, problem = compare(result, reference, options["StopTime"])
-    return Outcome(case, errors, outliers, wall, result, reference, inputs, problem)
+def run_case(case, fmu_path, reference_data=programme.REFERENCE_DATA, identity=None):
+    """One case through one FMU. An engineer's own part, or another of the thesis's model
+    structures, is compared with the independent solve under its own parameter values,
+    made here; the thesis's FMUs with the committed references."""
+    if identity is not None and (identity.own or identity.structure != "final"):
+        spec = reference.spec_from_parameters(identity.component, identity.values,
+                                              identity.structure)
+        inputs, expected, options = programme.generate(case, spec)
+        options = case.options()
+        part = Path(fmu_path).stem
+    else:
+        inputs, expected, options = programme.read(case, reference_data)
+        part = ""
+    result, wall = simulate_case(fmu_path, inputs, options, list(expected.dtype.names[1:]))
+    errors, outliers, problem = compare(result, expected, options["StopTime"])
+    return Outcome(case, errors, outliers, wall, result, expected, inputs, problem, part)
+
+
+def built_fmus(folder):
+    """{file name without .fmu: (path, Identity)} of every FMU this project built in
+    `folder`: the thesis's under their components' names and any engineer's own part."""
+    found = {}
+    for path in sorted(Path(folder).glob("*.fmu")):
+        try:
+            identity = read_identity(path)
+        except NotOurFmu:
+            continue  # another tool's FMU: not one to verify
+        found[path.stem] = (path, identity)
+    return found
 
 
 EXAMPLES = """examples:
@@ -85,37 +111,49 @@ EXAMPLES = """examples:
 
 
 def configure(parser):
-    parser.add_argument("--fmu", action="append", choices=sorted(COMPONENTS),
-                        help="only this FMU (repeatable)")
+    parser.add_argument("--fmu", action="append", metavar="NAME",
+                        help="only this FMU: a component (" + ", ".join(sorted(COMPONENTS))
+                             + ") or an own part's name (repeatable)")
     parser.add_argument("--case", action="append", metavar="GLOB",
                         help="only cases whose name or FMU/name matches (repeatable)")
     parser.add_argument("--report", type=Path, default=Path("reports") / "verification",
-                        help="folder for the plots and summary.md (default reports/verification)")
+                        help="folder for the plots and summary.md")
     parser.add_argument("--fmus", type=Path, default=Path("fmus"),
-                        help="folder holding the built <FMU>.fmu files (default fmus/)")
-    parser.add_argument("--reference-data", type=Path, default=programme.REFERENCE_DATA)
+                        help="folder holding the built FMUs: the thesis's <Component>.fmu and "
+                             "any own part (its reference is solved with its own values)")
+    parser.add_argument("--reference-data", type=Path, default=programme.REFERENCE_DATA,
+                        help="the thesis FMUs' committed references")
 
 
 def run_command(args):
-    selected = programme.select(args.fmu, args.case)
-    if not selected:
+    found = built_fmus(args.fmus)
+    unknown = [n for n in args.fmu or () if n not in found and n not in COMPONENTS]
+    if unknown:
+        raise UsageError(f"--fmu {unknown[0]}: no such FMU in {args.fmus} (it has: "
+                         f"{', '.join(found) or 'none'})")
+    wanted = args.fmu or [n for n in found] or sorted(COMPONENTS)
+    component = {n: found[n][1].component if n in found else n for n in wanted}
+    cases = {n: programme.select([component[n]], args.case) for n in wanted}
+    if not any(cases.values()):
         raise UsageError("no case matches: see the case names in reference_data/<FMU>/")
-    missing = sorted({str(args.fmus / f"{c.fmu}.fmu") for c in selected
-                      if not (args.fmus / f"{c.fmu}.fmu").exists()})
+    missing = sorted(str(args.fmus / f"{n}.fmu") for n in wanted if n not in found and cases[n])
     if missing:
         raise UsageError(f"not built: {', '.join(missing)} (run fmu-components build first)")
+    runs = [(case, *found[name]) for name in wanted for case in cases[name]]
+    selected = [case for case, _, _ in runs]
 
     outcomes = []
     # One bar over the simulations and the plots (the plots take most of the time). It draws
     # on a terminal; in a CI log (no terminal) it stays out of the way.
     progress = tqdm(total=len(selected), desc="simulating", unit="step", file=sys.stderr,
                     disable=None)
-    for case in selected:
-        progress.set_postfix_str(case.key)
+    for case, path, identity in runs:
+        progress.set_postfix_str(f"{path.stem}/{case.name}")
         try:
-            outcomes.append(run_case(case, args.fmus / f"{case.fmu}.fmu", args.reference_data))
+            outcomes.append(run_case(case, path, args.reference_data, identity))
         except Exception as exc:  # a case that cannot run is a failed case, not a crash
-            outcomes.append(Outcome(case, problem=f"{type(exc).__name__}: {exc}"))
+            outcomes.append(Outcome(case, problem=f"{type(exc).__name__}: {exc}",
+                                    part="" if path.stem == case.fmu else path.stem))
         progress.update(1)
 
     from .report import plot_count, write_report  # matplotlib only once there is something to plot
