@@ -12,6 +12,7 @@ from fmu_components import cli
 
 from fmu_components.verification import synthetic
 from fmu_components.lab.history import simulate
+from fmu_components.runtime.catalog import component_definition
 
 COMPONENT = "TrackBushRadial"
 MM = 1e-3
@@ -194,3 +195,29 @@ def test_rig_table_round_trip(tmp_path):
                  start_values=start)
     for name in free:
         assert result.values[name] == pytest.approx(TRUTH[name], rel=0.03), name
+
+
+def test_fit_reads_what_simulate_writes_and_says_which_columns(native_fmus, tmp_path, capsys):
+    """simulate names its columns as the FMU does (angle, torque); the fit takes them."""
+    from fmu_components.lab.measured import read_data
+    from fmu_components.lab.signals import input_table, sine, time_grid, write_csv
+
+    t = time_grid(2.0, 2e-3)
+    with open(tmp_path / "in.csv", "w") as f:
+        write_csv(input_table("TrackBushTorsion", t, sine(t, 0.17, 0.08, 1.0)), f)
+    assert cli.main(["simulate", str(native_fmus["TrackBushTorsion"]), str(tmp_path / "in.csv"),
+                     "--out", str(tmp_path / "torsion.csv")]) == 0
+    history = read_data(tmp_path / "torsion.csv", component_definition("TrackBushTorsion"))
+    assert history.columns == ("time", "angle", "torque")
+    assert history.deflection == pytest.approx(sine(t, 0.17, 0.08, 1.0), abs=1e-12)
+    capsys.readouterr()
+    fixed = [n for n in component_definition("TrackBushTorsion").default_parameters()
+             if n not in ("k1", "geometric.x_ref")]
+    assert cli.main(["fit", "--component", "TrackBushTorsion", "--fix", *fixed, "--starts", "1",
+                     "--jobs", "1", "--out", str(tmp_path / "p.json"),
+                     str(tmp_path / "torsion.csv")]) == 0
+    assert (f"{tmp_path / 'torsion.csv'}: deflection from column 'angle', load from column "
+            f"'torque'") in capsys.readouterr().err
+    fitted = json.loads((tmp_path / "p.json").read_text())
+    assert fitted["k1"] == pytest.approx(component_definition("TrackBushTorsion")
+                                         .default_parameters()["k1"], rel=1e-3)

@@ -401,6 +401,11 @@ def run_command(args):
     if args.starts < 1:
         raise UsageError("--starts must be 1 or more")
     tests = [read_data(path, definition) for path in args.data]
+    for test in tests:
+        if isinstance(test, History):
+            _, deflection, force = test.columns
+            print(f"{test.path}: deflection from column {deflection!r}, load from column "
+                  f"{force!r}", file=sys.stderr)
     try:
         result = fit(args.component, tests, args.fix, args.structure, args.starts, args.jobs)
     except HistoryError as error:

@@ -33,6 +33,7 @@ class History:
     times: np.ndarray
     deflection: np.ndarray
     force: np.ndarray
+    columns: tuple = HISTORY_COLUMNS  # the file's columns they were read from
 
     @property
     def label(self):
@@ -83,13 +84,26 @@ def read_data(path, definition):
         raise UsageError(f"cannot read {path}: {error.strerror}") from None
     except (UnicodeDecodeError, csv.Error):
         raise UsageError(f"{path} is not a CSV text file") from None
-    if set(HISTORY_COLUMNS) <= set(header):
-        return _history(path, _numbers(path, rows, HISTORY_COLUMNS), definition)
+    columns = history_columns(header, definition)
+    if columns:
+        return _history(path, _numbers(path, rows, columns), definition, columns)
     if set(TABLE_COLUMNS) <= set(header):
         return _table(path, _numbers(path, rows, TABLE_COLUMNS), definition)
+    deflection, load = definition.inputs[0].name, definition.outputs[0].name
     raise UsageError(f"{path}: columns {','.join(header) or '(none)'}; expected "
-                     f"{','.join(HISTORY_COLUMNS)} (a measured test) or "
+                     f"{','.join(HISTORY_COLUMNS)} (a measured test; or {deflection} and "
+                     f"{load}, as fmu-components simulate writes them) or "
                      f"{','.join(TABLE_COLUMNS)} (a rig table)")
+
+
+def history_columns(header, definition):
+    """(time, deflection, force) column names of a history: the generic names, or the
+    component's own input and output names (what `fmu-components simulate` writes); None
+    if the header has neither."""
+    choices = (("time",), ("deflection", definition.inputs[0].name),
+               ("force", definition.outputs[0].name))
+    taken = tuple(next((name for name in names if name in header), None) for names in choices)
+    return None if None in taken else taken
 
 
 def deflection_limit(definition):
@@ -119,7 +133,7 @@ def _check_deflection(path, definition, x):
                          f"{other}; give {unit}")
 
 
-def _history(path, values, definition):
+def _history(path, values, definition, columns=HISTORY_COLUMNS):
     t, x, force = values.T
     if len(t) < MIN_SAMPLES:
         raise UsageError(f"{path}: {len(t)} samples; a test needs at least {MIN_SAMPLES}")
@@ -150,7 +164,7 @@ def _history(path, values, definition):
             raise UsageError(f"{path}: the force spans {np.ptp(force):.3g}, {ratio:.0f} times "
                              f"what {definition.name} carries over that deflection: give "
                              f"{load_unit}, not a smaller unit")
-    return History(path, t, x, force)
+    return History(path, t, x, force, columns)
 
 
 def _unilateral(definition):
