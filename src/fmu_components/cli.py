@@ -13,7 +13,9 @@ nothing imports it.
 
 import argparse
 import importlib
+import os
 import sys
+import textwrap
 
 from .errors import UsageError
 
@@ -36,13 +38,32 @@ COMMANDS = {
 }
 
 
+class HelpFormatter(argparse.RawDescriptionHelpFormatter):
+    """The examples as written, and every option's default after its help (unless the help
+    already says it)."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        default = action.default
+        if (default in (None, False, argparse.SUPPRESS) or default == [] or action.required
+                or "default" in text or not action.option_strings):
+            return text
+        shown = " ".join(map(str, default)) if isinstance(default, (list, tuple)) else default
+        return f"{text} (default: {shown})".lstrip()
+
+
+def description(module, summary):
+    """The module's first paragraph, whole: the subcommand's description."""
+    text = (module.__doc__ or summary).strip().split("\n\n")[0]
+    return textwrap.fill(" ".join(text.split()), width=90)
+
+
 def _add_command(subparsers, name):
     module_name, summary = COMMANDS[name]
     module = importlib.import_module(module_name)
     parser = subparsers.add_parser(
-        name, help=summary, description=(module.__doc__ or summary).strip().splitlines()[0],
-        epilog=getattr(module, "EXAMPLES", None),
-        formatter_class=argparse.RawDescriptionHelpFormatter)
+        name, help=summary, description=description(module, summary),
+        epilog=getattr(module, "EXAMPLES", None), formatter_class=HelpFormatter)
     module.configure(parser)
     parser.set_defaults(run_command=module.run_command)
     return parser
@@ -69,6 +90,14 @@ def main(argv=None):
     # Build only the subcommand asked for, so that one command's imports never slow another.
     wanted = [a for a in argv[:1] if a in COMMANDS]
     parser, subparsers = _parser(wanted or list(COMMANDS))
-    args = parser.parse_args(argv)
-    return _run(subparsers[args.command], args)
+    try:
+        args = parser.parse_args(argv)
+        status = _run(subparsers[args.command], args)
+        sys.stdout.flush()
+        return status
+    except BrokenPipeError:
+        # The reader stopped reading (`... | head -1`): end quietly, as SIGPIPE would, and
+        # keep Python from complaining when it flushes stdout at exit.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 128 + 13
 

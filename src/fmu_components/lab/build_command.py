@@ -1,5 +1,6 @@
-"""fmu-components build: build both flavours of the FMUs (``export.build``) and simulate each
-once through fmpy, printing a summary.
+"""Build both flavours of the FMUs and simulate each once through fmpy, printing a summary.
+
+The build itself is ``export.build``; this is the command around it.
 
     fmu-components build            # build fmus/*.fmu (native) and fmus/python/*.fmu, then run
     fmu-components build --no-run   # build only
@@ -83,7 +84,9 @@ def configure(parser):
                              "(section 6.4, the default), four-element (Appendix 4a, torsion "
                              "bush only) or haupt-sedlan (section 6.1); DEST defaults to "
                              "fmus/STRUCTURE for all but final")
-    parser.add_argument("--flavour", nargs="+", choices=FLAVOURS, default=list(FLAVOURS))
+    parser.add_argument("--flavour", nargs="+", choices=FLAVOURS, default=list(FLAVOURS),
+                        help="native (compiled C, fmus/) and/or python (pythonfmu, "
+                             "fmus/python/)")
     parser.add_argument("--no-run", action="store_true", help="build only")
     parser.add_argument("--params", type=Path, metavar="PARAMS.json",
                         help="parameter start values (FMU names, SI; fmu-components fit writes "

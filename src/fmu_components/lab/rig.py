@@ -686,7 +686,8 @@ def configure(parser):
     parser.add_argument("--amplitude", type=float, nargs="+", metavar="A",
                         help="sine amplitudes (m or rad)")
     parser.add_argument("--frequency", type=float, nargs="+", metavar="F", help="Hz")
-    parser.add_argument("--out", type=Path, required=True, metavar="DIR")
+    parser.add_argument("--out", type=Path, required=True, metavar="DIR",
+                        help="folder for rig.csv, relaxation.csv and the plots")
     parser.add_argument("--engine", choices=sorted(DRIVERS), default="model",
                         help="the Python model (default) or a built FMU (--fmu)")
     parser.add_argument("--fmu", metavar="PATH", help="the FMU for --engine fmu (either flavour)")
@@ -708,7 +709,8 @@ def configure(parser):
     parser.add_argument("--steady", type=float, default=STEADY,
                         help=f"periodic steady state: the relative change still to come of "
                              f"the harmonic result (default {STEADY:g})")
-    parser.add_argument("--max-cycles", type=int, default=MAX_CYCLES)
+    parser.add_argument("--max-cycles", type=int, default=MAX_CYCLES,
+                        help="the most cycles run towards periodic steady state")
     parser.add_argument("--rtol", type=float, default=RIG_RTOL,
                         help=f"the integrator's relative tolerance (default {RIG_RTOL:g}; "
                              f"the FMUs' own default is {DEFAULT_RTOL:g})")
