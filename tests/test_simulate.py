@@ -92,7 +92,8 @@ def test_the_result_has_the_inputs_and_every_output_and_matches_the_reference(
         assert np.max(np.abs(column - reference_values)) <= ACCEPTANCE * peak_to_peak(
             reference_values), output
     import matplotlib.image
-    assert matplotlib.image.imread(plot).shape[:2] == (960, 1280)  # 6.4 x 4.8 in at 200 dpi
+    # the loop beside the time histories: 12.8 x 5.6 in at 200 dpi
+    assert matplotlib.image.imread(plot).shape[:2] == (1120, 2560)
     assert str(out) in said and str(plot) in said
 
 
@@ -209,3 +210,23 @@ def test_a_step_that_does_not_divide_the_span_ends_on_the_stop_time(native_fmus,
                        tmp_path / "whole.csv", "--step", "1e-3")
     _, whole = read_result(tmp_path / "whole.csv")
     assert values[-1, 3] == pytest.approx(whole[-1, 3], rel=2e-3)
+
+
+@pytest.mark.parametrize("shape, expected", [
+    ("step", "step and hold: 0 mm to 4 mm in 0.1 s, held 200 s"),
+    ("bump", "single bump: 3 mm to 4 mm and back to 3 mm over 2 s"),
+    ("sine", "sine: 0.75 Hz, 3.5 mm +- 1 mm"),
+    ("ramp", "ramp: 0 mm to 2 mm over 2 s"),
+    ("constant", "constant at 1 mm"),
+])
+def test_a_plot_is_titled_with_what_the_signal_really_is(shape, expected):
+    """Not 'main frequency 0.005 Hz' for a step and hold, nor '0.999 Hz' for one bump."""
+    from fmu_components.lab.signals import describe, ramp_and_hold
+
+    t = np.arange(0, 200.0 + 1e-9, 0.01) if shape == "step" else time_grid(2.0, 1e-3)
+    x = {"step": lambda: ramp_and_hold(t, 0.0, 4e-3, 0.1),
+         "bump": lambda: 3e-3 + 1e-3 * (1 - np.cos(math.pi * t)) / 2,
+         "sine": lambda: sine(t, 3.5e-3, 1e-3, 0.75),
+         "ramp": lambda: 1e-3 * t,
+         "constant": lambda: np.full_like(t, 1e-3)}[shape]()
+    assert describe(t, x, 1e3, "mm") == expected

@@ -101,6 +101,60 @@ def write_csv(table, file):
         writer.writerow([float(value) for value in row])
 
 
+def describe(times, deflection, display_factor=1.0, unit=""):
+    """What a deflection history is, in a few words for a plot's title: constant, a step and
+    hold, a ramp, a single bump, a sine (its frequency, mean and amplitude), or else its
+    range and how often it turns. Values shown in the display unit (factor, unit)."""
+    t, x = np.asarray(times, dtype=float), np.asarray(deflection, dtype=float)
+    span = float(t[-1] - t[0]) if len(t) > 1 else 0.0
+    low, high = float(x.min()), float(x.max())
+    size = high - low
+
+    def v(value):
+        value = 0.0 if abs(value) <= 1e-9 * size else value  # round-off of a zero mean
+        return f"{value * display_factor:.4g} {unit}".strip()
+
+    if len(x) < 3 or size <= 1e-12 * max(abs(high), abs(low), 1e-300):
+        return f"constant at {v(x[0])}"
+    moves = np.diff(x)
+    still = np.abs(moves) <= 1e-9 * size
+    steps = np.sign(moves[~still])
+    turns = int(np.count_nonzero(np.diff(steps) != 0))
+    moving_until = float(t[1:][~still][-1])  # the end of the last movement
+    held = float(t[-1]) - moving_until
+    if turns == 0 and held >= 0.5 * span:
+        return (f"step and hold: {v(x[0])} to {v(x[-1])} in {moving_until - t[0]:.3g} s, "
+                f"held {held:.3g} s")
+    if turns == 0:
+        return f"ramp: {v(x[0])} to {v(x[-1])} over {span:.3g} s"
+    if turns == 1:
+        peak = high if abs(high - x[0]) >= abs(low - x[0]) else low
+        return f"single bump: {v(x[0])} to {v(peak)} and back to {v(x[-1])} over {span:.3g} s"
+    # A sine: a least-squares fit at the main frequency that leaves little unexplained.
+    uniform = np.linspace(t[0], t[-1], len(t))
+    resampled = np.interp(uniform, t, x)
+    spectrum = np.abs(np.fft.rfft(resampled[:-1] - resampled.mean()))
+    cycles = 1 + int(np.argmax(spectrum[1:]))  # whole cycles over the record, roughly
+
+    def fit(frequency):
+        omega = 2 * math.pi * frequency
+        basis = np.column_stack([np.ones_like(t), np.sin(omega * t), np.cos(omega * t)])
+        coefficients, *_ = np.linalg.lstsq(basis, x, rcond=None)
+        return np.max(np.abs(basis @ coefficients - x)), frequency, coefficients
+
+    # between the spectrum's neighbouring bins (a record need not hold whole cycles), then
+    # finer about the best
+    low_c, high_c = max(cycles - 1.0, 0.5), cycles + 1.0
+    for _ in range(3):
+        worst, frequency, (mean, a, b) = min(
+            (fit(c / span) for c in np.linspace(low_c, high_c, 41)), key=lambda f: f[0])
+        width = (high_c - low_c) / 40
+        low_c, high_c = frequency * span - width, frequency * span + width
+    if worst <= 0.05 * size:
+        return f"sine: {frequency:.3g} Hz, {v(mean)} +- {v(math.hypot(a, b))}"
+    return f"{v(low)} to {v(high)} over {span:.3g} s, turning {turns} times"
+
+
 EXAMPLES = """examples:
   fmu-components signal RoadWheelTyre sine --mean 3.5e-3 --amplitude 1e-3 --frequency 1 > in.csv
   fmu-components signal TrackBushTorsion ramp --mean 0.1745 --amplitude 0.2618 --stop-time 200

@@ -21,8 +21,8 @@ import numpy as np
 from ..errors import UsageError
 from ..export.identity import NotOurFmu, read_identity
 from ..export.parameters import ParameterError, parameter_set, read_parameters, settings
-from ..runtime.units import UNITS
-from .signals import deflection_slip
+from .display import DISPLAY
+from .signals import deflection_slip, describe
 
 EXAMPLES = """examples:
   fmu-components signal RoadWheelTyre sine --mean 3.5e-3 --amplitude 1e-3 > tyre_in.csv
@@ -259,26 +259,41 @@ def main_frequency(times, deflection):
 
 
 def plot_loop(path, component, columns):
-    """The force-deflection loop in display units, at 200 dpi."""
+    """The force-deflection loop beside the time histories of the inputs and every output
+    (display units, 200 dpi), titled with what the input is (signals.describe)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    deflection = component.definition.inputs[0]
-    load = component.definition.outputs[0]
-    x_display, x_factor = UNITS[deflection.unit][1][0]
-    f_display, f_factor = UNITS[load.unit][1][0]
-    x = columns[deflection.name]
-    frequency = main_frequency(columns["time"], x)
-    main = f", main frequency {frequency:.3g} Hz" if frequency else ""
-    figure, axes = plt.subplots(figsize=(6.4, 4.8))
-    axes.plot(x * x_factor, columns[load.name] * f_factor, lw=1.2)
-    axes.set_xlabel(f"{deflection.name} ({x_display})")
-    axes.set_ylabel(f"{load.name} ({f_display})")
-    axes.set_title(f"{os.path.basename(component.path)} ({component.flavour}): "
-                   f"{deflection.name} {x.min() * x_factor:.4g} to {x.max() * x_factor:.4g} "
-                   f"{x_display}{main}", fontsize=9)
-    axes.grid(True, alpha=0.3)
+    definition = component.definition
+    deflection, rate = definition.inputs
+    load = definition.outputs[0]
+    (x_factor, x_unit), (f_factor, f_unit), (v_factor, v_unit) = DISPLAY[definition.component]
+    time, x = columns["time"], columns[deflection.name]
+    figure = plt.figure(figsize=(12.8, 5.6))
+    grid = figure.add_gridspec(3, 2, width_ratios=(1.0, 1.3))
+    loop = figure.add_subplot(grid[:, 0])
+    loop.plot(x * x_factor, columns[load.name] * f_factor, lw=1.2)
+    loop.set_xlabel(f"{deflection.name} ({x_unit})")
+    loop.set_ylabel(f"{load.name} ({f_unit})")
+    loop.set_title("loop", fontsize=9)
+    panels = [figure.add_subplot(grid[i, 1]) for i in range(3)]
+    for panel in panels[1:]:
+        panel.sharex(panels[0])
+    for panel, variable, factor, unit in ((panels[0], deflection, x_factor, x_unit),
+                                          (panels[1], rate, v_factor, v_unit)):
+        panel.plot(time, columns[variable.name] * factor, lw=1.0, color="tab:gray")
+        panel.set_ylabel(f"{variable.name}\n({unit})", fontsize=8)
+    # the load and its parts (every output in the load's unit)
+    for output in (v for v in definition.outputs if v.unit == load.unit):
+        panels[2].plot(time, columns[output.name] * f_factor, lw=1.0, label=output.name)
+    panels[2].set_ylabel(f"{load.name} ({f_unit})", fontsize=8)
+    panels[2].set_xlabel("time (s)")
+    panels[2].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    for panel in (loop, *panels):
+        panel.grid(True, alpha=0.3)
+    figure.suptitle(f"{os.path.basename(component.path)} ({component.flavour}), "
+                    f"{describe(time, x, x_factor, x_unit)}", fontsize=10)
     figure.tight_layout()
     figure.savefig(path, dpi=200)
     plt.close(figure)
@@ -289,7 +304,9 @@ def configure(parser):
     parser.add_argument("input", metavar="INPUT.csv", help="time and the FMU's inputs, SI units")
     parser.add_argument("--out", metavar="RESULT.csv", required=True,
                         help="the result: time, deflection, rate and every output")
-    parser.add_argument("--plot", metavar="LOOP.png", help="the force-deflection loop (200 dpi)")
+    parser.add_argument("--plot", metavar="PLOT.png",
+                        help="the force-deflection loop beside the inputs and outputs against "
+                             "time (200 dpi)")
     parser.add_argument("--derive-rate", action="store_true",
                         help="the CSV has no rate column: the FMU derives the rate from the "
                              "deflection (parameter rate_from_deflection)")
