@@ -340,9 +340,10 @@ def main(argv=None):
     print(f"static: pin forces {force[0].min() / 1e3:.2f} to {force[0].max() / 1e3:.2f} kN, "
           f"joint torques {torque[0].min():.1f} to {torque[0].max():.1f} N.m, mid-span sag "
           f"{-result['link_height'][0][args.links // 2] * 1e3:.2f} mm")
+    rise = result["link_height"] - result["link_height"][0]
     print(f"run: joint torques {torque.min():.1f} to {torque.max():.1f} N.m, pin forces "
-          f"{force.min() / 1e3:.2f} to {force.max() / 1e3:.2f} kN, link heights "
-          f"{result['link_height'].min() * 1e3:.1f} to {result['link_height'].max() * 1e3:.1f} mm")
+          f"{force.min() / 1e3:.2f} to {force.max() / 1e3:.2f} kN, link heights from static "
+          f"{rise.min() * 1e3:.1f} to {rise.max() * 1e3:.1f} mm (as plotted)")
     plot_span(args.out / "track_span.png", result, span)
     plot_shapes(args.out / "track_span_shapes.png", result, span)
     if args.csv:

@@ -72,7 +72,7 @@ def test_own_build_mistakes_are_one_line(tmp_path, capsys, argv, words):
 def test_own_fmu_runs_the_components_sine(own, capsys):
     from fmu_components.lab.build_command import run
 
-    run({"native": {"MyBush": own / "MyBush.fmu"}}, "TrackBushRadial")
+    run({"native": {"MyBush": own / "MyBush.fmu"}})
     (row,) = [line for line in capsys.readouterr().out.splitlines() if line.startswith("MyBush")]
     assert row.split()[2] == "force"
 
@@ -175,3 +175,11 @@ def test_a_unit_slip_in_the_parameters_is_named(tmp_path, capsys):
                      "--dest", str(tmp_path), "--no-run"]) == 0
     assert ("warning: parameter k1 = 60000 N/m is 1/1e+03 of the thesis's 6e+07 N/m: it looks "
             "like N/mm (give N/m: 60000 N/mm = 6e+07 N/m)") in capsys.readouterr().err
+
+
+def test_the_build_summary_names_each_fmu_by_its_file(tmp_path, capsys):
+    assert cli.main(["build", "--structure", "four-element", "--flavour", "native",
+                     "--dest", str(tmp_path)]) == 0
+    rows = [line.split() for line in capsys.readouterr().out.splitlines()
+            if line.startswith("TrackBush")]
+    assert [row[:3] for row in rows] == [["TrackBushTorsionFourElement", "native", "torque"]]

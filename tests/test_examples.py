@@ -5,6 +5,7 @@ study and --csv write. The exudyn runs need the `examples` extra (pip install -e
 ".[examples]"); without it they are skipped with that reason."""
 
 import math
+import re
 import sys
 
 import numpy as np
@@ -316,3 +317,20 @@ def test_a_discarded_fmu_step_makes_exudyn_retry_it_shorter(native_fmus):
     assert coupling.retries >= 1 and host.attempts > coupling.steps
     assert min(np.diff(times)) < 1e-3 and times[-1] == pytest.approx(6e-3)
     assert math.isfinite(damper.load) and damper.load > 0.0
+
+
+@needs_exudyn
+def test_track_span_prints_the_link_heights_it_plots(native_fmus, tmp_path, capsys):
+    """The printed range is the plotted one: heights from the static state."""
+    import track_span
+
+    track_span.main(["--end-time", "0.05", "--step", "1e-3", "--csv", "--out", str(tmp_path),
+                     "--fmu-dir", str(native_fmus["TrackBushRadial"].parent)])
+    printed = re.search(r"link heights from static (-?[\d.]+) to (-?[\d.]+) mm",
+                        capsys.readouterr().out)
+    data = np.genfromtxt(tmp_path / "track_span.csv", delimiter=",", names=True)
+    heights = np.column_stack([data[n] for n in data.dtype.names
+                               if n.startswith("link_height_")])
+    rise = (heights - heights[0]) * 1e3
+    assert float(printed.group(1)) == pytest.approx(rise.min(), abs=0.051)
+    assert float(printed.group(2)) == pytest.approx(rise.max(), abs=0.051)

@@ -24,6 +24,7 @@ import numpy as np
 
 from ..errors import UsageError
 from ..export.build import FLAVOURS, Own, build
+from ..export.identity import read_identity
 from ..export.parameters import ParameterError, parameter_set
 from ..runtime.catalog import COMPONENTS, STRUCTURES, structures_of
 from .signals import THESIS_SINES, input_table, sine, time_grid
@@ -38,25 +39,25 @@ def sine_input(name, stop_time, step):
                        rate=amplitude * omega * np.cos(omega * t))
 
 
-def run(built, component=None):
-    """One thesis sine through each built FMU; component: what an own part is."""
+def run(built):
+    """One thesis sine through each built FMU, each named by its file (an own part or a
+    structure's FMU by its own name), the sine its component's."""
     from fmpy import simulate_fmu
 
-    print(f"\n{'FMU':18s} {'flavour':8s} {'output':12s} {'min':>11s} {'max':>11s} {'unit':>6s} "
+    print(f"\n{'FMU':28s} {'flavour':8s} {'output':12s} {'min':>11s} {'max':>11s} {'unit':>6s} "
           f"{'steps':>6s} {'wall s':>7s} {'us/step':>8s}")
     for flavour, paths in built.items():
-        for name, path in paths.items():
-            definition = COMPONENTS[component or name]
-            output = definition.outputs[0]
+        for path in paths.values():
+            component = read_identity(path).component
+            output = COMPONENTS[component].outputs[0]
             stop, step = 2.0, 1e-3
             started = time.perf_counter()
             result = simulate_fmu(str(path), stop_time=stop, output_interval=step,
-                                  input=sine_input(component or name, stop, step),
-                                  output=[output.name])
+                                  input=sine_input(component, stop, step), output=[output.name])
             wall = time.perf_counter() - started
             values = result[output.name]
             steps = len(values) - 1
-            print(f"{name:18s} {flavour:8s} {output.name:12s} {values.min():11.5g} "
+            print(f"{Path(path).stem:28s} {flavour:8s} {output.name:12s} {values.min():11.5g} "
                   f"{values.max():11.5g} {output.unit:>6s} {steps:6d} {wall:7.2f} "
                   f"{wall / steps * 1e6:8.1f}")
 
@@ -161,5 +162,5 @@ def build_own(args):
         for path in paths.values():
             print(f"built {path}")
     if not args.no_run:
-        run(built, own.component)
+        run(built)
     return 0
