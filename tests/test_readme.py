@@ -115,3 +115,14 @@ def test_the_readme_quick_start_commands_run_as_written(all_fmus, tmp_path):
         assert (tmp_path / written).stat().st_size > 0, written
     header = (tmp_path / "tyre_out.csv").read_text().splitlines()[0].replace('"', "")
     assert header.split(",")[:3] == ["time", "compression", "compression_rate"]
+
+
+def test_the_readme_tells_a_host_what_it_needs_in_the_readme_itself():
+    """Not only in docs/: the starting state, how each load acts on the bodies, the two tyre
+    instances of a wheel, the glibc floor."""
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    for said in ("**The starting state.**", "its rotor turning at the initial arm rate",
+                 "**How the loads act on the bodies.**", "**One instance is one half-wheel's "
+                 "tyre**", "carries two instances", "the arm feels -`torque` and the hull "
+                 "+`torque`", "glibc 2.17 or later"):
+        assert said in readme, said
