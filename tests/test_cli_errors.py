@@ -81,3 +81,15 @@ def test_verify_with_no_matching_case_says_where_the_names_are(tmp_path):
     result = run(["-m", "fmu_components", "verify", "--case", "no_such_case", "--fmus",
                   str(tmp_path), "--report", str(tmp_path / "report")])
     one_line_error(result, "reference_data")
+
+
+@pytest.mark.parametrize("fmu, mean, amplitude", [
+    ("RotaryDamper", "0", "2"),        # +-2 deg typed as rad: under 10 times the range
+    ("TrackBushTorsion", "0", "0.8"),  # 0.8 deg typed as rad: past the 33 deg measured
+])
+def test_a_small_angle_that_may_be_in_deg_is_warned_about(fmu, mean, amplitude):
+    result = run(["-m", "fmu_components", "signal", fmu, "sine", "--mean", mean,
+                  "--amplitude", amplitude, "--stop-time", "1"])
+    assert result.returncode == 0
+    assert "warning:" in result.stderr and "if the values are in deg" in result.stderr
+    assert "divide by 57.2958" in result.stderr
