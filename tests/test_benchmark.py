@@ -53,3 +53,17 @@ def test_the_python_flavours_c_host_benchmark_runs_and_reports_every_fmu(all_fmu
     for row in rows:
         medians = [float(cell.split()[0]) for cell in row[1:]]
         assert len(medians) == 5 and all(math.isfinite(v) and v > 0 for v in medians)
+
+
+def test_the_rollback_cost_benchmark_reports_every_native_fmu(all_fmus):
+    native_dir = str(next(iter(all_fmus["native"].values())).parent)
+    run = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "rollback_cost.py"), "--quick",
+                          "--fmus", native_dir], capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, run.stderr
+    rows = [line.split("|")[1:-1] for line in run.stdout.splitlines()
+            if line.startswith("| ") and not line.startswith("| FMU")]
+    assert {row[0].strip() for row in rows} == set(all_fmus["native"])
+    for row in rows:
+        plain, corrected, ratio, get, set_ = (float(cell.split()[0]) for cell in row[1:])
+        assert all(math.isfinite(v) and v > 0 for v in (plain, corrected, get, set_))
+        assert ratio > 1.0  # two cycles and a state round trip cost more than one cycle

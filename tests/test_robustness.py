@@ -386,3 +386,38 @@ def test_after_an_error_a_saved_state_continues_identically(built_fmus, name):
     runner.fmu.setFMUstate(saved)
     assert np.array_equal(runner.run(x, v, STEP), expected)
     runner.free()
+
+
+def test_a_state_restored_into_an_instance_with_other_parameters_runs_on_them(built_fmus):
+    """fmi2SetFMUstate keeps the instance's constants and curves only where the state's
+    parameters are the instance's own; a state made with others brings them along."""
+    t, x, v = thesis_sine("TrackBushRadial", 0.05, STEP)
+    softer = FmuRunner(built_fmus["TrackBushRadial"], "softer")
+    softer.fmu.setupExperiment(startTime=0.0)
+    softer.fmu.enterInitializationMode()
+    softer.fmu.setReal([softer.vr["k1"]], [0.5 * softer.fmu.getReal([softer.vr["k1"]])[0]])
+    softer.set_inputs(x[0], v[0])
+    softer.fmu.exitInitializationMode()
+    softer.run(x[:21], v[:21], STEP)
+    thesis = FmuRunner(built_fmus["TrackBushRadial"], "thesis")
+    thesis.initialize(x[0], v[0])
+    thesis.run(x[:21], v[:21], STEP)
+    thesis.fmu.setFMUstate(softer.fmu.getFMUstate())
+    thesis.time = softer.time
+    assert thesis.run(x[20:], v[20:], STEP).tolist() == softer.run(x[20:], v[20:], STEP).tolist()
+    thesis.fmu.setFMUstate(thesis.fmu.getFMUstate())  # its own parameters: nothing rebuilt
+    softer.free()
+    thesis.free()
+
+
+def test_a_state_of_another_fmu_is_refused(built_fmus):
+    bush = FmuRunner(built_fmus["TrackBushRadial"], "bush")
+    bush.initialize(1e-3, 0.0)
+    tyre = FmuRunner(built_fmus["RoadWheelTyre"], "tyre")
+    tyre.initialize(1e-3, 0.0)
+    before = tyre.step(1e-3, 0.0, STEP)
+    assert tyre.status(tyre.fmu.setFMUstate, bush.fmu.getFMUstate()) == ERROR
+    assert "RoadWheelTyre" in last_error(tyre) and "state unchanged" in last_error(tyre)
+    assert tyre.read() == before
+    bush.free()
+    tyre.free()

@@ -8,6 +8,12 @@
  *       (each call timed, the clock's least cost taken off) and per fmi2SetReal (both
  *       inputs) + fmi2DoStep + fmi2GetReal (every output), timed over the next STEPS
  *       cycles as a whole, with no timer inside
+ *   bench_host rollback STEPS REPEATS SPEC
+ *       one instance; per repeat, "PLAIN_US CORRECTED_US GET_NS SET_NS": microseconds per
+ *       plain cycle (as above) and per corrected cycle (fmi2GetFMUstate into the state it
+ *       keeps, cycle, fmi2SetFMUstate back, cycle again: what the coupling library's
+ *       corrected scheme asks of each FMU per host step), then nanoseconds per
+ *       fmi2GetFMUstate and per fmi2SetFMUstate alone, each timed over STEPS calls
  *   bench_host vehicle STEPS SPEC...
  *       every instance of every SPEC stepped together at 1 ms: "WALL_S INSTANCES"
  *
@@ -34,6 +40,9 @@ typedef struct {
     fmi2GetRealTYPE *get_real;
     fmi2DoStepTYPE *do_step;
     fmi2FreeInstanceTYPE *free_instance;
+    fmi2GetFMUstateTYPE *get_state;
+    fmi2SetFMUstateTYPE *set_state;
+    fmi2FreeFMUstateTYPE *free_state;
     fmi2Component component;
     fmi2ValueReference inputs[2], outputs[MAX_OUTPUTS];
     size_t n_outputs;
@@ -103,6 +112,9 @@ static Instance *load(char **spec, long steps, int *count) {
         instance->get_real = lookup(library, "fmi2GetReal");
         instance->do_step = lookup(library, "fmi2DoStep");
         instance->free_instance = lookup(library, "fmi2FreeInstance");
+        instance->get_state = lookup(library, "fmi2GetFMUstate");
+        instance->set_state = lookup(library, "fmi2SetFMUstate");
+        instance->free_state = lookup(library, "fmi2FreeFMUstate");
         instance->inputs[0] = (fmi2ValueReference)atoi(spec[4]);
         instance->inputs[1] = (fmi2ValueReference)atoi(spec[5]);
         for (char *item = strtok(strdup(spec[6]), ","); item && instance->n_outputs < MAX_OUTPUTS;
@@ -176,6 +188,38 @@ static int cost(long steps, int repeats, char **spec) {
     return 0;
 }
 
+static int rollback(long steps, int repeats, char **spec) {
+    int count;
+    Instance *instance = load(spec, 2 * steps * repeats, &count);
+    fmi2FMUstate state = NULL;
+    fmi2Component c = instance->component;
+    check(instance->get_state(c, &state), "fmi2GetFMUstate");
+    long k = 0;
+    for (int r = 0; r < repeats; r++) {
+        double started = now();
+        for (long i = 0; i < steps; i++, k++) cycle(instance, k);
+        double plain = (now() - started) / steps;
+        started = now();
+        for (long i = 0; i < steps; i++, k++) {
+            check(instance->get_state(c, &state), "fmi2GetFMUstate");
+            cycle(instance, k);
+            check(instance->set_state(c, state), "fmi2SetFMUstate");
+            cycle(instance, k);
+        }
+        double corrected = (now() - started) / steps;
+        started = now();
+        for (long i = 0; i < steps; i++) check(instance->get_state(c, &state), "get");
+        double get = (now() - started) / steps;
+        started = now();
+        for (long i = 0; i < steps; i++) check(instance->set_state(c, state), "set");
+        double set = (now() - started) / steps;
+        printf("%.6f %.6f %.3f %.3f\n", plain * 1e6, corrected * 1e6, get * 1e9, set * 1e9);
+    }
+    check(instance->free_state(c, &state), "fmi2FreeFMUstate");
+    instance->free_instance(c);
+    return 0;
+}
+
 static int vehicle(long steps, int argc, char **argv) {
     int groups = argc / 10, total = 0;
     Instance **fleets = malloc(sizeof(Instance *) * groups);
@@ -197,8 +241,10 @@ static int vehicle(long steps, int argc, char **argv) {
 int main(int argc, char **argv) {
     if (argc == 14 && strcmp(argv[1], "cost") == 0)
         return cost(atol(argv[2]), atoi(argv[3]), argv + 4);
+    if (argc == 14 && strcmp(argv[1], "rollback") == 0)
+        return rollback(atol(argv[2]), atoi(argv[3]), argv + 4);
     if (argc >= 13 && strcmp(argv[1], "vehicle") == 0 && (argc - 3) % 10 == 0)
         return vehicle(atol(argv[2]), argc - 3, argv + 3);
-    fprintf(stderr, "usage: %s cost STEPS REPEATS SPEC | vehicle STEPS SPEC...\n", argv[0]);
+    fprintf(stderr, "usage: %s cost|rollback STEPS REPEATS SPEC | vehicle STEPS SPEC...\n", argv[0]);
     return 1;
 }

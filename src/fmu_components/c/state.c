@@ -2,7 +2,10 @@
  * FMU states: a copy of the instance's Snapshot (what the host set and what the run has
  * done; the constants and curves are rebuilt from its parameters). A serialized state is
  * the Snapshot in its envelope (state_envelope.h: format version, GUID, checksum); every
- * value in a state passes the checks fmi2SetReal applies before anything of it is used.
+ * value in a serialized state passes the checks fmi2SetReal applies before anything of it
+ * is used. A state in memory was checked when it was made (taken from the running instance,
+ * or deserialized and checked), so restoring it is a copy: the coupling library's corrected
+ * scheme restores every FMU once per host step (docs/coupling.md).
  */
 #include <math.h>
 #include <stdio.h>
@@ -20,6 +23,7 @@
 
 typedef struct {
     uint32_t magic;
+    const ModelInfo *model; /* this library's model: another FMU's state is refused */
     Snapshot s;
 } SavedState;
 
@@ -87,11 +91,22 @@ static int snapshot_problem(const Snapshot *s, char *message, size_t size) {
     return 0;
 }
 
+/* 1 when two snapshots' parameters are the same, so the constants and curves built from one
+   serve the other. */
+static int same_parameters(const Snapshot *a, const Snapshot *b) {
+    for (unsigned vr = 0; vr < MODEL_VARIABLES; vr++)
+        if (MODEL_INFO.variables[vr].causality == CAUSALITY_PARAMETER &&
+            memcmp(&a->values[vr], &b->values[vr], sizeof(double)) != 0)
+            return 0;
+    return 1;
+}
+
 static SavedState *saved(Instance *instance, fmi2FMUstate state, const char *function) {
     SavedState *saved_state = (SavedState *)state;
-    if (saved_state == NULL || saved_state->magic != STATE_MAGIC) {
-        log_status(instance, fmi2Error, "%s: the FMU state is NULL or not one this FMU made",
-                   function);
+    if (saved_state == NULL || saved_state->magic != STATE_MAGIC ||
+        saved_state->model != &MODEL_INFO) {
+        log_status(instance, fmi2Error, "%s: the FMU state is NULL or not one %s made; state "
+                   "unchanged", function, MODEL_INFO.name);
         return NULL;
     }
     return saved_state;
@@ -105,7 +120,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
         return call_end(instance, fmi2Error);
     }
     SavedState *state = (SavedState *)*FMUstate;
-    if (state != NULL && state->magic != STATE_MAGIC) {
+    if (state != NULL && (state->magic != STATE_MAGIC || state->model != &MODEL_INFO)) {
         log_status(instance, fmi2Error, "fmi2GetFMUstate: the state to update is not one this "
                    "FMU made");
         return call_end(instance, fmi2Error);
@@ -116,6 +131,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
         return call_end(instance, fmi2Error);
     }
     state->magic = STATE_MAGIC;
+    state->model = &MODEL_INFO;
     state->s = instance->s;
     *FMUstate = state;
     return call_end(instance, fmi2OK);
@@ -125,14 +141,11 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
     Instance *instance = (Instance *)c;
     if (!call_begin(instance, ALL_MODES, __func__)) return fmi2Error;
     SavedState *state = saved(instance, FMUstate, "fmi2SetFMUstate");
-    char problem[MESSAGE_SIZE];
     if (state == NULL) return call_end(instance, fmi2Error);
-    if (snapshot_problem(&state->s, problem, sizeof problem)) {
-        log_status(instance, fmi2Error, "fmi2SetFMUstate: %s; state unchanged", problem);
-        return call_end(instance, fmi2Error);
-    }
+    int data_kept = instance->s.initialized && same_parameters(&instance->s, &state->s);
     instance->s = state->s;
-    if (instance->s.initialized) build_model_data(&instance->data, instance->s.values);
+    if (instance->s.initialized && !data_kept)
+        build_model_data(&instance->data, instance->s.values);
     instance->outputs_fresh = 0;
     return call_end(instance, fmi2OK);
 }
@@ -194,7 +207,7 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
         log_status(instance, fmi2Error, "fmi2DeSerializeFMUstate: %s", problem);
         return call_end(instance, fmi2Error);
     }
-    SavedState restored = {STATE_MAGIC, {0}};
+    SavedState restored = {STATE_MAGIC, &MODEL_INFO, {0}};
     if (length != sizeof restored.s) {
         log_status(instance, fmi2Error, "fmi2DeSerializeFMUstate: the serialized state cannot "
                    "be read: %u bytes of content, this build's state has %u", (unsigned)length,
