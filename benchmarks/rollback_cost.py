@@ -12,14 +12,10 @@ so the ratio is taken on one machine state. Medians over repetitions, range in b
 """
 
 import argparse
-import statistics
-import sys
 import tempfile
 from pathlib import Path
 
-from run import HERE, ROOT, Unpacked, compile_c, run_c_host, spread
-
-from fmu_components.runtime.catalog import COMPONENTS
+from run import HERE, ROOT, Unpacked, compile_c, native_fmus, run_c_host, spread
 
 
 def measure(fmus, repeats, steps):
@@ -56,11 +52,7 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="seconds: small sizes")
     args = parser.parse_args(argv)
     repeats, steps = (3, 300) if args.quick else (9, 20000)
-    fmus = {n: args.fmus / f"{n}.fmu" for n in COMPONENTS}
-    missing = [str(p) for p in fmus.values() if not p.exists()]
-    if missing:
-        sys.exit(f"missing {', '.join(missing)}: build the FMUs first (python build_fmus.py)")
-    print(report(measure(fmus, repeats, steps), repeats, steps))
+    print(report(measure(native_fmus(args.fmus), repeats, steps), repeats, steps))
 
 
 if __name__ == "__main__":

@@ -200,6 +200,15 @@ class Unpacked:
                 repr(frequency)]
 
 
+def native_fmus(folder, subfolder=""):
+    """{name: path} of the four native FMUs in folder/subfolder, or exit saying to build."""
+    fmus = {n: Path(folder) / subfolder / f"{n}.fmu" for n in COMPONENTS}
+    missing = [str(p) for p in fmus.values() if not p.exists()]
+    if missing:
+        sys.exit(f"missing {', '.join(missing)}: build the FMUs first (python build_fmus.py)")
+    return fmus
+
+
 def run_c_host(host, *arguments):
     run = subprocess.run([str(host), *arguments], capture_output=True, text=True, timeout=900)
     if run.returncode != 0:

@@ -55,15 +55,24 @@ def test_the_python_flavours_c_host_benchmark_runs_and_reports_every_fmu(all_fmu
         assert len(medians) == 5 and all(math.isfinite(v) and v > 0 for v in medians)
 
 
-def test_the_rollback_cost_benchmark_reports_every_native_fmu(all_fmus):
+def benchmark_rows(script, all_fmus):
+    """The table rows a benchmark script prints for the native FMUs' folder (--quick)."""
     native_dir = str(next(iter(all_fmus["native"].values())).parent)
-    run = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "rollback_cost.py"), "--quick",
+    run = subprocess.run([sys.executable, str(ROOT / "benchmarks" / script), "--quick",
                           "--fmus", native_dir], capture_output=True, text=True, timeout=900)
     assert run.returncode == 0, run.stderr
     rows = [line.split("|")[1:-1] for line in run.stdout.splitlines()
             if line.startswith("| ") and not line.startswith("| FMU")]
     assert {row[0].strip() for row in rows} == set(all_fmus["native"])
-    for row in rows:
-        plain, corrected, ratio, get, set_ = (float(cell.split()[0]) for cell in row[1:])
+    return [[float(cell.split()[0]) for cell in row[1:]] for row in rows]
+
+
+def test_the_rollback_cost_benchmark_reports_every_native_fmu(all_fmus):
+    for plain, corrected, ratio, get, set_ in benchmark_rows("rollback_cost.py", all_fmus):
         assert all(math.isfinite(v) and v > 0 for v in (plain, corrected, get, set_))
         assert ratio > 1.0  # two cycles and a state round trip cost more than one cycle
+
+
+def test_the_fmi3_cost_benchmark_reports_every_component(all_fmus):
+    for medians in benchmark_rows("fmi3_cost.py", all_fmus):
+        assert len(medians) == 3 and all(math.isfinite(v) and v > 0 for v in medians)

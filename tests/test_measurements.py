@@ -156,7 +156,7 @@ def compared(all_fmus):
             for flavour, paths in all_fmus.items()}
 
 
-@pytest.mark.parametrize("flavour", ["native", "python"])
+@pytest.mark.parametrize("flavour", ["native", "python", "fmi3"])
 def test_every_row_with_a_metric_runs_and_gives_a_finite_value(compared, flavour):
     for c in compared[flavour]:
         assert not c.problem, c.problem
@@ -166,10 +166,11 @@ def test_every_row_with_a_metric_runs_and_gives_a_finite_value(compared, flavour
 
 
 def test_both_flavours_give_the_same_values(compared):
-    for native, python in zip(compared["native"], compared["python"]):
+    for native, python, fmi3 in zip(compared["native"], compared["python"], compared["fmi3"]):
         if native.ran:
             assert python.model == pytest.approx(native.model, rel=1e-9, abs=1e-9), \
                 native.measurement.id
+            assert fmi3.model == native.model, native.measurement.id  # one core, same bits
 
 
 class ReferenceRuns(Runs):

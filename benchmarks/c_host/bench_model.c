@@ -12,7 +12,8 @@
 #include <stdlib.h>
 #include <time.h>
 
-#include "runtime.h"
+#include "core.h"
+#include "fmi2Functions.h"
 
 static double now(void) {
     struct timespec t;

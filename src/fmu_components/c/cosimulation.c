@@ -8,7 +8,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "runtime.h"
+#include "core.h"
 #include "text.h"
 
 #define N MODEL_INTEGRATED
@@ -123,7 +123,7 @@ static void rate_warning(const Snapshot *s, double secant, char *message, size_t
     else
         snprintf(what, sizeof what, "%s = %.6g %s does not fit the movement of %s", v->name,
                  s->rate, v->unit, x);
-    snprintf(message, size, "fmi2DoStep: %s (%.6g %s over the last step); the rate-dependent "
+    snprintf(message, size, "%s (%.6g %s over the last step); the rate-dependent "
              "force is wrong. Give %s in %s with the sign of d(%s)/dt, or set "
              "rate_from_deflection to derive it. Warned once per instance.", what, secant,
              v->unit, v->name, v->unit, x);

@@ -39,7 +39,7 @@
 #include "call_flag.h"
 #include "fmi2Functions.h"
 #include "host_log.h"
-#include "instantiation.h"
+#include "fmi2_host.h"
 #include "state_envelope.h"
 
 #ifndef PYTHON_LIBRARY
@@ -308,7 +308,7 @@ static fmi2Status guard_error(const Guard *guard, const char *format, ...) {
     va_start(args, format);
     vsnprintf(message, sizeof message, format, args);
     va_end(args);
-    host_log(&guard->log, fmi2Error, message);
+    host_log(&guard->log, STATUS_ERROR, message);
     return fmi2Error;
 }
 
@@ -319,7 +319,7 @@ static void guard_logger(fmi2ComponentEnvironment environment, fmi2String instan
     (void)instance_name;
     Guard *guard = (Guard *)environment;
     if (status > guard->worst) guard->worst = status;
-    if (!host_log_wants(&guard->log, status, category)) return;
+    if (!host_log_wants(&guard->log, (Status)status, category)) return;
     if (guard->n_pending == PENDING_MESSAGES) {
         guard->n_dropped++;
         return;
@@ -350,13 +350,13 @@ static fmi2Status overlapping(Guard *guard, const char *function) {
    claimed, so a logger calling back is refused), then the call's status. */
 static fmi2Status finish(Guard *guard, fmi2Status status) {
     for (int i = 0; i < guard->n_pending; i++)
-        host_log_send(&guard->log, guard->pending[i].status, guard->pending[i].category,
+        host_log_send(&guard->log, (Status)guard->pending[i].status, guard->pending[i].category,
                       guard->pending[i].text);
     if (guard->n_dropped) {
         char message[96];
         snprintf(message, sizeof message, "%d more messages of this call were dropped",
                  guard->n_dropped);
-        host_log_send(&guard->log, fmi2Warning, "logStatusWarning", message);
+        host_log_send(&guard->log, STATUS_WARNING, "logStatusWarning", message);
     }
     guard->n_pending = guard->n_dropped = 0;
     calling = guard->outer;
@@ -423,13 +423,13 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               fmi2String fmuResourceLocation,
                               const fmi2CallbackFunctions *functions, fmi2Boolean visible,
                               fmi2Boolean loggingOn) {
-    HostLog log = instantiation_log(instanceName, functions);
-    if (instantiation_problem(&log, instanceName, fmuType, fmuGUID, fmuResourceLocation,
-                              functions, FMU_NAME, FMU_GUID, 1u << fmi2CoSimulation))
+    HostLog log = fmi2_host_log(instanceName, functions);
+    if (fmi2_instantiation_problem(&log, instanceName, fmuType, fmuGUID, fmuResourceLocation,
+                                   functions, FMU_NAME, FMU_GUID, 1u << fmi2CoSimulation))
         return NULL;
     pthread_once(&engine_once, load_engine);
     if (engine_problem[0]) {
-        host_log(&log, fmi2Error, engine_problem);
+        host_log(&log, STATUS_ERROR, engine_problem);
         return NULL;
     }
     Guard *guard = pool_take(fmuResourceLocation);
@@ -488,7 +488,8 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
                                const fmi2String categories[]) {
     GUARDED(c);
     char problem[MESSAGE_SIZE];
-    if (host_log_set(&guard->log, loggingOn, nCategories, categories, problem))
+    if (host_log_set(&guard->log, "fmi2SetDebugLogging", loggingOn, nCategories, categories,
+                     problem))
         CLOSE(guard_error(guard, "%s", problem));
     CLOSE(fmi2OK);
 }

@@ -18,30 +18,30 @@ void host_log_overlap(const HostLog *log, CallFlag *call, const char *function) 
     if (!call_refusal_told(call, logger_depth > 0)) return;
     char message[MESSAGE_SIZE];
     snprintf(message, sizeof message, CALL_OVERLAP_MESSAGE, function);
-    host_log(log, fmi2Error, message);
+    host_log(log, STATUS_ERROR, message);
 }
 
-static void call_logger(const HostLog *log, fmi2Status status, const char *category,
-                        const char *message) {
+void host_log_send(const HostLog *log, Status status, const char *category,
+                   const char *message) {
+    if (log->logger == NULL || log->send == NULL) return;
     logger_depth++;
-    log->logger(log->environment, log->instance_name ? log->instance_name : "", status,
-                category, message);
+    log->send(log, status, category, message);
     logger_depth--;
 }
 
-const char *log_category(fmi2Status status) {
+const char *log_category(Status status) {
     switch (status) {
-    case fmi2Warning: return "logStatusWarning";
-    case fmi2Discard: return "logStatusDiscard";
-    case fmi2Error: return "logStatusError";
-    case fmi2Fatal: return "logStatusFatal";
+    case STATUS_WARNING: return "logStatusWarning";
+    case STATUS_DISCARD: return "logStatusDiscard";
+    case STATUS_ERROR: return "logStatusError";
+    case STATUS_FATAL: return "logStatusFatal";
     default: return "logAll";
     }
 }
 
-int host_log_wants(const HostLog *log, fmi2Status status, const char *category) {
+int host_log_wants(const HostLog *log, Status status, const char *category) {
     if (log->logger == NULL) return 0;
-    if (status >= fmi2Warning) return 1;
+    if (status >= STATUS_WARNING) return 1;
     if (!log->debug_logging) return 0;
     if (log->n_categories == 0) return 1;
     for (size_t i = 0; i < log->n_categories; i++)
@@ -51,24 +51,7 @@ int host_log_wants(const HostLog *log, fmi2Status status, const char *category) 
     return 0;
 }
 
-void host_log_send(const HostLog *log, fmi2Status status, const char *category,
-                   const char *message) {
-    if (log->logger == NULL) return;
-    if (strchr(message, '%') == NULL) {
-        call_logger(log, status, category, message);
-        return;
-    }
-    char escaped[2 * MESSAGE_SIZE + 1];
-    size_t n = 0;
-    for (const char *in = message; *in && n + 2 < sizeof escaped; in++) {
-        if (*in == '%') escaped[n++] = '%';
-        escaped[n++] = *in;
-    }
-    escaped[n] = '\0';
-    call_logger(log, status, category, escaped);
-}
-
-void host_log(const HostLog *log, fmi2Status status, const char *message) {
+void host_log(const HostLog *log, Status status, const char *message) {
     const char *category = log_category(status);
     if (host_log_wants(log, status, category)) host_log_send(log, status, category, message);
 }
@@ -78,16 +61,16 @@ void host_log_forget(HostLog *log) {
     log->n_categories = 0;
 }
 
-int host_log_set(HostLog *log, fmi2Boolean on, size_t n, const fmi2String categories[],
-                 char *problem) {
+int host_log_set(HostLog *log, const char *function, int on, size_t n,
+                 const char *const categories[], char *problem) {
     if (n > MAX_LOG_CATEGORIES) {
-        snprintf(problem, MESSAGE_SIZE, "fmi2SetDebugLogging: %u categories given, at most %d "
-                 "are kept", (unsigned)n, MAX_LOG_CATEGORIES);
+        snprintf(problem, MESSAGE_SIZE, "%s: %u categories given, at most %d are kept",
+                 function, (unsigned)n, MAX_LOG_CATEGORIES);
         return 1;
     }
     if (n > 0 && categories == NULL) {
-        snprintf(problem, MESSAGE_SIZE, "fmi2SetDebugLogging: %u categories announced but "
-                 "the list is NULL", (unsigned)n);
+        snprintf(problem, MESSAGE_SIZE, "%s: %u categories announced but the list is NULL",
+                 function, (unsigned)n);
         return 1;
     }
     char *copies[MAX_LOG_CATEGORIES];
@@ -96,7 +79,7 @@ int host_log_set(HostLog *log, fmi2Boolean on, size_t n, const fmi2String catego
         copies[i] = malloc(strlen(category) + 1);
         if (copies[i] == NULL) {
             while (i > 0) free(copies[--i]);
-            snprintf(problem, MESSAGE_SIZE, "fmi2SetDebugLogging: out of memory");
+            snprintf(problem, MESSAGE_SIZE, "%s: out of memory", function);
             return 1;
         }
         strcpy(copies[i], category);

@@ -40,23 +40,36 @@ static int uri_path(const char *uri, char *path, size_t size) {
     return n == 0;
 }
 
-static int resource_problem(const char *uri, const char *guid, char *problem, size_t size) {
+static int resource_problem(const InstantiationRequest *r, const char *guid, char *problem,
+                            size_t size) {
     char folder[MAX_PATH_LENGTH], identity[MAX_PATH_LENGTH + 32];
-    if (uri == NULL || uri[0] == '\0') {
-        snprintf(problem, size, "fmuResourceLocation is missing: pass the file URI of the "
-                 "unzipped FMU's resources folder");
+    const char *given = r->resource;
+    if (given == NULL || given[0] == '\0') {
+        snprintf(problem, size, "%s is missing: pass %s of the unzipped FMU's resources folder",
+                 r->resource_name, r->resource_is_uri ? "the file URI" : "the path");
         return 1;
     }
-    if (uri_path(uri, folder, sizeof folder)) {
-        snprintf(problem, size, "fmuResourceLocation '%.300s' is not a local file URI "
-                 "(file:///path/to/resources)", uri);
-        return 1;
+    if (r->resource_is_uri) {
+        if (uri_path(given, folder, sizeof folder)) {
+            snprintf(problem, size, "%s '%.300s' is not a local file URI "
+                     "(file:///path/to/resources)", r->resource_name, given);
+            return 1;
+        }
+    } else {
+        size_t n = strlen(given);
+        if (n >= sizeof folder) {
+            snprintf(problem, size, "%s '%.300s...' is longer than %d characters",
+                     r->resource_name, given, MAX_PATH_LENGTH - 1);
+            return 1;
+        }
+        memcpy(folder, given, n + 1);
+        while (n > 1 && (folder[n - 1] == '/' || folder[n - 1] == '\\')) folder[--n] = '\0';
     }
     snprintf(identity, sizeof identity, "%s/%s", folder, IDENTITY_FILE);
     FILE *file = fopen(identity, "rb");
     if (file == NULL) {
-        snprintf(problem, size, "fmuResourceLocation '%.300s' is not the resources folder of "
-                 "an unzipped FMU of this kind: it has no %s", uri, IDENTITY_FILE);
+        snprintf(problem, size, "%s '%.300s' is not the resources folder of an unzipped FMU "
+                 "of this kind: it has no %s", r->resource_name, given, IDENTITY_FILE);
         return 1;
     }
     char text[128] = "";
@@ -65,45 +78,31 @@ static int resource_problem(const char *uri, const char *guid, char *problem, si
     while (read > 0 && (text[read - 1] == '\n' || text[read - 1] == '\r')) read--;
     text[read] = '\0';
     if (strcmp(text, guid) != 0) {
-        snprintf(problem, size, "fmuResourceLocation '%.300s' belongs to another FMU: its %s "
-                 "holds GUID %.64s, this FMU's is %s", uri, IDENTITY_FILE, text, guid);
+        snprintf(problem, size, "%s '%.300s' belongs to another FMU: its %s holds %.64s, "
+                 "this FMU's %s is %s", r->resource_name, given, IDENTITY_FILE, text,
+                 r->token_name, guid);
         return 1;
     }
     return 0;
 }
 
-HostLog instantiation_log(fmi2String instance_name, const fmi2CallbackFunctions *functions) {
-    HostLog log = {0};
-    if (functions != NULL) {
-        log.logger = functions->logger;
-        log.environment = functions->componentEnvironment;
-    }
-    log.instance_name = instance_name;
-    return log;
-}
-
-int instantiation_problem(const HostLog *log, fmi2String instance_name, fmi2Type type,
-                          fmi2String guid, fmi2String resource_location,
-                          const fmi2CallbackFunctions *functions, const char *name,
-                          const char *expected_guid, unsigned types) {
-    char problem[MESSAGE_SIZE], reason[MESSAGE_SIZE - 32];
-    if (instance_name == NULL || instance_name[0] == '\0' || functions == NULL) {
-        snprintf(problem, sizeof problem, "fmi2Instantiate: the instance name or the callback "
-                 "functions are missing");
-    } else if ((unsigned)type > fmi2CoSimulation || !(types & (1u << type))) {
-        snprintf(problem, sizeof problem, "fmi2Instantiate: %s does not offer the interface "
-                 "type %d asked for (%s)", name, (int)type,
-                 types == (1u << fmi2CoSimulation) ? "Co-Simulation only"
-                                                   : "Model Exchange and Co-Simulation");
-    } else if (guid == NULL || strcmp(guid, expected_guid) != 0) {
-        snprintf(problem, sizeof problem, "fmi2Instantiate: GUID %.100s is not this FMU's (%s "
-                 "%s): the modelDescription and the binary belong to different FMUs",
-                 guid ? guid : "(NULL)", name, expected_guid);
-    } else if (resource_problem(resource_location, expected_guid, reason, sizeof reason)) {
-        snprintf(problem, sizeof problem, "fmi2Instantiate: %s", reason);
+int instantiation_problem(const HostLog *log, const InstantiationRequest *r, const char *name,
+                          const char *expected) {
+    char problem[MESSAGE_SIZE], reason[MESSAGE_SIZE - 64];
+    if (r->instance_name == NULL || r->instance_name[0] == '\0' || r->callbacks_missing) {
+        snprintf(problem, sizeof problem, "%s: the instance name %s missing", r->function,
+                 r->callbacks_missing ? "or the callback functions are" : "is");
+    } else if (r->interface_problem) {
+        snprintf(problem, sizeof problem, "%s: %s %s", r->function, name, r->interface_problem);
+    } else if (r->token == NULL || strcmp(r->token, expected) != 0) {
+        snprintf(problem, sizeof problem, "%s: %s %.100s is not this FMU's (%s %s): the "
+                 "modelDescription and the binary belong to different FMUs", r->function,
+                 r->token_name, r->token ? r->token : "(NULL)", name, expected);
+    } else if (resource_problem(r, expected, reason, sizeof reason)) {
+        snprintf(problem, sizeof problem, "%s: %s", r->function, reason);
     } else {
         return 0;
     }
-    host_log(log, fmi2Error, problem);
+    host_log(log, STATUS_ERROR, problem);
     return 1;
 }

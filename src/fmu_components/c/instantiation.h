@@ -1,5 +1,5 @@
-/* What a host passes to fmi2Instantiate, checked before anything uses it, the same way in
-   both flavours' binaries. */
+/* What a host passes to instantiate an FMU, checked before anything uses it, the same way in
+   every binary (both flavours, both FMI versions). */
 #ifndef INSTANTIATION_H
 #define INSTANTIATION_H
 
@@ -9,16 +9,22 @@
 
 #define IDENTITY_FILE "fmu-guid.txt" /* in resources/: the FMU's GUID */
 
-/* The host's logger (may be NULL) for the instance being made. */
-HostLog instantiation_log(fmi2String instance_name, const fmi2CallbackFunctions *functions);
+typedef struct {
+    const char *function;      /* fmi2Instantiate, fmi3InstantiateCoSimulation, ... */
+    const char *instance_name;
+    int callbacks_missing;     /* FMI 2: the callback functions are NULL */
+    const char *interface_problem; /* NULL, or why the interface asked for is not offered */
+    const char *token_name;    /* "GUID" (FMI 2), "instantiationToken" (FMI 3) */
+    const char *token;
+    const char *resource_name; /* "fmuResourceLocation" (FMI 2), "resourcePath" (FMI 3) */
+    const char *resource;      /* FMI 2: a file URI; FMI 3: a path */
+    int resource_is_uri;
+} InstantiationRequest;
 
-/* 0 when the arguments are right for the FMU `name` with `guid` that offers the interface
-   types in `types` (bits 1 << fmi2ModelExchange, 1 << fmi2CoSimulation); else 1, with the
-   reason logged. The resource location must be a file URI of this FMU's resources
-   folder: its IDENTITY_FILE holds the GUID. */
-int instantiation_problem(const HostLog *log, fmi2String instance_name, fmi2Type type,
-                          fmi2String guid, fmi2String resource_location,
-                          const fmi2CallbackFunctions *functions, const char *name,
-                          const char *expected_guid, unsigned types);
+/* 0 when the request is right for the FMU `name` with token (GUID) `expected`; else 1,
+   with the reason logged. The resource location must be this FMU's resources folder: its
+   IDENTITY_FILE holds the token. */
+int instantiation_problem(const HostLog *log, const InstantiationRequest *request,
+                          const char *name, const char *expected);
 
 #endif

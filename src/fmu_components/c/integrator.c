@@ -9,7 +9,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "runtime.h"
+#include "core.h"
 
 #define N MODEL_INTEGRATED
 

@@ -2,7 +2,7 @@
  * FMU states: a copy of the instance's Snapshot (what the host set and what the run has
  * done; the constants and curves are rebuilt from its parameters). A serialized state is
  * the Snapshot in its envelope (state_envelope.h: format version, GUID, checksum); every
- * value in a serialized state passes the checks fmi2SetReal applies before anything of it
+ * value in a serialized state passes the checks setting a value applies before anything of it
  * is used. A state in memory was checked when it was made (taken from the running instance,
  * or deserialized and checked), so restoring it is a copy: the coupling library's corrected
  * scheme restores every FMU once per host step (docs/coupling.md).
@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "runtime.h"
+#include "core.h"
 #include "state_envelope.h"
 
 #define STATE_FORMAT_VERSION 2u
@@ -101,130 +101,129 @@ static int same_parameters(const Snapshot *a, const Snapshot *b) {
     return 1;
 }
 
-static SavedState *saved(Instance *instance, fmi2FMUstate state, const char *function) {
+static SavedState *saved(Instance *instance, void *state, const char *function) {
     SavedState *saved_state = (SavedState *)state;
     if (saved_state == NULL || saved_state->magic != STATE_MAGIC ||
         saved_state->model != &MODEL_INFO) {
-        log_status(instance, fmi2Error, "%s: the FMU state is NULL or not one %s made; state "
+        log_status(instance, STATUS_ERROR, "%s: the FMU state is NULL or not one %s made; state "
                    "unchanged", function, MODEL_INFO.name);
         return NULL;
     }
     return saved_state;
 }
 
-fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    Instance *instance = (Instance *)c;
-    if (!call_begin(instance, ALL_MODES, __func__)) return fmi2Error;
+Status core_get_state(Instance *instance, const char *function, void **FMUstate) {
+    if (!call_begin(instance, ALL_MODES, function)) return STATUS_ERROR;
     if (FMUstate == NULL) {
-        log_status(instance, fmi2Error, "fmi2GetFMUstate: the place for the state is NULL");
-        return call_end(instance, fmi2Error);
+        log_status(instance, STATUS_ERROR, "%s: the place for the state is NULL", function);
+        return call_end(instance, STATUS_ERROR);
     }
     SavedState *state = (SavedState *)*FMUstate;
     if (state != NULL && (state->magic != STATE_MAGIC || state->model != &MODEL_INFO)) {
-        log_status(instance, fmi2Error, "fmi2GetFMUstate: the state to update is not one this "
-                   "FMU made");
-        return call_end(instance, fmi2Error);
+        log_status(instance, STATUS_ERROR, "%s: the state to update is not one %s "
+                   "made", function, MODEL_INFO.name);
+        return call_end(instance, STATUS_ERROR);
     }
     if (state == NULL) state = malloc(sizeof *state);
     if (state == NULL) {
-        log_status(instance, fmi2Error, "fmi2GetFMUstate: out of memory");
-        return call_end(instance, fmi2Error);
+        log_status(instance, STATUS_ERROR, "%s: out of memory", function);
+        return call_end(instance, STATUS_ERROR);
     }
     state->magic = STATE_MAGIC;
     state->model = &MODEL_INFO;
     state->s = instance->s;
     *FMUstate = state;
-    return call_end(instance, fmi2OK);
+    return call_end(instance, STATUS_OK);
 }
 
-fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
-    Instance *instance = (Instance *)c;
-    if (!call_begin(instance, ALL_MODES, __func__)) return fmi2Error;
-    SavedState *state = saved(instance, FMUstate, "fmi2SetFMUstate");
-    if (state == NULL) return call_end(instance, fmi2Error);
+Status core_set_state(Instance *instance, const char *function, void *FMUstate) {
+    if (!call_begin(instance, ALL_MODES, function)) return STATUS_ERROR;
+    SavedState *state = saved(instance, FMUstate, function);
+    if (state == NULL) return call_end(instance, STATUS_ERROR);
     int data_kept = instance->s.initialized && same_parameters(&instance->s, &state->s);
     instance->s = state->s;
     if (instance->s.initialized && !data_kept)
         build_model_data(&instance->data, instance->s.values);
     instance->outputs_fresh = 0;
-    return call_end(instance, fmi2OK);
+    return call_end(instance, STATUS_OK);
 }
 
-fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    Instance *instance = (Instance *)c;
-    if (!call_begin(instance, ALL_MODES, __func__)) return fmi2Error;
-    if (FMUstate == NULL || *FMUstate == NULL) return call_end(instance, fmi2OK);
-    SavedState *state = saved(instance, *FMUstate, "fmi2FreeFMUstate");
-    if (state == NULL) return call_end(instance, fmi2Error);
+Status core_free_state(Instance *instance, const char *function, void **FMUstate) {
+    if (!call_begin(instance, ALL_MODES, function)) return STATUS_ERROR;
+    if (FMUstate == NULL || *FMUstate == NULL) return call_end(instance, STATUS_OK);
+    SavedState *state = saved(instance, *FMUstate, function);
+    if (state == NULL) return call_end(instance, STATUS_ERROR);
     state->magic = 0;
     free(state);
     *FMUstate = NULL;
-    return call_end(instance, fmi2OK);
+    return call_end(instance, STATUS_OK);
 }
 
-fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
-    Instance *instance = (Instance *)c;
-    if (!call_begin(instance, ALL_MODES, __func__)) return fmi2Error;
-    if (saved(instance, FMUstate, "fmi2SerializedFMUstateSize") == NULL || size == NULL)
-        return call_end(instance, fmi2Error);
+Status core_serialized_state_size(Instance *instance, const char *function, void *FMUstate,
+                                  size_t *size) {
+    if (!call_begin(instance, ALL_MODES, function)) return STATUS_ERROR;
+    if (saved(instance, FMUstate, function) == NULL) return call_end(instance, STATUS_ERROR);
+    if (size == NULL) {
+        log_status(instance, STATUS_ERROR, "%s: the place for the size is NULL", function);
+        return call_end(instance, STATUS_ERROR);
+    }
     *size = ENVELOPE_OVERHEAD + sizeof(Snapshot);
-    return call_end(instance, fmi2OK);
+    return call_end(instance, STATUS_OK);
 }
 
-fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate,
-                                 fmi2Byte serializedState[], size_t size) {
-    Instance *instance = (Instance *)c;
-    if (!call_begin(instance, ALL_MODES, __func__)) return fmi2Error;
-    SavedState *state = saved(instance, FMUstate, "fmi2SerializeFMUstate");
-    if (state == NULL) return call_end(instance, fmi2Error);
+Status core_serialize_state(Instance *instance, const char *function, void *FMUstate,
+                            unsigned char serializedState[], size_t size) {
+    if (!call_begin(instance, ALL_MODES, function)) return STATUS_ERROR;
+    SavedState *state = saved(instance, FMUstate, function);
+    if (state == NULL) return call_end(instance, STATUS_ERROR);
     size_t needed = ENVELOPE_OVERHEAD + sizeof(Snapshot);
     if (serializedState == NULL || size < needed) {
-        log_status(instance, fmi2Error, "fmi2SerializeFMUstate: the buffer holds %u bytes, the "
-                   "state needs %u (fmi2SerializedFMUstateSize)", (unsigned)size,
-                   (unsigned)needed);
-        return call_end(instance, fmi2Error);
+        log_status(instance, STATUS_ERROR, "%s: the buffer holds %u bytes, the "
+                   "state needs %u (%sSerializedFMUstateSize)", function, (unsigned)size,
+                   (unsigned)needed, instance->face->prefix);
+        return call_end(instance, STATUS_ERROR);
     }
     envelope_write((unsigned char *)serializedState, MODEL_INFO.name, MODEL_INFO.guid,
                    STATE_FORMAT_VERSION, (const unsigned char *)&state->s, sizeof(Snapshot));
-    return call_end(instance, fmi2OK);
+    return call_end(instance, STATUS_OK);
 }
 
-fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
-                                   fmi2FMUstate *FMUstate) {
-    Instance *instance = (Instance *)c;
-    if (!call_begin(instance, ALL_MODES, __func__)) return fmi2Error;
+Status core_deserialize_state(Instance *instance, const char *function,
+                              const unsigned char serializedState[], size_t size,
+                              void **FMUstate) {
+    if (!call_begin(instance, ALL_MODES, function)) return STATUS_ERROR;
     const unsigned char *payload;
     size_t length;
     char problem[MESSAGE_SIZE];
     if (FMUstate == NULL) {
-        log_status(instance, fmi2Error, "fmi2DeSerializeFMUstate: the place for the state is "
-                   "NULL");
-        return call_end(instance, fmi2Error);
+        log_status(instance, STATUS_ERROR, "%s: the place for the state is "
+                   "NULL", function);
+        return call_end(instance, STATUS_ERROR);
     }
     if (envelope_read((const unsigned char *)serializedState, size, MODEL_INFO.name,
                       MODEL_INFO.guid, STATE_FORMAT_VERSION, &payload, &length, problem,
                       sizeof problem)) {
-        log_status(instance, fmi2Error, "fmi2DeSerializeFMUstate: %s", problem);
-        return call_end(instance, fmi2Error);
+        log_status(instance, STATUS_ERROR, "%s: %s", function, problem);
+        return call_end(instance, STATUS_ERROR);
     }
     SavedState restored = {STATE_MAGIC, &MODEL_INFO, {0}};
     if (length != sizeof restored.s) {
-        log_status(instance, fmi2Error, "fmi2DeSerializeFMUstate: the serialized state cannot "
-                   "be read: %u bytes of content, this build's state has %u", (unsigned)length,
+        log_status(instance, STATUS_ERROR, "%s: the serialized state cannot "
+                   "be read: %u bytes of content, this build's state has %u", function, (unsigned)length,
                    (unsigned)sizeof restored.s);
-        return call_end(instance, fmi2Error);
+        return call_end(instance, STATUS_ERROR);
     }
     memcpy(&restored.s, payload, length);
     if (snapshot_problem(&restored.s, problem, sizeof problem)) {
-        log_status(instance, fmi2Error, "fmi2DeSerializeFMUstate: %s", problem);
-        return call_end(instance, fmi2Error);
+        log_status(instance, STATUS_ERROR, "%s: %s", function, problem);
+        return call_end(instance, STATUS_ERROR);
     }
     SavedState *state = malloc(sizeof *state);
     if (state == NULL) {
-        log_status(instance, fmi2Error, "fmi2DeSerializeFMUstate: out of memory");
-        return call_end(instance, fmi2Error);
+        log_status(instance, STATUS_ERROR, "%s: out of memory", function);
+        return call_end(instance, STATUS_ERROR);
     }
     *state = restored;
     *FMUstate = state;
-    return call_end(instance, fmi2OK);
+    return call_end(instance, STATUS_OK);
 }

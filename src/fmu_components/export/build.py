@@ -14,8 +14,11 @@
   pythonfmu's library: it returns fmi2Error for rejected calls, loads the Python shared
   library for C hosts, and never lets a failed instance crash the host. linux64, Python 3.11
   on the host.
+* FMI 3.0 (``fmus/fmi3/<Name>.fmu``): the native FMU's core and model code behind the FMI
+  3.0 face (``c/fmi3_face.c``), binaries for x86_64-linux and x86_64-windows, the sources
+  with a ``buildDescription.xml``.
 
-Both get their modelDescription.xml from the one writer (``fmu_components.export.model_description``).
+All get their modelDescription.xml from the one writer (``fmu_components.export.model_description``).
 Building needs gcc (and x86_64-w64-mingw32-gcc for win64: without it the native FMUs carry
 linux64 only, and the build says so).
 """
@@ -30,25 +33,36 @@ import tempfile
 import uuid
 import zipfile
 from pathlib import Path
+from xml.dom import minidom
+from xml.etree.ElementTree import Element, SubElement, tostring
 
 from .. import __version__
 from .cgen import ModelCode
-from .model_description import model_description
+from .model_description import model_description, model_description_fmi3
 from ..runtime.catalog import component_definition
 
 SOURCE = Path(__file__).resolve().parents[1]  # the package: c/ and runtime/ ship in FMUs
 C_SOURCE = SOURCE / "c"
 
-FLAVOURS = ("native", "python")
+# native: FMI 2.0 in C (fmus/); python: FMI 2.0 through pythonfmu (fmus/python/); fmi3: FMI 3.0
+# in C from the same core (fmus/fmi3/)
+FLAVOURS = ("native", "python", "fmi3")
+FOLDERS = {"native": "", "python": "python", "fmi3": "fmi3"}
+# Where each FMI version keeps a platform's binary
+PLATFORMS = {2: {"linux": "linux64", "windows": "win64"},
+             3: {"linux": "x86_64-linux", "windows": "x86_64-windows"}}
 GUID_NAMESPACE = uuid.UUID("6c1f4b7e-4f5e-4a8e-9c71-2f4d8e3b9a10")
 
 # The native runtime, hand-written once for all components, and the FMI headers.
-RUNTIME_SOURCES = ("fmi2_functions.c", "model_exchange.c", "cosimulation.c", "integrator.c",
-                   "state.c", "hermite.c", "text.c", "host_log.c", "state_envelope.c",
-                   "instantiation.c")
-RUNTIME_HEADERS = ("runtime.h", "model.h", "arithmetic.h", "hermite.h", "text.h", "host_log.h",
-                   "state_envelope.h", "instantiation.h", "call_flag.h")
-FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
+# The core (every FMI version), then each version's face.
+RUNTIME_SOURCES = ("core.c", "model_exchange.c", "cosimulation.c", "integrator.c", "state.c",
+                   "hermite.c", "text.c", "host_log.c", "state_envelope.c", "instantiation.c")
+RUNTIME_HEADERS = ("core.h", "model.h", "arithmetic.h", "hermite.h", "text.h", "host_log.h",
+                   "status.h", "state_envelope.h", "instantiation.h", "call_flag.h")
+FACE_SOURCES = {2: ("fmi2_face.c", "fmi2_host.c"), 3: ("fmi3_face.c",)}
+FACE_HEADERS = {2: ("fmi2_host.h",), 3: ()}
+FMI_HEADERS = {2: ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"),
+               3: ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")}
 GENERATED = ("model_config.h", "model.c")
 # The same arithmetic in the same order as the Python flavour: no fused multiply-add, no
 # fast-math; only the FMI functions visible; the model's functions inlined into the
@@ -124,22 +138,31 @@ def identity(definition, guid):
 
 # --- native -------------------------------------------------------------------------------
 
-def native_sources(definition, directory):
-    """The FMU's sources/ folder: runtime, FMI headers and the generated model; returns
-    (GUID, source file names in compile order)."""
+def runtime_files(fmi_version=2):
+    """The hand-written runtime's (sources, headers) for an FMI version: the core and the
+    version's face."""
+    return (RUNTIME_SOURCES + FACE_SOURCES[fmi_version],
+            RUNTIME_HEADERS + FACE_HEADERS[fmi_version])
+
+
+def native_sources(definition, directory, fmi_version=2):
+    """The FMU's sources/ folder: runtime (the core and the FMI version's face), FMI headers
+    and the generated model; returns (GUID, source file names in compile order)."""
     directory.mkdir(parents=True)
-    runtime = [(C_SOURCE / n).read_bytes() for n in RUNTIME_SOURCES + RUNTIME_HEADERS]
+    sources, headers = runtime_files(fmi_version)
+    runtime = [(C_SOURCE / n).read_bytes() for n in sources + headers]
     unidentified = ModelCode(definition, "")
-    guid = guid_for("native", definition.name, *runtime, unidentified.config_header(),
+    guid = guid_for("native" if fmi_version == 2 else f"native-fmi{fmi_version}",
+                    definition.name, *runtime, unidentified.config_header(),
                     unidentified.source())
     code = ModelCode(definition, guid)
     (directory / "model_config.h").write_text(code.config_header())
     (directory / "model.c").write_text(code.source())
-    for name in RUNTIME_SOURCES + RUNTIME_HEADERS:
+    for name in sources + headers:
         shutil.copy2(C_SOURCE / name, directory / name)
-    for name in FMI_HEADERS:
+    for name in FMI_HEADERS[fmi_version]:
         shutil.copy2(fmi_headers() / name, directory / name)
-    return guid, ["model.c", *RUNTIME_SOURCES]
+    return guid, ["model.c", *sources]
 
 
 def compile_native(compiler, sources, files, output, extra=()):
@@ -192,30 +215,53 @@ def definition_of(name, structure, own=None):
     return own.definition if own else component_definition(name, structure)
 
 
-def build_native(names, destination, staging, structure="final", own=None):
+def build_description(identifier, files):
+    """sources/buildDescription.xml (FMI 3.0 section 2.5.1): how a host compiles the
+    sources, with the flags that keep the Python flavour's bits."""
+    root = Element("fmiBuildDescription", fmiVersion="3.0")
+    configuration = SubElement(root, "BuildConfiguration", modelIdentifier=identifier)
+    file_set = SubElement(configuration, "SourceFileSet", language="C99", compilerOptions=" ".join(
+        f for f in C_FLAGS if f not in ("-Werror", "-Wall", "-Wextra", "-flto")
+        and not f.startswith("-Wno")))
+    for name in files:
+        SubElement(file_set, "SourceFile", name=name)
+    SubElement(configuration, "Library", name="m")
+    text = minidom.parseString(tostring(root, encoding="unicode")).toprettyxml(indent="  ")
+    return text.replace('<?xml version="1.0" ?>', '<?xml version="1.0" encoding="UTF-8"?>', 1)
+
+
+def build_native(names, destination, staging, structure="final", own=None, fmi_version=2):
     win64 = windows_compiler()
     if win64 is None:
         print(f"warning: {MINGW} not found, so the native FMUs carry no win64 binary (Debian: "
               f"apt-get install gcc-mingw-w64-x86-64-win32; .ci/run installs it)",
               file=sys.stderr)
+    platforms = PLATFORMS[fmi_version]
+    destination.mkdir(parents=True, exist_ok=True)
     built = {}
     for name in names:
         definition = definition_of(name, structure, own)
         identifier = own.name if own else model_identifier(name, structure)
-        work = staging / "native" / name
+        work = staging / f"native-fmi{fmi_version}" / name
         sources = work / "sources"
-        guid, files = native_sources(definition, sources)
-        binaries = {f"binaries/linux64/{identifier}.so": compile_native(
+        guid, files = native_sources(definition, sources, fmi_version)
+        binaries = {f"binaries/{platforms['linux']}/{identifier}.so": compile_native(
             "gcc", sources, files, work / f"{identifier}.so",
             ["-fPIC", "-Wl,-Bsymbolic", *GLIBC_FLOOR])}
         if win64:
             # mingw's own C99 printf (no DLL beyond msvcrt), libgcc linked in
-            binaries[f"binaries/win64/{identifier}.dll"] = compile_native(
+            binaries[f"binaries/{platforms['windows']}/{identifier}.dll"] = compile_native(
                 win64, sources, files, work / f"{identifier}.dll",
                 ["-D__USE_MINGW_ANSI_STDIO=1", "-static-libgcc"])
-        description = model_description(definition, guid=guid, model_identifier=identifier,
-                                         native=True, source_files=files,
-                                         nominals=state_nominals(definition))
+        if fmi_version == 2:
+            description = model_description(definition, guid=guid, model_identifier=identifier,
+                                             native=True, source_files=files,
+                                             nominals=state_nominals(definition))
+        else:
+            description = model_description_fmi3(definition, guid=guid,
+                                                  model_identifier=identifier,
+                                                  nominals=state_nominals(definition))
+            (sources / "buildDescription.xml").write_text(build_description(identifier, files))
         built[name] = write_fmu(destination / f"{identifier}.fmu", {
             "modelDescription.xml": description, **binaries,
             **{f"sources/{p.name}": p for p in sorted(sources.iterdir())},
@@ -270,7 +316,7 @@ def compile_guard(directory, name, guid):
                     f'-DPYTHON_LIBRARY="{python_library()}"', f'-DFMU_GUID="{guid}"',
                     f'-DFMU_NAME="{name}"', str(C_SOURCE / "fmi2_guard.c"),
                     *[str(C_SOURCE / f) for f in ("host_log.c", "state_envelope.c",
-                                                  "instantiation.c")],
+                                                  "instantiation.c", "fmi2_host.c")],
                     *GLIBC_FLOOR, "-o", str(library),
                     # NEEDED even where libc has them: a glibc before 2.34 has them there
                     "-Wl,--no-as-needed", "-l:libdl.so.2", "-l:libpthread.so.0"], check=True)
@@ -314,9 +360,9 @@ def build_python(names, destination, staging, structure="final", own=None):
 
 
 def build(names, destination, flavours=FLAVOURS, structure="final", own=None):
-    """{flavour: {name: path}}: native FMUs in destination, Python ones in destination/python;
-    the components in one of the thesis's model structures (catalog.STRUCTURES), or the one
-    part `own` (an Own; names: [own.name])."""
+    """{flavour: {name: path}}: native FMUs in destination, Python ones in destination/python,
+    FMI 3.0 ones in destination/fmi3; the components in one of the thesis's model structures
+    (catalog.STRUCTURES), or the one part `own` (an Own; names: [own.name])."""
     destination.mkdir(parents=True, exist_ok=True)
     built = {}
     with tempfile.TemporaryDirectory(prefix="fmu_components_") as tmp:
@@ -326,4 +372,7 @@ def build(names, destination, flavours=FLAVOURS, structure="final", own=None):
         if "python" in flavours:
             built["python"] = build_python(names, destination / "python", staging, structure,
                                            own)
+        if "fmi3" in flavours:
+            built["fmi3"] = build_native(names, destination / "fmi3", staging, structure, own,
+                                         fmi_version=3)
     return built

@@ -67,7 +67,9 @@ def read_identity(path):
         raise NotOurFmu(f"{path} cannot be read as an FMU ({error}); give a .fmu file that "
                         f"`fmu-components build` wrote") from None
     name = root.get("modelName", "")
-    tag = root.find(f"VendorAnnotations/Tool[@name='{TOOL}']/Component")
+    tag = root.find(f"VendorAnnotations/Tool[@name='{TOOL}']/Component")  # FMI 2.0
+    if tag is None:
+        tag = root.find(f"Annotations/Annotation[@type='{TOOL}']/Component")  # FMI 3.0
     if tag is not None:
         component, structure = tag.get("name"), tag.get("structure")
     elif name in COMPONENTS:  # built before the annotation: a thesis FMU by its name
@@ -80,10 +82,13 @@ def read_identity(path):
         raise NotOurFmu(f"{path} says it is {component!r} in the {structure!r} structure, "
                         f"which this version does not know; rebuild it")
     values = {}
-    for variable in root.iter("ScalarVariable"):
+    for variable in root.iter("ScalarVariable"):  # FMI 2.0
         real = variable.find("Real")
         if variable.get("causality") == "parameter" and real is not None:
             values[variable.get("name")] = float(real.get("start"))
+    for variable in root.iter("Float64"):  # FMI 3.0
+        if variable.get("causality") == "parameter":
+            values[variable.get("name")] = float(variable.get("start"))
     expected = set(component_definition(component, structure).default_parameters())
     if set(values) != expected:
         raise NotOurFmu(f"{path}: its parameters are not those of {component} in the "

@@ -1,9 +1,10 @@
-"""The one modelDescription.xml writer, for both flavours of every component.
+"""The one modelDescription.xml writer, for both flavours of every component and both FMI
+versions.
 
 From the catalog (variables, units, display units, descriptions, thesis start values,
 direct dependencies) and what the flavour is (its GUID, its model identifier, whether it
-needs Python on the host, its C sources), so that both flavours declare the same
-variables, value references, units and structure.
+needs Python on the host, its C sources), so that both flavours and both versions declare
+the same variables, value references, units and structure.
 """
 
 from xml.dom import minidom
@@ -15,10 +16,10 @@ from ..runtime.units import UNITS
 TOOL = "fmu-components"  # the VendorAnnotations tool that says which component an FMU is
 
 LOG_CATEGORIES = {
-    "logStatusWarning": "Log messages with fmi2Warning status.",
-    "logStatusDiscard": "Log messages with fmi2Discard status.",
-    "logStatusError": "Log messages with fmi2Error status.",
-    "logStatusFatal": "Log messages with fmi2Fatal status.",
+    "logStatusWarning": "Log messages with Warning status.",
+    "logStatusDiscard": "Log messages with Discard status.",
+    "logStatusError": "Log messages with Error status.",
+    "logStatusFatal": "Log messages with Fatal status.",
     "logAll": "Log all messages.",
 }
 
@@ -65,16 +66,9 @@ def model_description(definition, *, guid, model_identifier, native, source_file
             files = SubElement(element, "SourceFiles")
             for name in source_files:
                 SubElement(files, "File", name=name)
-    root.append(_unit_definitions(definition))
-    categories = SubElement(root, "LogCategories")
-    for name, description in LOG_CATEGORIES.items():
-        SubElement(categories, "Category", name=name, description=description)
-    SubElement(root, "DefaultExperiment",
-               {k: repr(float(v)) for k, v in definition.default_experiment.items()})
-    # What the FMU is, for the project's tools (export/identity.py): whatever its name.
-    tool = SubElement(SubElement(root, "VendorAnnotations"), "Tool", name=TOOL)
-    SubElement(tool, "Component", name=definition.component,
-               structure=definition.structure_name)
+    _common_elements(root, definition)
+    _identity_annotation(SubElement(SubElement(root, "VendorAnnotations"), "Tool", name=TOOL),
+                         definition)
     variables = SubElement(root, "ModelVariables")
     index = {v.name: i + 1 for i, v in enumerate(definition.variables)}
     nominal = dict(zip((v.name for v in definition.states), nominals))
@@ -86,11 +80,33 @@ def model_description(definition, *, guid, model_identifier, native, source_file
     for switch in definition.switches:
         variables.append(_switch_variable(switch, definition.switch_reference(switch.name)))
     root.append(_model_structure(definition, index))
+    return _xml_text(root)
+
+
+def _xml_text(root):
     text = minidom.parseString(tostring(root, encoding="unicode")).toprettyxml(indent="  ")
     return text.replace('<?xml version="1.0" ?>', '<?xml version="1.0" encoding="UTF-8"?>', 1)
 
 
-def _scalar_variable(variable, vr, nominal, derivative_of):
+def _common_elements(root, definition):
+    """Units, log categories and default experiment: the same in both FMI versions."""
+    root.append(_unit_definitions(definition))
+    categories = SubElement(root, "LogCategories")
+    for name, description in LOG_CATEGORIES.items():
+        SubElement(categories, "Category", name=name, description=description)
+    SubElement(root, "DefaultExperiment",
+               {k: repr(float(v)) for k, v in definition.default_experiment.items()})
+
+
+def _identity_annotation(parent, definition):
+    """What the FMU is, for the project's tools (export/identity.py): whatever its name."""
+    SubElement(parent, "Component", name=definition.component,
+               structure=definition.structure_name)
+
+
+def _variable_attributes(variable, vr):
+    """Name, value reference, description, causality, variability and initial: the same in
+    both FMI versions."""
     causality = variable.causality
     attributes = {"name": variable.name, "valueReference": str(vr),
                   "description": variable.description, "causality": causality,
@@ -99,7 +115,10 @@ def _scalar_variable(variable, vr, nominal, derivative_of):
         attributes["initial"] = "exact"
     elif causality == "local":  # states and derivatives: from the inputs at initialization
         attributes["initial"] = "calculated"
-    node = Element("ScalarVariable", attributes)
+    return attributes
+
+
+def _real_attributes(variable, nominal, derivative_of):
     real = {"unit": variable.unit}
     if variable.display_unit:
         real["displayUnit"] = variable.display_unit
@@ -109,7 +128,90 @@ def _scalar_variable(variable, vr, nominal, derivative_of):
         real["nominal"] = repr(float(nominal))
     if derivative_of is not None:
         real["derivative"] = str(derivative_of)
-    SubElement(node, "Real", real)
+    return real
+
+
+EVENT_INDICATOR = "contact_indicator"  # FMI 3 declares the contact's event indicator
+
+
+def model_description_fmi3(definition, *, guid, model_identifier, source_files=(),
+                           nominals=()):
+    """The FMI 3.0 modelDescription.xml of a native FMU: the same variables, value
+    references, units and structure as its FMI 2.0 one, and what FMI 3.0 adds (the outputs'
+    first time derivatives, adjoint derivatives, the event indicator as a variable)."""
+    view = definition.equations.continuous
+    root = Element("fmiModelDescription", {
+        "fmiVersion": "3.0", "modelName": definition.name, "instantiationToken": guid,
+        "description": definition.description, "author": "fmu-components",
+        "version": __version__, "license": "MIT",
+        "generationTool": f"fmu-components {__version__}",
+        "variableNamingConvention": "structured"})
+    common = {"modelIdentifier": model_identifier, "needsExecutionTool": "false",
+              "canBeInstantiatedOnlyOncePerProcess": "false", "canGetAndSetFMUState": "true",
+              "canSerializeFMUState": "true", "providesDirectionalDerivatives": "true",
+              "providesAdjointDerivatives": "true"}
+    SubElement(root, "ModelExchange", {**common, "needsCompletedIntegratorStep": "false"})
+    SubElement(root, "CoSimulation", {
+        **common, "canHandleVariableCommunicationStepSize": "true",
+        "maxOutputDerivativeOrder": "1", "hasEventMode": "false",
+        "providesIntermediateUpdate": "false", "canReturnEarlyAfterIntermediateUpdate": "false",
+        "mightReturnEarlyFromDoStep": "false", "providesEvaluateDiscreteStates": "false"})
+    _common_elements(root, definition)
+    variables = SubElement(root, "ModelVariables")
+    # after the Float64 variables, the Boolean parameter and the event indicator's place
+    # (c/core.h: TIME_REFERENCE)
+    SubElement(variables, "Float64", {
+        "name": "time", "valueReference": str(len(definition.variables) + 2),
+        "causality": "independent", "variability": "continuous",
+        "description": "Simulation time"})
+    nominal = dict(zip((v.name for v in definition.states), nominals))
+    references = {v.name: vr for vr, v in enumerate(definition.variables)}
+    derivative_of = {d.name: references[s.name] for s, d in zip(definition.states,
+                                                                definition.derivatives)}
+    for vr, variable in enumerate(definition.variables):
+        node = SubElement(variables, "Float64", _variable_attributes(variable, vr))
+        node.attrib.update(_real_attributes(variable, nominal.get(variable.name),
+                                            derivative_of.get(variable.name)))
+    for switch in definition.switches:
+        SubElement(variables, "Boolean", {
+            "name": switch.name, "valueReference": str(definition.switch_reference(switch.name)),
+            "description": switch.description, "causality": "parameter",
+            "variability": "fixed", "initial": "exact",
+            "start": "true" if switch.start else "false"})
+    indicators = []
+    if view.event_indicators:
+        vr = len(definition.variables) + len(definition.switches)
+        x = definition.inputs[0]
+        SubElement(variables, "Float64", {
+            "name": EVENT_INDICATOR, "valueReference": str(vr), "causality": "local",
+            "variability": "continuous", "initial": "calculated",
+            "description": f"The contact's event indicator: {x.name} in mm (contact while "
+                           f"positive)"})
+        indicators.append(vr)
+    structure = definition.structure()
+    node = SubElement(root, "ModelStructure")
+    for tag, group in (("Output", definition.outputs),
+                       ("ContinuousStateDerivative", definition.derivatives)):
+        for variable in group:
+            read = sorted(references[name] for name in structure[variable.name])
+            SubElement(node, tag, valueReference=str(references[variable.name]),
+                       dependencies=" ".join(map(str, read)),
+                       dependenciesKind=" ".join(["dependent"] * len(read)))
+    unknowns = list(definition.outputs) + list(definition.states) + list(definition.derivatives)
+    for vr in sorted(references[v.name] for v in unknowns):
+        SubElement(node, "InitialUnknown", valueReference=str(vr))
+    for vr in indicators:
+        SubElement(node, "EventIndicator", valueReference=str(vr),
+                   dependencies=str(references[definition.inputs[0].name]),
+                   dependenciesKind="dependent")
+    _identity_annotation(SubElement(SubElement(root, "Annotations"), "Annotation", type=TOOL),
+                         definition)
+    return _xml_text(root)
+
+
+def _scalar_variable(variable, vr, nominal, derivative_of):
+    node = Element("ScalarVariable", _variable_attributes(variable, vr))
+    SubElement(node, "Real", _real_attributes(variable, nominal, derivative_of))
     return node
 
 

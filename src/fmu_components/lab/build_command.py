@@ -86,8 +86,9 @@ def configure(parser):
                              "bush only) or haupt-sedlan (section 6.1); DEST defaults to "
                              "fmus/STRUCTURE for all but final")
     parser.add_argument("--flavour", nargs="+", choices=FLAVOURS, default=list(FLAVOURS),
-                        help="native (compiled C, fmus/) and/or python (pythonfmu, "
-                             "fmus/python/)")
+                        help="native (FMI 2.0 in compiled C, fmus/), python (FMI 2.0 through "
+                             "pythonfmu, fmus/python/) and/or fmi3 (FMI 3.0 in compiled C, "
+                             "fmus/fmi3/)")
     parser.add_argument("--no-run", action="store_true", help="build only")
     parser.add_argument("--params", type=Path, metavar="PARAMS.json",
                         help="parameter start values (FMU names, SI; fmu-components fit writes "
@@ -124,11 +125,15 @@ def run_command(args):
     destination = args.dest
     if structure != "final" and args.dest == Path("fmus"):
         destination = args.dest / structure
-    built = build(names, destination, args.flavour, structure)
+    return report_built(build(names, destination, args.flavour, structure), args.no_run)
+
+
+def report_built(built, no_run):
+    """Each built FMU's path, then (unless no_run) each run once."""
     for paths in built.values():
         for path in paths.values():
             print(f"built {path}")
-    if not args.no_run:
+    if not no_run:
         run(built)
     return 0
 
@@ -157,10 +162,5 @@ def read_own(path, name, component, structure):
 
 def build_own(args):
     own = read_own(args.params, args.name, args.component, args.structure)
-    built = build([own.name], args.dest, args.flavour, args.structure, own)
-    for paths in built.values():
-        for path in paths.values():
-            print(f"built {path}")
-    if not args.no_run:
-        run(built)
-    return 0
+    return report_built(build([own.name], args.dest, args.flavour, args.structure, own),
+                        args.no_run)

@@ -45,14 +45,15 @@ def cache_folder():
 
 
 def _content_key(definition):
-    from ..export.build import C_FLAGS, C_SOURCE, RUNTIME_HEADERS, RUNTIME_SOURCES
+    from ..export.build import C_FLAGS, C_SOURCE, runtime_files
     from ..export.cgen import ModelCode
 
     code = ModelCode(definition, "")
     digest = hashlib.sha256(" ".join(C_FLAGS).encode())
     digest.update(code.config_header().encode())
     digest.update(code.source().encode())
-    for name in RUNTIME_SOURCES + RUNTIME_HEADERS + (DRIVER,):
+    sources, headers = runtime_files()
+    for name in sources + headers + (DRIVER,):
         digest.update((C_SOURCE / name).read_bytes())
     return f"{definition.name}-{digest.hexdigest()[:20]}"
 

@@ -64,7 +64,7 @@ def forget_import_path(resources):
 
 
 # FMI 2.0 co-simulation states (section 4.2.4) and the calls each allows (the masks the
-# native runtime uses too, c/fmi2_functions.c).
+# native runtime uses too, c/core.c).
 INSTANTIATED = "Instantiated"
 INITIALIZATION = "InitializationMode"
 STEP_COMPLETE = "StepComplete"
@@ -432,8 +432,9 @@ class ComponentSlave(Fmi2Slave):
                 return
             if self._mode not in (INSTANTIATED, INITIALIZATION):
                 name = self.definition.switches[vr - self._switch_vrs.start].name
-                self._error(f"fmi2SetBoolean: {name} is a fixed parameter, settable only "
-                            f"before fmi2ExitInitializationMode; nothing set")
+                last = "true" if values[-1] else "false"
+                self._error(f"fmi2SetBoolean: {name} = {last} is a fixed parameter, settable "
+                            f"only before fmi2ExitInitializationMode; nothing set")
                 return
         for vr, value in zip(vrs, values):
             self._switches[vr - self._switch_vrs.start] = bool(value)
