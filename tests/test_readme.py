@@ -100,11 +100,14 @@ def test_the_readme_quick_start_commands_run_as_written(all_fmus, tmp_path):
     for command in readme_commands():
         if where_run(command):
             continue
-        words = shlex.split(command.replace(".venv/bin/", f"{bin_dir}/"))
+        # the README's /tmp/ paths go under tmp_path before the venv's own path goes in
+        # (a clone under /tmp keeps its venv)
+        words = [str(tmp_path / w[len("/tmp/"):]) if w.startswith("/tmp/") else w
+                 for w in shlex.split(command)]
+        words = [w.replace(".venv/bin/", f"{bin_dir}/") for w in words]
         output = None
         if ">" in words:
             words, output = words[:words.index(">")], tmp_path / words[words.index(">") + 1]
-        words = [str(tmp_path / w[len("/tmp/"):]) if w.startswith("/tmp/") else w for w in words]
         run = subprocess.run(words, cwd=tmp_path, capture_output=True, text=True, timeout=900)
         assert run.returncode == 0, (command, run.stderr[-2000:])
         if output:
