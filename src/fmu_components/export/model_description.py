@@ -51,13 +51,8 @@ def model_description(definition, *, guid, model_identifier, native, source_file
     """The modelDescription.xml text of one flavour of one component; `nominals`: of the
     continuous states, at the thesis parameters."""
     view = definition.equations.continuous
-    root = Element("fmiModelDescription", {
-        "fmiVersion": "2.0", "modelName": definition.name, "guid": guid,
-        "description": definition.description, "author": "fmu-components",
-        "version": __version__, "license": "MIT",
-        "generationTool": f"fmu-components {__version__}",
-        "variableNamingConvention": "structured",
-        "numberOfEventIndicators": str(len(view.event_indicators) if native else 0)})
+    root = _root(definition, "2.0", "guid", guid,
+                 numberOfEventIndicators=str(len(view.event_indicators) if native else 0))
     co_simulation, model_exchange = _capabilities(native)
     interfaces = [("ModelExchange", model_exchange)] if native else []
     for tag, capabilities in interfaces + [("CoSimulation", co_simulation)]:
@@ -81,6 +76,17 @@ def model_description(definition, *, guid, model_identifier, native, source_file
         variables.append(_switch_variable(switch, definition.switch_reference(switch.name)))
     root.append(_model_structure(definition, index))
     return _xml_text(root)
+
+
+def _root(definition, version, token_name, token, **extra):
+    """The fmiModelDescription element: what both versions say of the FMU, with the
+    version, its GUID or instantiation token (`token_name`), and its own attributes."""
+    return Element("fmiModelDescription", {
+        "fmiVersion": version, "modelName": definition.name, token_name: token,
+        "description": definition.description, "author": "fmu-components",
+        "version": __version__, "license": "MIT",
+        "generationTool": f"fmu-components {__version__}",
+        "variableNamingConvention": "structured", **extra})
 
 
 def _xml_text(root):
@@ -140,12 +146,7 @@ def model_description_fmi3(definition, *, guid, model_identifier, source_files=(
     references, units and structure as its FMI 2.0 one, and what FMI 3.0 adds (the outputs'
     first time derivatives, adjoint derivatives, the event indicator as a variable)."""
     view = definition.equations.continuous
-    root = Element("fmiModelDescription", {
-        "fmiVersion": "3.0", "modelName": definition.name, "instantiationToken": guid,
-        "description": definition.description, "author": "fmu-components",
-        "version": __version__, "license": "MIT",
-        "generationTool": f"fmu-components {__version__}",
-        "variableNamingConvention": "structured"})
+    root = _root(definition, "3.0", "instantiationToken", guid)
     common = {"modelIdentifier": model_identifier, "needsExecutionTool": "false",
               "canBeInstantiatedOnlyOncePerProcess": "false", "canGetAndSetFMUState": "true",
               "canSerializeFMUState": "true", "providesDirectionalDerivatives": "true",
