@@ -125,3 +125,37 @@ def test_the_damper_refuses_states_past_its_region_with_discard(native_fmus):
     assert all(math.isfinite(d) for d in derivatives)
     fmu.terminate()
     fmu.freeInstance()
+
+
+def test_an_output_driven_to_infinity_is_answered_with_discard_and_the_value(native_fmus):
+    """In Model Exchange the host's inputs and states go in unchecked until it reads: an
+    overflowing output is a Discard that names it, never an infinite value with OK."""
+    path = native_fmus["RoadWheelTyre"]
+    description = read_model_description(str(path))
+    messages = []
+    fmu = FMU2Model(guid=description.guid, unzipDirectory=extract(str(path)),
+                    modelIdentifier=description.modelExchange.modelIdentifier,
+                    instanceName="overflow")
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(
+        lambda env, name, status, category, message: messages.append((status, message.decode())))
+    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    fmu.instantiate(callbacks=callbacks)
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.setReal([0, 1], [2e-3, 0.0])
+    fmu.exitInitializationMode()
+    fmu.newDiscreteStates()
+    fmu.enterContinuousTimeMode()
+    assert all(math.isfinite(value) for value in fmu.getReal([2, 3, 4, 5]))
+    fmu.setReal([0, 1], [1e300, 0.0])
+    with pytest.raises(FMICallException):
+        fmu.getReal([2])
+    assert messages[-1] == (2, "fmi2GetReal: force would be inf at compression = 1e+300 m, "
+                               "compression_rate = 0.0 m/s: beyond what the model can give; "
+                               "retry with a smaller step or smaller inputs")
+    fmu.setReal([0, 1], [2e-3, 0.0])
+    assert all(math.isfinite(value) for value in fmu.getReal([2, 3, 4, 5]))
+    fmu.terminate()
+    fmu.freeInstance()

@@ -60,6 +60,61 @@ def test_non_finite_input_is_refused_and_changes_nothing(built_fmus, name, bad, 
     runner.free()
 
 
+def test_an_input_that_would_drive_an_output_to_infinity_is_refused_and_changes_nothing(
+        built_fmus):
+    """Compression 1e300 m overflows the tyre's exponential force: refused with the values
+    and the output named, not answered with OK and an infinite force."""
+    name = "RoadWheelTyre"
+    expected = uninterrupted(built_fmus[name], name)
+    runner, x, v = started(built_fmus[name], name)
+    before = runner.read()
+    rate = runner.fmu.getReal([runner.vr["compression_rate"]])[0]
+    assert runner.status(runner.fmu.setReal, [runner.vr["compression"]], [1e300]) == ERROR
+    assert last_error(runner) == ("fmi2SetReal: compression = 1e+300 m with compression_rate "
+                                  f"= {rate!r} m/s would drive force to inf; nothing set")
+    assert runner.read() == before
+    assert np.array_equal(runner.run(x, v, STEP), expected)
+    runner.free()
+
+
+def test_a_step_that_would_drive_an_output_to_infinity_is_discarded_and_changes_nothing(
+        built_fmus):
+    """A step of 1e300 s at a pressing rate leaves the tyre 1e297 m compressed: discarded,
+    the instance where it was, and a saved state carries on as if it had never been tried."""
+    name = "RoadWheelTyre"
+    expected = uninterrupted(built_fmus[name], name)
+    runner, x, v = started(built_fmus[name], name)
+    saved = runner.fmu.getFMUstate()
+    before = runner.read()
+    runner.set_inputs(x[0], 1e-3)
+    assert runner.status(runner.fmu.doStep, runner.time, 1e300) == DISCARD
+    message = [text for status, text in runner.messages if status == DISCARD][-1]
+    assert message.startswith(f"fmi2DoStep: step from t = {runner.time:.9g} s by 1e+300 s "
+                              "failed: it would drive force to inf (compression = ")
+    assert message.endswith("m at its end); nothing changed: take a smaller step")
+    runner.fmu.setFMUstate(saved)
+    assert runner.read() == before
+    assert np.array_equal(runner.run(x, v, STEP), expected)
+    runner.free()
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_every_output_is_finite_at_the_corners_of_the_finite_bounds(built_fmus, name):
+    """Inside ComponentDefinition.finite_bounds the guard does not look: at their corners,
+    from a state inside a sine's loop, a set of inputs and a 1 ms step give finite outputs
+    (or a refusal that is the model's own, as the damper's gas-spring limit)."""
+    (x_low, x_high), (v_low, v_high) = COMPONENTS[name].finite_bounds
+    for deflection in (x_low, x_high):
+        for rate in (v_low, v_high):
+            runner, _, _ = started(built_fmus[name], name)
+            if runner.status(runner.fmu.setReal, [runner.vr[n] for n in runner.inputs],
+                             [deflection, rate]) == OK:
+                assert np.all(np.isfinite(runner.read())), (deflection, rate)
+                runner.status(runner.fmu.doStep, runner.time, STEP)
+                assert np.all(np.isfinite(runner.read())), (deflection, rate)
+            runner.free()
+
+
 @pytest.mark.parametrize("name", FMU_NAMES)
 @pytest.mark.parametrize("time_offset, step", [(0.0, 0.0), (0.0, -STEP), (0.0, math.nan),
                                                (0.5, STEP), (-STEP, STEP)],

@@ -167,6 +167,23 @@ double contact_at(double x, double v) {
     return !MODEL_INFO.unilateral || x > 0.0 || (x == 0.0 && v > 0.0) ? 1.0 : 0.0;
 }
 
+int non_finite(Instance *instance, const char *function, unsigned first, const double *values,
+               int n, double x, double v) {
+    for (int i = 0; i < n; i++) {
+        if (isfinite(values[i])) continue;
+        const VariableInfo *input = MODEL_INFO.variables;
+        char a[REPR_SIZE], b[REPR_SIZE], c[REPR_SIZE];
+        log_status(instance, STATUS_DISCARD, "%s: %s would be %s at %s = %s %s, %s = %s %s: "
+                   "beyond what the model can give; retry with a smaller step or smaller "
+                   "inputs", function, MODEL_INFO.variables[first + i].name,
+                   format_repr(values[i], a), input[INPUT_DEFLECTION].name, format_repr(x, b),
+                   input[INPUT_DEFLECTION].unit, input[INPUT_RATE].name, format_repr(v, c),
+                   input[INPUT_RATE].unit);
+        return 1;
+    }
+    return 0;
+}
+
 /* The outputs, states and derivatives now, into outputs and locals (NaN while the
    parameters make no sense); STATUS_DISCARD where a host's states leave the model's region. */
 static Status current_values(Instance *instance, const char *function, int want_outputs,
@@ -192,10 +209,17 @@ static Status current_values(Instance *instance, const char *function, int want_
         inside &= model_rates(now.data, now.state, now.x, now.v, now.contact, NULL, 0.0, 0.0,
                               locals + MODEL_CONTINUOUS, NULL);
     }
-    if (inside) return STATUS_OK;
-    log_status(instance, STATUS_DISCARD, "%s: the states are outside the region the model is "
-               "defined in; retry with a smaller step", function);
-    return STATUS_DISCARD;
+    if (!inside) {
+        log_status(instance, STATUS_DISCARD, "%s: the states are outside the region the model "
+                   "is defined in; retry with a smaller step", function);
+        return STATUS_DISCARD;
+    }
+    if ((want_outputs && non_finite(instance, function, FIRST_OUTPUT, outputs, MODEL_OUTPUTS,
+                                    now.x, now.v)) ||
+        (want_locals && non_finite(instance, function, FIRST_STATE, locals,
+                                   2 * MODEL_CONTINUOUS, now.x, now.v)))
+        return STATUS_DISCARD;
+    return STATUS_OK;
 }
 
 /* --- life cycle -------------------------------------------------------------------------- */
@@ -407,7 +431,8 @@ Status core_set_float64(Instance *instance, const char *function, const unsigned
     if (refused) return call_end(instance, STATUS_ERROR);
     int co_simulation = s->initialized && instance->type == CO_SIMULATION;
     if (inputs_set && co_simulation && cosim_input_problem(instance, inputs[INPUT_DEFLECTION],
-                                                           problem, sizeof problem)) {
+                                                           inputs[INPUT_RATE], problem,
+                                                           sizeof problem)) {
         log_status(instance, STATUS_ERROR, "%s: %s; nothing set", function, problem);
         return call_end(instance, STATUS_ERROR);
     }

@@ -159,13 +159,20 @@ double contact_at(double x, double v);
 int parameter_problem(const double *values, char *message, size_t size);
 int variable_problem(unsigned vr, double value, char *message, size_t size);
 /* Constants and curves from the parameter values (checked). */
+/* 1, logged as STATUS_DISCARD with the inputs, when one of the n values (variables from
+   value reference `first` on) is not finite: an input or a host's state beyond the
+   model's range overflowed it. */
+int non_finite(Instance *instance, const char *function, unsigned first, const double *values,
+               int n, double x, double v);
 void build_model_data(ModelData *data, const double *values);
 
 /* --- co-simulation (cosimulation.c) ------------------------------------------------- */
 
 void cosim_start(Instance *instance);
-/* 0, or 1 with a message: the model cannot take the deflection. */
-int cosim_input_problem(Instance *instance, double deflection, char *message, size_t size);
+/* 0, or 1 with a message: the model cannot take the deflection, or (beyond the bounds of
+   FiniteGuard, runtime/cosim.py) an output at these inputs would not be finite. */
+int cosim_input_problem(Instance *instance, double deflection, double rate, char *message,
+                        size_t size);
 /* Inputs that cosim_input_problem accepted. */
 void cosim_take_inputs(Instance *instance, double deflection, double rate);
 /* STEP_WARNED: done, but the rate did not fit the deflection's movement (once per run); the

@@ -26,9 +26,38 @@ void cosim_start(Instance *instance) {
     instance->outputs_fresh = 0;
 }
 
-int cosim_input_problem(Instance *instance, double deflection, char *message, size_t size) {
+/* As FiniteGuard (runtime/cosim.py), word for word. */
+static int guard_watches(double deflection, double rate) {
+    return !(FINITE_DEFLECTION_LOW <= deflection && deflection <= FINITE_DEFLECTION_HIGH &&
+             FINITE_RATE_LOW <= rate && rate <= FINITE_RATE_HIGH);
+}
+
+/* The first output that is not finite, or -1. */
+static int non_finite_output(const double *outputs) {
+    for (int i = 0; i < MODEL_OUTPUTS; i++)
+        if (!isfinite(outputs[i])) return i;
+    return -1;
+}
+
+int cosim_input_problem(Instance *instance, double deflection, double rate, char *message,
+                        size_t size) {
     if (!instance->s.initialized) return 0;
-    return model_input_problem(&instance->data, instance->s.state, deflection, message, size);
+    if (model_input_problem(&instance->data, instance->s.state, deflection, message, size))
+        return 1;
+    if (!guard_watches(deflection, rate)) return 0;
+    double state[SLOTS(MODEL_STATES)], outputs[MODEL_OUTPUTS];
+    memcpy(state, instance->s.state, sizeof state);
+    model_take_input(&instance->data, state, deflection);
+    model_outputs(&instance->data, state, deflection, rate, outputs);
+    int bad = non_finite_output(outputs);
+    if (bad < 0) return 0;
+    const VariableInfo *x = &MODEL_INFO.variables[INPUT_DEFLECTION];
+    const VariableInfo *v = &MODEL_INFO.variables[INPUT_RATE];
+    char a[REPR_SIZE], b[REPR_SIZE], c[REPR_SIZE];
+    snprintf(message, size, "%s = %s %s with %s = %s %s would drive %s to %s", x->name,
+             format_repr(deflection, a), x->unit, v->name, format_repr(rate, b), v->unit,
+             MODEL_INFO.variables[FIRST_OUTPUT + bad].name, format_repr(outputs[bad], c));
+    return 1;
 }
 
 void cosim_take_inputs(Instance *instance, double deflection, double rate) {
@@ -129,8 +158,44 @@ static void rate_warning(const Snapshot *s, double secant, char *message, size_t
              v->unit, v->name, v->unit, x);
 }
 
+static int unguarded_step(Instance *instance, double current_time, double step_size,
+                          char *message, size_t size);
+
+/* A step that ends beyond the guard's bounds: taken, and undone with
+   STEP_FAILED_TO_COMPLETE if an output after it is not finite (as CoSimulation._guarded_step). */
+static int guarded_step(Instance *instance, double current_time, double step_size,
+                        char *message, size_t size) {
+    Snapshot before = instance->s;
+    int outcome = unguarded_step(instance, current_time, step_size, message, size);
+    if (outcome != STEP_DONE && outcome != STEP_WARNED) return outcome;
+    const double *outputs = cosim_outputs(instance);
+    int bad = non_finite_output(outputs);
+    if (bad < 0) return outcome;
+    char a[REPR_SIZE], b[REPR_SIZE];
+    snprintf(message, size, "step from t = %.9g s by %.6g s failed: it would drive %s to %s "
+             "(%s = %s %s at its end); nothing changed: take a smaller step", current_time,
+             step_size, MODEL_INFO.variables[FIRST_OUTPUT + bad].name,
+             format_repr(outputs[bad], a), MODEL_INFO.variables[INPUT_DEFLECTION].name,
+             format_repr(instance->s.deflection, b), MODEL_INFO.variables[INPUT_DEFLECTION].unit);
+    instance->s = before;
+    instance->outputs_fresh = 0;
+    return STEP_FAILED_TO_COMPLETE;
+}
+
 int cosim_do_step(Instance *instance, double current_time, double step_size, char *message,
                   size_t size) {
+    const Snapshot *s = &instance->s;
+    double rate = s->rate;
+    if (s->has_previous && s->rate_from_deflection)
+        rate = (s->deflection - s->previous_deflection) / s->previous_step;
+    if (0.0 < step_size && step_size < INFINITY &&
+        guard_watches(s->deflection + rate * step_size, rate))
+        return guarded_step(instance, current_time, step_size, message, size);
+    return unguarded_step(instance, current_time, step_size, message, size);
+}
+
+static int unguarded_step(Instance *instance, double current_time, double step_size,
+                          char *message, size_t size) {
     Snapshot *s = &instance->s;
     char a[REPR_SIZE], b[REPR_SIZE];
     if (!(0.0 < step_size && step_size < INFINITY)) {

@@ -118,6 +118,8 @@ Status core_get_derivatives(Instance *instance, const char *function, double der
                    s->time);
         return call_end(instance, STATUS_DISCARD);
     }
+    if (non_finite(instance, function, FIRST_DERIVATIVE, derivatives, N, s->deflection, s->rate))
+        return call_end(instance, STATUS_DISCARD);
     return call_end(instance, STATUS_OK);
 }
 

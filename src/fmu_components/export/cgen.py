@@ -194,6 +194,11 @@ class ModelCode:
             f"#define RATE_MARGIN {cosim.RATE_MARGIN!r}",
             f"#define RATE_STILL {cosim.rate_floors(d.deflection_scale)[0]!r}",
             f"#define RATE_CREEP {cosim.rate_floors(d.deflection_scale)[1]!r}",
+            "/* Inside these bounds every output is finite (runtime/cosim.py, FiniteGuard). */",
+            f"#define FINITE_DEFLECTION_LOW {c_number(d.finite_bounds[0][0])}",
+            f"#define FINITE_DEFLECTION_HIGH {c_number(d.finite_bounds[0][1])}",
+            f"#define FINITE_RATE_LOW {c_number(d.finite_bounds[1][0])}",
+            f"#define FINITE_RATE_HIGH {c_number(d.finite_bounds[1][1])}",
             "#endif", ""])
 
     def source(self):

@@ -29,7 +29,7 @@ if __package__ == "fmu_components.runtime":
 else:
     from .. import pythonfmu
 
-from .cosim import REFUSED, WARNED, CoSimulation, rate_floors
+from .cosim import REFUSED, WARNED, CoSimulation, FiniteGuard, rate_floors
 from .integrator import DEFAULT_RTOL, Rosenbrock
 
 Fmi2Slave, Fmi2Status = pythonfmu.Fmi2Slave, pythonfmu.enums.Fmi2Status
@@ -214,7 +214,8 @@ class ComponentSlave(Fmi2Slave):
 
     def _new_cosim(self, model, *args):
         return CoSimulation(model, *args, rate_floors=rate_floors(self.definition.deflection_scale),
-                            rate_from_deflection=self._switches[0])
+                            rate_from_deflection=self._switches[0],
+                            guard=FiniteGuard(self.definition))
 
     @fmi_call("fmi2Terminate", {STEP_COMPLETE, STEP_FAILED})
     def terminate(self):
@@ -343,7 +344,7 @@ class ComponentSlave(Fmi2Slave):
             if refused:
                 return
             if inputs_set and self._cosim is not None:
-                problem = self._cosim.input_problem(inputs[DEFLECTION_VR])
+                problem = self._cosim.input_problem(inputs[DEFLECTION_VR], inputs[RATE_VR])
                 if problem:
                     self._error(f"fmi2SetReal: {problem}; nothing set")
                     return

@@ -40,6 +40,11 @@ def magnitude_problem(variable, value):
         return (f"{variable.name} = {value!r} {variable.unit} is outside the magnitudes the "
                 f"model's arithmetic takes (zero or 1e-100 to 1e100 in size)")
     return None
+# Within this many deflection scales of 0, in the deflection and in the rate (per second),
+# every output is finite for a state the model reached (tests/test_robustness.py); beyond,
+# a set or a step first makes sure of it (runtime/cosim.py, FiniteGuard).
+FINITE_SCALES = 1e3
+
 DERIVATIVE_UNITS = {"m": "m/s", "rad": "rad/s", "1": "1/s", "rad/s": "rad/s2"}
 
 
@@ -104,6 +109,8 @@ class ComponentDefinition:
         # The size of a deflection, for the floors of the rate check (runtime/cosim.py).
         low, high, _ = measured_ranges[inputs[0].name]
         self.deflection_scale = max(abs(b) for b in (low, high) if math.isfinite(b))
+        bound = FINITE_SCALES * self.deflection_scale
+        self.finite_bounds = ((-bound, bound), (-bound, bound))  # deflection, rate
         deflection, rate = (v.name for v in inputs)
         self.switches = (Switch(
             "rate_from_deflection",

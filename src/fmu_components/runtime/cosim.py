@@ -53,12 +53,46 @@ def rate_inconsistency(previous_deflection, previous_rate, step, deflection, rat
     return None
 
 
+class FiniteGuard:
+    """Beyond the bounds of the inputs inside which every output is finite
+    (ComponentDefinition.finite_bounds), a set of inputs or a step first works out the
+    outputs it leads to, and is refused if one is not finite: an infinite force answered
+    with OK is worse than a refusal. Inside them it costs one comparison per input."""
+
+    def __init__(self, definition):
+        (self.x_low, self.x_high), (self.v_low, self.v_high) = definition.finite_bounds
+        (self.x_name, self.x_unit), (self.v_name, self.v_unit) = (
+            (v.name, v.unit) for v in definition.inputs)
+        self.output_names = [v.name for v in definition.outputs]
+
+    def watches(self, deflection, rate):
+        return not (self.x_low <= deflection <= self.x_high and self.v_low <= rate <= self.v_high)
+
+    def input_problem(self, outputs, deflection, rate):
+        """A message if an output is not finite at these inputs, else None."""
+        for name, value in zip(self.output_names, outputs):
+            if not math.isfinite(value):
+                return (f"{self.x_name} = {deflection!r} {self.x_unit} with {self.v_name} = "
+                        f"{rate!r} {self.v_unit} would drive {name} to {value!r}")
+        return None
+
+    def step_problem(self, outputs, deflection):
+        """A message if an output is not finite after a step, else None."""
+        for name, value in zip(self.output_names, outputs):
+            if not math.isfinite(value):
+                return (f"it would drive {name} to {value!r} ({self.x_name} = {deflection!r} "
+                        f"{self.x_unit} at its end); nothing changed: take a smaller step")
+        return None
+
+
 class CoSimulation:
     def __init__(self, model, rtol=DEFAULT_RTOL, start_time=0.0, deflection=0.0, rate=0.0,
-                 rate_floors=None, rate_from_deflection=False):
+                 rate_floors=None, rate_from_deflection=False, guard=None):
         """rate_floors: check the rate against the deflection (cosim.rate_floors), or None
-        not to; rate_from_deflection: derive the rate from the deflection instead."""
+        not to; rate_from_deflection: derive the rate from the deflection instead; guard: a
+        FiniteGuard, or None for none."""
         self.model = model
+        self.guard = guard
         self.rate_floors = rate_floors
         self.rate_from_deflection = rate_from_deflection
         # The last step: (deflection at its start, the rate held over it, its size).
@@ -74,14 +108,20 @@ class CoSimulation:
 
     def set_inputs(self, deflection, rate):
         """Returns an error message (and changes nothing) if the model cannot take them."""
-        problem = self.input_problem(deflection)
+        problem = self.input_problem(deflection, rate)
         if problem:
             return problem
         self.take_inputs(deflection, rate)
         return None
 
-    def input_problem(self, deflection):
-        return self.model.check_input(self.state, deflection)
+    def input_problem(self, deflection, rate):
+        problem = self.model.check_input(self.state, deflection)
+        guard = self.guard
+        if problem or guard is None or not guard.watches(deflection, rate):
+            return problem
+        state = self.state[:]
+        self.model.take_input(state, deflection)
+        return guard.input_problem(self.model.outputs(state, deflection, rate), deflection, rate)
 
     def take_inputs(self, deflection, rate):
         """Inputs that input_problem has accepted."""
@@ -109,6 +149,13 @@ class CoSimulation:
             return REFUSED, (f"current time {current_time!r} s does not follow from the last "
                              f"step, which ended at {time!r} s")
         held_rate, previous, secant = self.rate, self.previous, None
+        guard = self.guard
+        if guard is not None:
+            rate = held_rate
+            if previous is not None and self.rate_from_deflection:
+                rate = (self.deflection - previous[0]) / previous[2]
+            if guard.watches(self.deflection + rate * step_size, rate):
+                return self._guarded_step(current_time, step_size)
         if previous is not None:
             if self.rate_from_deflection:
                 # Backward difference over the last step, held over this one.
@@ -136,6 +183,23 @@ class CoSimulation:
             self.rate = held_rate
             return FAILED, f"step from t = {current_time:.9g} s by {step_size:.6g} s failed: {problem}"
         return self._completed(current_time, step_size, secant)
+
+    def _guarded_step(self, current_time, step_size):
+        """A step that ends beyond the guard's bounds: taken, and undone with FAILED if an
+        output after it is not finite."""
+        before, guard = self.snapshot(), self.guard
+        self.guard = None
+        try:
+            outcome = self.do_step(current_time, step_size)
+        finally:
+            self.guard = guard
+        if outcome is not None and outcome[0] != WARNED:
+            return outcome
+        problem = guard.step_problem(self.outputs(), self.deflection)
+        if problem is None:
+            return outcome
+        self.restore(before)
+        return FAILED, f"step from t = {current_time:.9g} s by {step_size:.6g} s failed: {problem}"
 
     def _completed(self, current_time, step_size, secant):
         self.previous = (self.deflection, self.rate, step_size)
