@@ -41,39 +41,14 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "fmi2Functions.h"
+#include "fmi2_table.h"
 #include "state_envelope.h"
 
 #define CALL_SECONDS 20 /* the first call of the Python flavour starts an interpreter */
 #define STATE_CAPACITY 65536
 
-static struct {
-    fmi2InstantiateTYPE *Instantiate;
-    fmi2FreeInstanceTYPE *FreeInstance;
-    fmi2SetDebugLoggingTYPE *SetDebugLogging;
-    fmi2SetupExperimentTYPE *SetupExperiment;
-    fmi2EnterInitializationModeTYPE *EnterInitializationMode;
-    fmi2ExitInitializationModeTYPE *ExitInitializationMode;
-    fmi2TerminateTYPE *Terminate;
-    fmi2ResetTYPE *Reset;
-    fmi2GetRealTYPE *GetReal;
-    fmi2GetIntegerTYPE *GetInteger;
-    fmi2GetBooleanTYPE *GetBoolean;
-    fmi2GetStringTYPE *GetString;
-    fmi2SetRealTYPE *SetReal;
-    fmi2SetIntegerTYPE *SetInteger;
-    fmi2SetBooleanTYPE *SetBoolean;
-    fmi2SetStringTYPE *SetString;
-    fmi2GetFMUstateTYPE *GetFMUstate;
-    fmi2SetFMUstateTYPE *SetFMUstate;
-    fmi2FreeFMUstateTYPE *FreeFMUstate;
-    fmi2SerializedFMUstateSizeTYPE *SerializedFMUstateSize;
-    fmi2SerializeFMUstateTYPE *SerializeFMUstate;
-    fmi2DeSerializeFMUstateTYPE *DeSerializeFMUstate;
-    fmi2DoStepTYPE *DoStep;
-    fmi2GetStatusTYPE *GetStatus;
-    fmi2GetRealStatusTYPE *GetRealStatus;
-} fmi;
+static Fmi2Table fmi;
+static int fmi3_binary; /* an FMI 3.0 binary, called through fmi3_as_fmi2.c */
 
 static const char *resource_uri, *guid, *model_name;
 static fmi2ValueReference vr_in[2], vr_out;
@@ -351,6 +326,8 @@ static int run_instantiate(const char *other_uri, int offers_model_exchange) {
     fmi2CallbackFunctions no_logger = {NULL, calloc, free, NULL, NULL};
     char missing[4096];
     snprintf(missing, sizeof missing, "%s/no-such-folder", resource_uri);
+    /* The cases with no FMI 3.0 form (no callbacks, an interface type FMI 3.0 has no call
+       for) are skipped on an FMI 3.0 binary. */
     struct { const char *what, *name; fmi2Type type; const char *guid, *uri;
              const fmi2CallbackFunctions *callbacks; } cases[] = {
         {"NULL instance name", NULL, fmi2CoSimulation, guid, resource_uri, &quiet},
@@ -372,8 +349,14 @@ static int run_instantiate(const char *other_uri, int offers_model_exchange) {
         {"folder without resources", "x", fmi2CoSimulation, guid, "file:///tmp", &quiet},
         {"another FMU's resources", "x", fmi2CoSimulation, guid, other_uri, &quiet},
     };
-    int n = (int)(sizeof cases / sizeof *cases), refused = 0;
+    int n = (int)(sizeof cases / sizeof *cases), refused = 0, skipped = 0;
     for (int i = 0; i < n; i++) {
+        if (fmi3_binary && (cases[i].callbacks == NULL ||
+                            (cases[i].type != fmi2CoSimulation &&
+                             cases[i].type != fmi2ModelExchange))) {
+            skipped++;
+            continue;
+        }
         alarm(CALL_SECONDS);
         fmi2Component c = fmi.Instantiate(cases[i].name, cases[i].type, cases[i].guid, cases[i].uri,
                                           cases[i].callbacks, fmi2False, fmi2True);
@@ -384,7 +367,7 @@ static int run_instantiate(const char *other_uri, int offers_model_exchange) {
     fmi2Component c = instantiate("good", &quiet, fmi2False);
     if (!c || !initialize(c, 0.0, 0.0)) fail("a valid instantiate after the refused ones failed");
     if (c) fmi.FreeInstance(c);
-    printf("instantiate_cases %d\ninstantiate_refused %d\n", n, refused);
+    printf("instantiate_cases %d\ninstantiate_refused %d\n", n - skipped, refused);
     return failures ? 3 : 0;
 }
 
@@ -844,6 +827,12 @@ static int run_thread_states(long calls) {
 static void *load(const char *binary) {
     void *library = dlopen(binary, RTLD_NOW | RTLD_LOCAL);
     if (!library) { fprintf(stderr, "dlopen failed: %s\n", dlerror()); return NULL; }
+    fmi3_binary = dlsym(library, "fmi3InstantiateCoSimulation") != NULL;
+    if (fmi3_binary) {
+        if (fmi3_as_fmi2(library, &fmi)) return library;
+        fprintf(stderr, "an FMI 3.0 function is missing\n");
+        return NULL;
+    }
 #define LOOKUP(name)                                                                       \
     if ((*(void **)&fmi.name = dlsym(library, "fmi2" #name)) == NULL) {                   \
         fprintf(stderr, "missing fmi2%s\n", #name);                                        \

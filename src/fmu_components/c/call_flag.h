@@ -47,7 +47,7 @@ static inline void call_release(CallFlag *flag) { FLAG_STORE(flag, CALL_FREE); }
 
 #define CALL_OVERLAP_MESSAGE                                                                \
     "%s refused: another call on this instance has not returned (a second thread, or "     \
-    "the logger calling back into the instance); FMI 2.0 allows one call at a time per "   \
+    "the logger calling back into the instance); FMI allows one call at a time per "       \
     "instance"
 
 #endif
