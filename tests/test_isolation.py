@@ -1,6 +1,7 @@
 """Instances are independent (spec section 8): two builds of one Python-flavour FMU in one
 process each run their own code, neither runs the host's `fmu_components` or pythonfmu, and
-making instances leaves the host's sys.path as it was."""
+making instances leaves the host's sys.path as it was; a copy whose Python was edited after
+the build is refused, since it would share the build's module names."""
 
 import shutil
 import sys
@@ -14,7 +15,7 @@ from fmu_components.export import build
 from fmu_components.lab.signals import thesis_sine
 
 from conftest import ROOT
-from fmu_runner import FmuRunner
+from fmu_runner import ERROR, FmuRunner
 
 NAME = "TrackBushTorsion"
 SHIFT = 1e6  # N m: what the modified build adds to the first output
@@ -100,3 +101,27 @@ def test_making_instances_leaves_sys_path_as_it_was(python_fmus):
     for _ in range(5):  # each run extracts the FMU to a new folder: five new resource paths
         simulate_fmu(str(path), stop_time=0.01, output_interval=1e-3)
     assert sys.path == before
+
+
+def test_a_copy_whose_python_was_edited_after_the_build_is_refused(python_fmus, tmp_path):
+    """An edited copy keeps the build's module names: in a process that has loaded the
+    unedited FMU it would run that FMU's code, not its own. The guard hashes the Python
+    in the resources folder when an instance is made and refuses the copy, naming both
+    hashes; the unedited FMU goes on working."""
+    shipped = first_output(python_fmus[NAME])
+    edited = tmp_path / f"{NAME}.fmu"
+    package = package_of(python_fmus[NAME])
+    with zipfile.ZipFile(python_fmus[NAME]) as source, zipfile.ZipFile(edited, "w") as target:
+        for item in source.infolist():
+            content = source.read(item)
+            if item.filename == f"resources/{package}/runtime/adapter.py":
+                content += SHIFTED_OUTPUT.encode()
+            target.writestr(item, content)
+    runner = FmuRunner.__new__(FmuRunner)
+    with pytest.raises(Exception):
+        runner.__init__(edited)
+    errors = [text for status, text in runner.messages if status == ERROR]
+    assert len(errors) == 1 and errors[0].startswith("fmi2Instantiate: the Python in file:")
+    assert "not to " in errors[0] and "Build the FMU again" in errors[0]
+    assert np.array_equal(first_output(python_fmus[NAME]), shipped)
+

@@ -167,6 +167,18 @@ double contact_at(double x, double v) {
     return !MODEL_INFO.unilateral || x > 0.0 || (x == 0.0 && v > 0.0) ? 1.0 : 0.0;
 }
 
+void log_outside_region(const Instance *instance, const char *function, const double *X) {
+    char states[MESSAGE_SIZE / 2] = "", text[REPR_SIZE];
+    for (int i = 0; i < MODEL_CONTINUOUS; i++) {
+        size_t used = strlen(states);
+        snprintf(states + used, sizeof states - used, "%s%s = %s", i ? ", " : "",
+                 MODEL_INFO.variables[FIRST_STATE + i].name, format_repr(X[i], text));
+    }
+    log_status(instance, STATUS_DISCARD, "%s: at t = %.9g s the states (%s) are outside the "
+               "region the model is defined in; retry with a smaller step", function,
+               instance->s.time, states);
+}
+
 int non_finite(Instance *instance, const char *function, unsigned first, const double *values,
                int n, double x, double v) {
     for (int i = 0; i < n; i++) {
@@ -210,8 +222,7 @@ static Status current_values(Instance *instance, const char *function, int want_
                               locals + MODEL_CONTINUOUS, NULL);
     }
     if (!inside) {
-        log_status(instance, STATUS_DISCARD, "%s: the states are outside the region the model "
-                   "is defined in; retry with a smaller step", function);
+        log_outside_region(instance, function, now.state);
         return STATUS_DISCARD;
     }
     if ((want_outputs && non_finite(instance, function, FIRST_OUTPUT, outputs, MODEL_OUTPUTS,

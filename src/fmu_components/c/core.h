@@ -159,6 +159,9 @@ double contact_at(double x, double v);
 int parameter_problem(const double *values, char *message, size_t size);
 int variable_problem(unsigned vr, double value, char *message, size_t size);
 /* Constants and curves from the parameter values (checked). */
+/* STATUS_DISCARD, logged with the time and the continuous states X, for states outside the
+   model's region (the damper's |z| < Z_LIMIT). */
+void log_outside_region(const Instance *instance, const char *function, const double *X);
 /* 1, logged as STATUS_DISCARD with the inputs, when one of the n values (variables from
    value reference `first` on) is not finite: an input or a host's state beyond the
    model's range overflowed it. */

@@ -23,13 +23,19 @@
  *    applies the host's logging choice itself (host_log.c, shared with the native runtime);
  *  - wraps serialized states in the envelope the native runtime uses (state_envelope.c:
  *    format version, GUID, checksum), and refuses a broken one before Python sees it;
- *  - answers fmi2GetRealStatus(fmi2LastSuccessfulTime) after a discarded step.
+ *  - answers fmi2GetRealStatus(fmi2LastSuccessfulTime) after a discarded step;
+ *  - hashes the Python in the resources folder when an instance is made from it, and
+ *    refuses a copy whose Python is not what the build wrote (PYTHON_CONTENT): its module
+ *    names carry the build's hash, so an edited copy would share modules with an unedited
+ *    one in the same process, and whichever came first would run for both.
  *
  * Everything else is forwarded unchanged.
  */
 
 #define _GNU_SOURCE
+#include <dirent.h>
 #include <dlfcn.h>
+#include <inttypes.h>
 #include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -40,6 +46,7 @@
 #include "fmi2Functions.h"
 #include "host_log.h"
 #include "fmi2_host.h"
+#include "instantiation.h"
 #include "state_envelope.h"
 
 #ifndef PYTHON_LIBRARY
@@ -47,6 +54,9 @@
 #endif
 #if !defined(FMU_GUID) || !defined(FMU_NAME)
 #error "build with -DFMU_GUID=\"...\" -DFMU_NAME=\"...\" (the FMU's GUID and model name)"
+#endif
+#ifndef PYTHON_CONTENT
+#error "build with -DPYTHON_CONTENT=\"...\" (export/build.py, python_content_hash)"
 #endif
 #define PYTHONFMU_ENGINE "libpythonfmu-export.so"
 #define STATE_FORMAT_VERSION 1u
@@ -416,6 +426,93 @@ __attribute__((visibility("default"))) int fmu_guard_log(int status, const char 
         CLOSE(settle(guard, engine.call));                                                  \
     } while (0)
 
+/* ---- the Python's content (export/build.py, python_content_hash) ---- */
+
+#define MAX_PYTHON_FILES 256
+
+typedef struct {
+    char *paths[MAX_PYTHON_FILES]; /* relative to the resources folder, '/' between parts */
+    int count, overflow;
+} PythonFiles;
+
+static void find_python(const char *root, const char *relative, PythonFiles *files) {
+    char folder[8192];
+    snprintf(folder, sizeof folder, "%s%s%s", root, relative[0] ? "/" : "", relative);
+    DIR *directory = opendir(folder);
+    if (directory == NULL) return;
+    struct dirent *entry;
+    while ((entry = readdir(directory)) != NULL) {
+        const char *name = entry->d_name;
+        if (name[0] == '.' || strcmp(name, "__pycache__") == 0) continue;
+        char path[8192];
+        snprintf(path, sizeof path, "%s%s%s", relative, relative[0] ? "/" : "", name);
+        size_t n = strlen(name);
+        if (entry->d_type == DT_DIR) {
+            find_python(root, path, files);
+        } else if (n > 3 && strcmp(name + n - 3, ".py") == 0) {
+            if (files->count == MAX_PYTHON_FILES) files->overflow = 1;
+            else files->paths[files->count++] = strdup(path);
+        }
+    }
+    closedir(directory);
+}
+
+static int by_bytes(const void *a, const void *b) {
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+static uint64_t fnv1a(uint64_t hash, const unsigned char *bytes, size_t n) {
+    for (size_t i = 0; i < n; i++) hash = (hash ^ bytes[i]) * 0x100000001b3ull;
+    return hash;
+}
+
+/* FNV-1a 64 over each .py file under the folder, in byte order of its relative path:
+   the path, a NUL, the content, a NUL. 0 with the hash, or 1 if a file cannot be read. */
+static int python_content(const char *folder, uint64_t *hash) {
+    PythonFiles files = {{0}, 0, 0};
+    find_python(folder, "", &files);
+    qsort(files.paths, (size_t)files.count, sizeof *files.paths, by_bytes);
+    uint64_t h = 0xcbf29ce484222325ull;
+    int failed = files.overflow;
+    static const unsigned char nul = 0;
+    for (int i = 0; i < files.count; i++) {
+        char path[8192];
+        snprintf(path, sizeof path, "%s/%s", folder, files.paths[i]);
+        FILE *file = fopen(path, "rb");
+        failed |= file == NULL;
+        h = fnv1a(fnv1a(h, (const unsigned char *)files.paths[i], strlen(files.paths[i])), &nul,
+                  1);
+        unsigned char buffer[65536];
+        size_t n;
+        while (file && (n = fread(buffer, 1, sizeof buffer, file)) > 0) h = fnv1a(h, buffer, n);
+        h = fnv1a(h, &nul, 1);
+        if (file) fclose(file);
+        free(files.paths[i]);
+    }
+    *hash = h;
+    return failed;
+}
+
+/* 1, logged, when the resources folder's Python is not what the build wrote. */
+static int python_content_problem(const HostLog *log, const char *resource_location) {
+    char folder[4096], text[17];
+    uint64_t hash = 0;
+    if (uri_path(resource_location, folder, sizeof folder) == 0 &&
+        python_content(folder, &hash) == 0) {
+        snprintf(text, sizeof text, "%016" PRIx64, hash);
+        if (strcmp(text, PYTHON_CONTENT) == 0) return 0;
+    } else {
+        snprintf(text, sizeof text, "(unreadable)");
+    }
+    char message[MESSAGE_SIZE];
+    snprintf(message, sizeof message, "fmi2Instantiate: the Python in %.300s hashes to %s, not "
+             "to %s as built: a copy edited after the build would share its module names with "
+             "an unedited one in this process. Build the FMU again (fmu-components build) "
+             "rather than editing it", resource_location, text, PYTHON_CONTENT);
+    host_log(log, STATUS_ERROR, message);
+    return 1;
+}
+
 const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
 const char *fmi2GetVersion(void) { return fmi2Version; }
 
@@ -434,6 +531,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     }
     Guard *guard = pool_take(fmuResourceLocation);
     int reused = guard != NULL;
+    if (!reused && python_content_problem(&log, fmuResourceLocation)) return NULL;
     if (!reused) guard = calloc(1, sizeof *guard);
     if (guard == NULL) return NULL;
     free(guard->instance_name);

@@ -14,7 +14,7 @@ static int hex(int c) {
 
 /* The path of a file URI, percent-decoded: file:///p, file:/p, file://localhost/p; on
    Windows file:///C:/p gives C:/p. 0 on success. */
-static int uri_path(const char *uri, char *path, size_t size) {
+int uri_path(const char *uri, char *path, size_t size) {
     if (strncmp(uri, "file:", 5) != 0) return 1;
     const char *p = uri + 5;
     if (strncmp(p, "//localhost/", 12) == 0) p += 11;

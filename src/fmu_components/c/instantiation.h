@@ -21,6 +21,9 @@ typedef struct {
     int resource_is_uri;
 } InstantiationRequest;
 
+/* The path of a local file URI, percent-decoded, into path[size]: 0 on success. */
+int uri_path(const char *uri, char *path, size_t size);
+
 /* 0 when the request is right for the FMU `name` with token (GUID) `expected`; else 1,
    with the reason logged. The resource location must be this FMU's resources folder: its
    IDENTITY_FILE holds the token. */

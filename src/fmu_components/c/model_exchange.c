@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "core.h"
+#include "text.h"
 
 #define ME_STATES (EVENT_MODE | CONTINUOUS_TIME_MODE)
 #define ME_READABLE (INITIALIZATION_MODE | EVENT_MODE | CONTINUOUS_TIME_MODE | TERMINATED)
@@ -69,8 +70,9 @@ Status core_set_time(Instance *instance, const char *function, double time) {
     if (!call_begin(instance, ME_STATES, function)) return STATUS_ERROR;
     if (!model_exchange(instance, function)) return call_end(instance, STATUS_ERROR);
     if (!isfinite(time)) {
-        log_status(instance, STATUS_ERROR, "%s: time = %g s is not finite; call ignored",
-                   function, time);
+        char text[REPR_SIZE];
+        log_status(instance, STATUS_ERROR, "%s: time = %s s is not finite; call ignored",
+                   function, format_repr(time, text));
         return call_end(instance, STATUS_ERROR);
     }
     instance->s.time = time;
@@ -87,8 +89,10 @@ Status core_set_continuous_states(Instance *instance, const char *function, cons
         return call_end(instance, STATUS_ERROR);
     for (size_t i = 0; i < nx; i++) {
         if (!isfinite(x[i])) {
-            log_status(instance, STATUS_ERROR, "%s: %s = %g is not finite; "
-                       "nothing set", function, MODEL_INFO.variables[FIRST_STATE + i].name, x[i]);
+            char text[REPR_SIZE];
+            log_status(instance, STATUS_ERROR, "%s: %s = %s is not finite; nothing set",
+                       function, MODEL_INFO.variables[FIRST_STATE + i].name,
+                       format_repr(x[i], text));
             return call_end(instance, STATUS_ERROR);
         }
     }
@@ -113,9 +117,7 @@ Status core_get_derivatives(Instance *instance, const char *function, double der
     Snapshot *s = &instance->s;
     if (!model_rates(&instance->data, s->state, s->deflection, s->rate, s->contact, NULL, 0.0,
                      0.0, derivatives, NULL)) {
-        log_status(instance, STATUS_DISCARD, "%s: at t = %.9g s the states are outside the "
-                   "region the model is defined in; retry with a smaller step", function,
-                   s->time);
+        log_outside_region(instance, function, s->state);
         return call_end(instance, STATUS_DISCARD);
     }
     if (non_finite(instance, function, FIRST_DERIVATIVE, derivatives, N, s->deflection, s->rate))
@@ -198,7 +200,10 @@ Status core_get_directional_derivative(Instance *instance, const char *function,
     }
     Now now;
     if (!model_now(instance, &now)) {
-        log_status(instance, STATUS_ERROR, "%s: the parameters make no sense yet", function);
+        char problem[MESSAGE_SIZE];
+        parameter_problem(instance->s.values, problem, sizeof problem);
+        log_status(instance, STATUS_ERROR, "%s: the parameters make no sense yet: %s", function,
+                   problem);
         return call_end(instance, STATUS_ERROR);
     }
     double outputs[MODEL_OUTPUTS], doutputs[MODEL_OUTPUTS], f[SLOTS(N)], df[SLOTS(N)] = {0};
@@ -212,8 +217,7 @@ Status core_get_directional_derivative(Instance *instance, const char *function,
                                          doutputs);
     }
     if (!inside) {
-        log_status(instance, STATUS_DISCARD, "%s: the states are outside the region the model is "
-                   "defined in", function);
+        log_outside_region(instance, function, now.state);
         return call_end(instance, STATUS_DISCARD);
     }
     for (size_t i = 0; i < nUnknown; i++) {
@@ -259,8 +263,7 @@ Status core_output_derivatives(Instance *instance, const char *function, const u
                      f, NULL) ||
         !model_continuous_outputs(&instance->data, s->state, s->deflection, s->rate, f, s->rate,
                                   0.0, outputs, doutputs)) {
-        log_status(instance, STATUS_DISCARD, "%s: the states are outside the region the model "
-                   "is defined in", function);
+        log_outside_region(instance, function, s->state);
         return call_end(instance, STATUS_DISCARD);
     }
     for (size_t i = 0; i < nvr; i++) values[i] = doutputs[vr[i] - FIRST_OUTPUT];

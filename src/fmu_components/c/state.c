@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "core.h"
+#include "text.h"
 #include "state_envelope.h"
 
 #define STATE_FORMAT_VERSION 2u
@@ -27,10 +28,25 @@ typedef struct {
     Snapshot s;
 } SavedState;
 
-static int finite_all(const double *values, size_t n) {
-    for (size_t i = 0; i < n; i++)
-        if (!isfinite(values[i])) return 0;
+/* 1, with "the state's NAME = VALUE is not valid" in message, when !ok. */
+static int invalid(int ok, const char *name, double value, char *message, size_t size) {
+    if (ok) return 0;
+    char text[REPR_SIZE];
+    snprintf(message, size, "the state's %s = %s is not valid", name, format_repr(value, text));
     return 1;
+}
+
+/* As invalid, for the first entry of values that is not finite. */
+static int invalid_entry(const double *values, size_t n, const char *name, char *message,
+                         size_t size) {
+    for (size_t i = 0; i < n; i++) {
+        if (isfinite(values[i])) continue;
+        char text[REPR_SIZE];
+        snprintf(message, size, "the state's %s[%u] = %s is not valid", name, (unsigned)i,
+                 format_repr(values[i], text));
+        return 1;
+    }
+    return 0;
 }
 
 /* 0 when every value of the snapshot is one the instance could have reached, else 1 with
@@ -50,16 +66,27 @@ static int snapshot_problem(const Snapshot *s, char *message, size_t size) {
             return 1;
         }
     }
-    if (!isfinite(s->start_time) || !(s->tolerance > 0.0 && isfinite(s->tolerance)) ||
-        !isfinite(s->last_successful_time) || s->warned > 3u ||
-        (s->rate_from_deflection != 0 && s->rate_from_deflection != 1) ||
-        (s->rate_warned != 0 && s->rate_warned != 1) ||
-        (s->has_previous != 0 && s->has_previous != 1) ||
-        (s->has_previous && !(isfinite(s->previous_deflection) && isfinite(s->previous_rate) &&
-                              s->previous_step > 0.0 && isfinite(s->previous_step)))) {
-        snprintf(message, size, "the state's experiment settings are not valid");
+    if (invalid(isfinite(s->start_time), "start time", s->start_time, message, size) ||
+        invalid(s->tolerance > 0.0 && isfinite(s->tolerance), "tolerance", s->tolerance,
+                message, size) ||
+        invalid(isfinite(s->last_successful_time), "last successful time",
+                s->last_successful_time, message, size) ||
+        invalid(s->warned <= 3u, "warned inputs", s->warned, message, size) ||
+        invalid(s->rate_from_deflection == 0 || s->rate_from_deflection == 1,
+                "rate_from_deflection", s->rate_from_deflection, message, size) ||
+        invalid(s->rate_warned == 0 || s->rate_warned == 1, "rate warned", s->rate_warned,
+                message, size) ||
+        invalid(s->has_previous == 0 || s->has_previous == 1, "last step flag",
+                s->has_previous, message, size))
         return 1;
-    }
+    if (s->has_previous &&
+        (invalid(isfinite(s->previous_deflection), "last step's deflection",
+                 s->previous_deflection, message, size) ||
+         invalid(isfinite(s->previous_rate), "last step's rate", s->previous_rate, message,
+                 size) ||
+         invalid(s->previous_step > 0.0 && isfinite(s->previous_step), "last step's size",
+                 s->previous_step, message, size)))
+        return 1;
     if (!s->initialized) return 0;
     if (s->initialized != 1) {
         snprintf(message, size, "the state's initialization flag %d is not 0 or 1",
@@ -71,17 +98,25 @@ static int snapshot_problem(const Snapshot *s, char *message, size_t size) {
         return 1;
     }
     const Memory *memory = &s->memory;
-    if (!isfinite(s->time) || !isfinite(s->deflection) || !isfinite(s->rate) ||
-        !finite_all(s->state, MODEL_STATES) || !(memory->rtol > 0.0 && isfinite(memory->rtol)) ||
-        (memory->has_h_next != 0 && memory->has_h_next != 1) ||
-        (memory->has_h_next && !(memory->h_next > 0.0 && isfinite(memory->h_next))) ||
-        memory->w_uses < 0 || memory->w_uses > MAX_W_REUSE ||
-        (memory->w_uses && (!(memory->w_h > 0.0 && isfinite(memory->w_h)) ||
-                            !finite_all(memory->w, MODEL_INTEGRATED * MODEL_INTEGRATED)))) {
-        snprintf(message, size, "the state's co-simulation values are not finite or out of "
-                 "range");
+    if (invalid(isfinite(s->time), "time", s->time, message, size) ||
+        invalid(isfinite(s->deflection), "deflection", s->deflection, message, size) ||
+        invalid(isfinite(s->rate), "rate", s->rate, message, size) ||
+        invalid_entry(s->state, MODEL_STATES, "internal state", message, size) ||
+        invalid(memory->rtol > 0.0 && isfinite(memory->rtol), "integrator tolerance",
+                memory->rtol, message, size) ||
+        invalid(memory->has_h_next == 0 || memory->has_h_next == 1, "next step flag",
+                memory->has_h_next, message, size) ||
+        (memory->has_h_next && invalid(memory->h_next > 0.0 && isfinite(memory->h_next),
+                                       "next step size", memory->h_next, message, size)) ||
+        invalid(memory->w_uses >= 0 && memory->w_uses <= MAX_W_REUSE,
+                "iteration matrix uses", memory->w_uses, message, size))
         return 1;
-    }
+    if (memory->w_uses &&
+        (invalid(memory->w_h > 0.0 && isfinite(memory->w_h), "iteration matrix step",
+                 memory->w_h, message, size) ||
+         invalid_entry(memory->w, MODEL_INTEGRATED * MODEL_INTEGRATED, "iteration matrix",
+                       message, size)))
+        return 1;
     ModelData data;
     build_model_data(&data, s->values);
     if (model_input_problem(&data, s->state, s->deflection, problem, sizeof problem)) {
@@ -105,8 +140,8 @@ static SavedState *saved(Instance *instance, void *state, const char *function) 
     SavedState *saved_state = (SavedState *)state;
     if (saved_state == NULL || saved_state->magic != STATE_MAGIC ||
         saved_state->model != &MODEL_INFO) {
-        log_status(instance, STATUS_ERROR, "%s: the FMU state is NULL or not one %s made; state "
-                   "unchanged", function, MODEL_INFO.name);
+        log_status(instance, STATUS_ERROR, "%s: the FMU state %p is NULL or not one %s made; "
+                   "state unchanged", function, state, MODEL_INFO.name);
         return NULL;
     }
     return saved_state;
@@ -120,8 +155,8 @@ Status core_get_state(Instance *instance, const char *function, void **FMUstate)
     }
     SavedState *state = (SavedState *)*FMUstate;
     if (state != NULL && (state->magic != STATE_MAGIC || state->model != &MODEL_INFO)) {
-        log_status(instance, STATUS_ERROR, "%s: the state to update is not one %s "
-                   "made", function, MODEL_INFO.name);
+        log_status(instance, STATUS_ERROR, "%s: the state to update, %p, is not one %s made",
+                   function, (void *)state, MODEL_INFO.name);
         return call_end(instance, STATUS_ERROR);
     }
     if (state == NULL) state = malloc(sizeof *state);

@@ -301,6 +301,17 @@ def build_tag(entry_text, package):
     return digest.hexdigest()[:12]
 
 
+def python_content_hash(files):
+    """The hash the Python flavour's guard (fmi2_guard.c, python_content) takes of the .py
+    files under an FMU's resources folder ({path relative to it: bytes}): FNV-1a 64 over
+    each in byte order of its path, the path, a NUL, the content, a NUL; 16 hex digits."""
+    value = 0xcbf29ce484222325
+    for path in sorted(p for p in files if p.endswith(".py")):
+        for byte in path.encode() + b"\0" + files[path] + b"\0":
+            value = ((value ^ byte) * 0x100000001b3) & 0xFFFFFFFFFFFFFFFF
+    return f"{value:016x}"
+
+
 def python_library():
     """The shared library of the Python that builds (and so will run) the FMUs."""
     soname = sysconfig.get_config_var("INSTSONAME") or ""
@@ -309,12 +320,13 @@ def python_library():
     return f"libpython{sys.version_info.major}.{sys.version_info.minor}.so.1.0"
 
 
-def compile_guard(directory, name, guid):
+def compile_guard(directory, name, guid, python_content):
     library = directory / f"{name}_guard.so"
     subprocess.run(["gcc", "-shared", "-fPIC", "-O2", "-Wall", "-Wextra", "-Werror",
                     f"-I{fmi_headers()}", f"-I{C_SOURCE}",
                     f'-DPYTHON_LIBRARY="{python_library()}"', f'-DFMU_GUID="{guid}"',
-                    f'-DFMU_NAME="{name}"', str(C_SOURCE / "fmi2_guard.c"),
+                    f'-DFMU_NAME="{name}"', f'-DPYTHON_CONTENT="{python_content}"',
+                    str(C_SOURCE / "fmi2_guard.c"),
                     *[str(C_SOURCE / f) for f in ("host_log.c", "state_envelope.c",
                                                   "instantiation.c", "fmi2_host.c")],
                     *GLIBC_FLOOR, "-o", str(library),
@@ -344,16 +356,16 @@ def build_python(names, destination, staging, structure="final", own=None):
         # the tag names every line of Python; the guard's source and the build's version
         # complete what the GUID is made of
         guid = guid_for("python", name, tag, guard_source)
-        guard = compile_guard(staging / "python", identifier, guid)
+        python = {f"{module}.py": entry_text.encode(),
+                  **{f"{package_name}/{path}": content for path, content in package.items()}}
+        guard = compile_guard(staging / "python", identifier, guid, python_content_hash(python))
         description = model_description(definition, guid=guid, model_identifier=identifier,
                                          native=False, nominals=state_nominals(definition))
         files = {"modelDescription.xml": description,
                  f"binaries/linux64/{identifier}.so": guard,
                  f"binaries/linux64/{PYTHONFMU_ENGINE}": engine,
                  "resources/slavemodule.txt": module,
-                 f"resources/{module}.py": entry_text,
-                 **{f"resources/{package_name}/{path}": content
-                    for path, content in package.items()},
+                 **{f"resources/{path}": content for path, content in python.items()},
                  **identity(definition, guid)}
         built[name] = write_fmu(destination / f"{identifier}.fmu", files)
     return built

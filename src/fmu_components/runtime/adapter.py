@@ -488,16 +488,22 @@ class ComponentSlave(Fmi2Slave):
             return f"the state belongs to {state.get('model')!r}, not to {self.definition.name}"
         values = state["values"]
         if len(values) != len(self._variables) or state["mode"] not in ANY_STATE:
-            return "the state's values or FMI state do not fit this FMU"
+            return (f"the state has {len(values)} values and FMI state {state['mode']!r}; this "
+                    f"FMU has {len(self._variables)} variables")
         for variable, value in zip(self._variables, values):
             problem = variable.causality in ("input", "parameter") and variable.check(float(value))
             if problem:
                 return f"the state's {problem}"
-        if not (_finite(state["start_time"]) and _positive(state["tolerance"])
-                and set(state["warned"]) <= {v.name for v in self.definition.inputs}
-                and len(state["switches"]) == len(self._switches)
-                and all(isinstance(v, bool) for v in state["switches"])):
-            return "the state's experiment settings are not valid"
+        inputs = {v.name for v in self.definition.inputs}
+        switches = state["switches"]
+        problem = _first_invalid([
+            ("start time", state["start_time"], _finite),
+            ("tolerance", state["tolerance"], _positive),
+            ("warned inputs", state["warned"], lambda v: set(v) <= inputs),
+            ("switches", switches, lambda v: len(v) == len(self._switches)
+             and all(isinstance(b, bool) for b in v))])
+        if problem:
+            return problem
         cosim = state["cosim"]
         if cosim is None:
             return None
@@ -508,19 +514,22 @@ class ComponentSlave(Fmi2Slave):
         size = self.definition.equations.state_size
         n = self.definition.equations.integrated
         w = memory["w"]
-        previous = cosim["previous"]
-        if not (isinstance(cosim["rate_warned"], bool) and (previous is None or (
-                len(previous) == 3 and all(_finite(v) for v in previous)
-                and _positive(previous[2])))):
-            return "the state's memory of the last step is not valid"
-        if not (all(_finite(cosim[k]) for k in ("time", "deflection", "rate"))
-                and len(cosim["state"]) == size and all(_finite(v) for v in cosim["state"])
-                and _positive(cosim["rtol"])
-                and (memory["h_next"] is None or _positive(memory["h_next"]))
-                and (w is None or (_positive(w[0]) and len(w[1]) == n * n
-                                   and all(_finite(v) for v in w[1])
-                                   and 1 <= int(w[2]) <= Rosenbrock.MAX_W_REUSE))):
-            return "the state's co-simulation values are not finite or out of range"
+        problem = _first_invalid([
+            ("rate warned", cosim["rate_warned"], lambda v: isinstance(v, bool)),
+            ("last step", cosim["previous"], lambda v: v is None or (
+                len(v) == 3 and all(_finite(x) for x in v) and _positive(v[2]))),
+            ("time", cosim["time"], _finite),
+            ("deflection", cosim["deflection"], _finite),
+            ("rate", cosim["rate"], _finite),
+            ("internal state size", len(cosim["state"]), lambda v: v == size),
+            *((f"internal state[{i}]", v, _finite) for i, v in enumerate(cosim["state"])),
+            ("integrator tolerance", cosim["rtol"], _positive),
+            ("next step size", memory["h_next"], lambda v: v is None or _positive(v)),
+            ("iteration matrix", w, lambda v: v is None or (
+                _positive(v[0]) and len(v[1]) == n * n and all(_finite(x) for x in v[1])
+                and 1 <= int(v[2]) <= Rosenbrock.MAX_W_REUSE))])
+        if problem:
+            return problem
         model = self.definition.build_model(self._parameter_values(values))
         problem = model.check_input(list(cosim["state"]), cosim["deflection"])
         if problem:
@@ -554,6 +563,15 @@ def rate_warning(definition, rate, secant):
             f"rate-dependent force is wrong. Give {rate_input.name} in {rate_input.unit} with "
             f"the sign of d({deflection.name})/dt, or set rate_from_deflection to derive it. "
             f"Warned once per instance.")
+
+
+def _first_invalid(checks):
+    """"the state's NAME = VALUE is not valid" for the first (name, value, test) whose test
+    fails, else None."""
+    for name, value, test in checks:
+        if not test(value):
+            return f"the state's {name} = {value!r} is not valid"
+    return None
 
 
 def _finite(value):
