@@ -15,6 +15,7 @@ from fmpy.validation import validate_fmu
 
 from fmu_components.lab.build_command import sine_input
 from fmu_components.lab.signals import thesis_sine
+from fmu_components.runtime.integrator import DEFAULT_RTOL
 
 from conftest import FMU_NAMES
 
@@ -57,7 +58,7 @@ def test_fmi3_gives_the_bits_of_fmi2(all_fmus, name, interface):
 class Instance:
     """One FMI 3.0 Co-Simulation instance through fmpy, its messages kept."""
 
-    def __init__(self, path):
+    def __init__(self, path, **options):
         self.description = read_model_description(str(path))
         self.vr = {v.name: v.valueReference for v in self.description.modelVariables}
         self.inputs = [v.valueReference for v in self.description.modelVariables
@@ -68,7 +69,7 @@ class Instance:
         self.fmu = FMU3Slave(guid=self.description.guid, unzipDirectory=extract(str(path)),
                              modelIdentifier=self.description.coSimulation.modelIdentifier,
                              instanceName="fmi3")
-        self.fmu.instantiate(logMessage=self._log)
+        self.fmu.instantiate(logMessage=self._log, **options)
         self.time = 0.0
 
     def _log(self, environment, status, category, message):
@@ -169,3 +170,144 @@ def test_the_tyres_contact_event_is_a_variable_and_its_indicator(fmi3):
     instance.step(-2e-3, 0.0)
     assert instance.fmu.getFloat64([indicator.variable.valueReference]) == [pytest.approx(-2.0)]
     instance.free()
+
+
+def contact_sine(t):
+    """A tyre that lifts off and lands twice a second: (compression, its rate)."""
+    return (0.5e-3 + 1.5e-3 * math.sin(2 * math.pi * t),
+            1.5e-3 * 2 * math.pi * math.cos(2 * math.pi * t))
+
+
+def run_tyre(path, early_return, event_mode, steps=2000):
+    """1 ms host steps on contact_sine; a step that returns early is finished from where it
+    returned (after event mode, if asked for). Forces at the grid, and the early returns as
+    (time, eventHandlingNeeded)."""
+    tyre = Instance(path, earlyReturnAllowed=early_return, eventModeUsed=event_mode)
+    tyre.start(*contact_sine(0.0))
+    tyre.fmu.enterStepMode()
+    forces, returns = [], []
+    for k in range(steps):
+        t, end = k * STEP, (k + 1) * STEP
+        tyre.fmu.setFloat64(tyre.inputs, list(contact_sine(t)))
+        while True:
+            event, _, early, last = tyre.fmu.doStep(t, end - t)
+            if not early:
+                break
+            returns.append((last, event))
+            if event:
+                tyre.fmu.enterEventMode()
+                tyre.fmu.updateDiscreteStates()
+                tyre.fmu.enterStepMode()
+            t = last
+        forces.append(tyre.fmu.getFloat64([tyre.vr["force"]])[0])
+    assert not [m for m in tyre.messages if m[0] >= 2], tyre.messages
+    tyre.free()
+    return np.array(forces), returns
+
+
+@pytest.mark.parametrize("event_mode", [True, False], ids=["event-mode", "early-return-only"])
+def test_the_tyre_returns_early_where_its_contact_begins_and_ends(fmi3, event_mode):
+    """Two lift-offs and two landings in 2 s: each step that crosses x = 0 returns at the
+    crossing of the held-rate path, asking for event handling when the host uses event
+    mode; the forces at the grid are those of whole steps."""
+    whole, none = run_tyre(fmi3["RoadWheelTyre"], False, False)
+    forces, returns = run_tyre(fmi3["RoadWheelTyre"], True, event_mode)
+    assert none == [] and len(returns) == 4
+    for last, event in returns:
+        k = math.floor(last / STEP)
+        x, v = contact_sine(k * STEP)
+        assert last == pytest.approx(k * STEP - x / v, abs=1e-15)  # where x + v (t - tk) = 0
+        assert event == event_mode
+    assert np.max(np.abs(forces - whole)) <= 1e-12 * np.ptp(whole)
+
+
+def damper_run(path, callback=None, early_return=False, steps=100, h=0.02):
+    """The damper on a 0.75 Hz sine at 20 ms steps (several internal steps each)."""
+    damper = Instance(path, intermediateUpdate=callback, earlyReturnAllowed=early_return)
+    damper.start(0.0, 0.0)
+    damper.fmu.enterStepMode()
+    rate = lambda t: 0.2 * 1.5 * math.pi * math.cos(1.5 * math.pi * t)  # noqa: E731
+    angle = lambda t: 0.2 * math.sin(1.5 * math.pi * t)  # noqa: E731
+    return damper, angle, rate, h, steps
+
+
+def test_intermediate_updates_come_at_internal_steps_with_outputs_to_read(fmi3):
+    """The host is called back inside each step that takes more than one internal step,
+    reads the outputs there, and the step ends where a step without call-backs ends (to
+    the integrator's relative tolerance of the range)."""
+    results, seen = {}, []
+    for with_callback in (False, True):
+        holder = {}
+
+        def callback(environment, t, set_requested, get_allowed, finished, can_return_early,
+                     early_requested, early_time):
+            damper = holder["damper"]
+            seen.append((t, damper.time, damper.fmu.getFloat64([damper.vr["torque"]])[0],
+                         bool(set_requested and get_allowed and finished)))
+
+        damper, angle, rate, h, steps = damper_run(fmi3["RotaryDamper"],
+                                                   callback if with_callback else None)
+        holder["damper"] = damper
+        torques = [damper.step(angle(k * h), rate(k * h), h)[0] for k in range(steps)]
+        assert not [m for m in damper.messages if m[0] >= 1], damper.messages
+        damper.free()
+        results[with_callback] = np.array(torques)
+    assert len(seen) >= steps // 2
+    assert all(start < t < start + h and math.isfinite(torque) and flags
+               for t, start, torque, flags in seen)
+    difference = np.max(np.abs(results[True] - results[False]))
+    assert 0 < difference <= DEFAULT_RTOL * np.ptp(results[False])
+
+
+def test_an_intermediate_update_sets_inputs_and_asks_to_return_early(fmi3):
+    """In the first call-back the host sets the rate to 0 and asks the step to return: the
+    step ends there, early, without event handling; the rate set holds from there on."""
+    holder, calls = {"armed": False}, []
+
+    def callback(environment, t, set_requested, get_allowed, finished, can_return_early,
+                 early_requested, early_time):
+        damper = holder["damper"]
+        if holder["armed"] and not calls:
+            calls.append((t, can_return_early))
+            damper.fmu.setFloat64([damper.vr["angle_rate"]], [0.0])
+            early_requested[0] = True
+
+    damper, angle, rate, h, _ = damper_run(fmi3["RotaryDamper"], callback, early_return=True)
+    holder["damper"] = damper
+    for k in range(10):  # into the sine: the integrator takes several steps per host step
+        damper.step(angle(k * h), rate(k * h), h)
+    start = damper.time
+    holder["armed"] = True
+    damper.fmu.setFloat64(damper.inputs, [angle(start), rate(start)])
+    event, _, early, last = damper.fmu.doStep(start, h)
+    assert calls and calls[0][1]  # the host was told it can ask for an early return
+    assert early and not event and last == calls[0][0] and start < last < start + h
+    assert damper.fmu.getFloat64([damper.vr["angle_rate"]]) == [0.0]
+    event, _, early, last = damper.fmu.doStep(last, start + h - last)
+    assert last == pytest.approx(start + h, abs=1e-15)
+    assert all(math.isfinite(value) for value in damper.fmu.getFloat64(damper.outputs))
+    assert not [m for m in damper.messages if m[0] >= 2], damper.messages
+    damper.free()
+
+
+def test_a_host_cannot_step_or_save_the_state_inside_an_intermediate_update(fmi3):
+    holder, statuses = {}, []
+
+    def callback(environment, t, set_requested, get_allowed, finished, can_return_early,
+                 early_requested, early_time):
+        damper = holder["damper"]
+        for call in (lambda: damper.fmu.doStep(t, 1e-3), damper.fmu.getFMUState,
+                     lambda: damper.fmu.setFloat64([damper.vr["C1"]], [900.0])):
+            try:
+                call()
+                statuses.append("accepted")
+            except FMICallException:
+                statuses.append("refused")
+
+    damper, angle, rate, h, _ = damper_run(fmi3["RotaryDamper"], callback)
+    holder["damper"] = damper
+    for k in range(10):
+        damper.step(angle(k * h), rate(k * h), h)
+    assert statuses and set(statuses) == {"refused"}
+    assert any("IntermediateUpdateMode" in m[1] for m in damper.messages)
+    damper.free()

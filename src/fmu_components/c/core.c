@@ -536,7 +536,11 @@ Status core_do_step(Instance *instance, const char *function, double current_tim
                     double step_size) {
     if (!call_begin(instance, STEP_COMPLETE, function)) return STATUS_ERROR;
     char problem[MESSAGE_SIZE];
-    switch (cosim_do_step(instance, current_time, step_size, problem, sizeof problem)) {
+    int in_pieces = instance->early_return_allowed || instance->intermediate_update;
+    switch (in_pieces ? cosim_do_step_in_pieces(instance, current_time, step_size, problem,
+                                                sizeof problem)
+                      : cosim_do_step(instance, current_time, step_size, problem,
+                                      sizeof problem)) {
     case STEP_DONE:
         instance->s.last_successful_time = instance->s.time;
         return call_end(instance, STATUS_OK);

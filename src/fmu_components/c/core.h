@@ -32,13 +32,16 @@ enum {
     TERMINATED = 1 << 4,
     EVENT_MODE = 1 << 5,
     CONTINUOUS_TIME_MODE = 1 << 6,
+    INTERMEDIATE_UPDATE = 1 << 7, /* FMI 3.0: inside a step, in the host's callback */
 };
-#define MODES 7
+#define MODES 8
 #define ANY_STATE                                                                          \
     (INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED |       \
      EVENT_MODE | CONTINUOUS_TIME_MODE)
-#define READABLE (ANY_STATE & ~INSTANTIATED)
-#define SETTABLE (INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | EVENT_MODE | CONTINUOUS_TIME_MODE)
+#define READABLE ((ANY_STATE & ~INSTANTIATED) | INTERMEDIATE_UPDATE)
+#define SETTABLE                                                                           \
+    (INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | EVENT_MODE | CONTINUOUS_TIME_MODE | \
+     INTERMEDIATE_UPDATE)
 #define BEFORE_INITIALIZED (INSTANTIATED | INITIALIZATION_MODE)
 
 typedef enum { MODEL_EXCHANGE, CO_SIMULATION } Interface; /* fmi2Type's values */
@@ -97,6 +100,11 @@ typedef struct {
 /* The independent variable, declared in FMI 3.0 (readable in both). */
 #define TIME_REFERENCE (RATE_FROM_DEFLECTION + 2)
 
+struct Instance;
+/* The host's intermediate update at time t inside a step (FMI 3.0 Co-Simulation): 1 when
+   it asks the step to return early there. */
+typedef int (*IntermediateUpdate)(struct Instance *instance, double t, int can_return_early);
+
 typedef struct Instance {
     Snapshot s;
     ModelData data;  /* from s.values at initialization: constants and curves */
@@ -108,7 +116,14 @@ typedef struct Instance {
     char *instance_name;
     CallFlag call; /* claimed while a call runs: another thread, or the logger, is refused */
     uint32_t magic;
+    /* What an FMI 3.0 Co-Simulation host allows a step (cosim_do_step_in_pieces). */
+    int early_return_allowed, event_mode_used;
+    IntermediateUpdate intermediate_update; /* NULL: the host takes none */
+    void *intermediate_context;            /* the face's: the host's callback */
+    int returned_early; /* the last step: 0 whole, RETURNED_AT_CONTACT or RETURNED_ON_REQUEST */
 } Instance;
+
+enum { RETURNED_AT_CONTACT = 1, RETURNED_ON_REQUEST = 2 };
 
 #define INSTANCE_MAGIC 0x54565247u /* "TVRG" */
 
@@ -176,6 +191,13 @@ void cosim_start(Instance *instance);
    FiniteGuard, runtime/cosim.py) an output at these inputs would not be finite. */
 int cosim_input_problem(Instance *instance, double deflection, double rate, char *message,
                         size_t size);
+/* As cosim_do_step, in pieces, for a host that lets the step return early or takes
+   intermediate updates: a tyre's step ends where its contact begins or ends
+   (RETURNED_AT_CONTACT), and the host is called back at the integrator's internal steps,
+   where it may read the outputs, set the inputs or ask for an early return. A step that
+   fails leaves everything as it was. */
+int cosim_do_step_in_pieces(Instance *instance, double current_time, double step_size,
+                            char *message, size_t size);
 /* Inputs that cosim_input_problem accepted. */
 void cosim_take_inputs(Instance *instance, double deflection, double rate);
 /* STEP_WARNED: done, but the rate did not fit the deflection's movement (once per run); the
@@ -227,6 +249,7 @@ Status core_output_derivatives(Instance *instance, const char *function, const u
 
 Status core_enter_event_mode(Instance *instance, const char *function);
 Status core_update_discrete_states(Instance *instance, const char *function);
+Status core_enter_step_mode(Instance *instance, const char *function);
 Status core_enter_continuous_time_mode(Instance *instance, const char *function);
 Status core_completed_integrator_step(Instance *instance, const char *function);
 Status core_set_time(Instance *instance, const char *function, double time);

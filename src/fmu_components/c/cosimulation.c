@@ -259,3 +259,84 @@ const double *cosim_outputs(Instance *instance) {
     }
     return instance->outputs;
 }
+
+/* The held rate the next step will use (as cosim_do_step derives it). */
+static double next_rate(const Snapshot *s) {
+    if (s->has_previous && s->rate_from_deflection)
+        return (s->deflection - s->previous_deflection) / s->previous_step;
+    return s->rate;
+}
+
+/* The time from now until a contact's deflection crosses 0 within h, or 0 if it does not. */
+static double until_contact_changes(const Snapshot *s, double h) {
+    if (!MODEL_INFO.unilateral) return 0.0;
+    double x = s->deflection, v = next_rate(s);
+    if ((x > 0.0) == (x + v * h > 0.0) || v == 0.0) return 0.0;
+    double crossing = -x / v;
+    return crossing > 0.0 && crossing < h ? crossing : 0.0;
+}
+
+int cosim_do_step_in_pieces(Instance *instance, double current_time, double step_size,
+                            char *message, size_t size) {
+    Snapshot *s = &instance->s, before = *s;
+    instance->returned_early = 0;
+    double t = current_time, done = 0.0, first_deflection = 0.0, first_rate = 0.0;
+    int outcome = STEP_DONE, pieces = 0;
+    char warning[MESSAGE_SIZE] = "";
+    for (;;) {
+        double piece = step_size - done;
+        double crossing = instance->early_return_allowed ? until_contact_changes(s, piece) : 0.0;
+        if (crossing > 0.0) piece = crossing;
+        if (instance->intermediate_update && s->memory.has_h_next && s->memory.h_next < piece)
+            piece = s->memory.h_next; /* one internal step of the integrator */
+        int last = piece == step_size - done;
+        int result = cosim_do_step(instance, t, piece, message, size);
+        if (result == STEP_WARNED) {
+            snprintf(warning, sizeof warning, "%s", message);
+            outcome = STEP_WARNED;
+        } else if (result != STEP_DONE) {
+            *s = before; /* nothing of the step is kept */
+            instance->outputs_fresh = 0;
+            return result;
+        }
+        if (pieces++ == 0) {
+            first_deflection = s->previous_deflection;
+            first_rate = s->previous_rate;
+        }
+        done += piece;
+        t = current_time + done;
+        if (last) {
+            s->time = current_time + step_size;
+            break;
+        }
+        if (crossing > 0.0 && piece == crossing) {
+            s->deflection = 0.0; /* where the contact changes: x + v t is 0 but for rounding */
+            instance->outputs_fresh = 0;
+            instance->returned_early = RETURNED_AT_CONTACT;
+            break;
+        }
+        if (instance->intermediate_update) {
+            s->mode = INTERMEDIATE_UPDATE;
+            call_release(&instance->call);
+            int early = instance->intermediate_update(instance, t, instance->early_return_allowed);
+            if (!call_claim(&instance->call)) {
+                snprintf(message, size, "another call took the instance during the "
+                         "intermediate update at t = %.9g s", t);
+                *s = before;
+                instance->outputs_fresh = 0;
+                return STEP_REFUSED;
+            }
+            s->mode = STEP_COMPLETE;
+            if (early && instance->early_return_allowed) {
+                instance->returned_early = RETURNED_ON_REQUEST;
+                break;
+            }
+        }
+    }
+    /* The rate check and the derived rate look at the host's step, not its pieces. */
+    s->previous_deflection = first_deflection;
+    s->previous_rate = first_rate;
+    s->previous_step = done;
+    if (outcome == STEP_WARNED) snprintf(message, size, "%s", warning);
+    return outcome;
+}

@@ -10,7 +10,8 @@
 
 static const Face FMI2 = {"fmi2",
                           {"Instantiated", "InitializationMode", "StepComplete", "StepFailed",
-                           "Terminated", "EventMode", "ContinuousTimeMode"}};
+                           "Terminated", "EventMode", "ContinuousTimeMode",
+                           "IntermediateUpdateMode"}};
 
 #define I ((Instance *)c)
 #define STATUS(call) ((fmi2Status)(call))

@@ -12,7 +12,8 @@
 
 static const Face FMI3 = {"fmi3",
                           {"Instantiated", "InitializationMode", "StepMode", "StepDiscarded",
-                           "Terminated", "EventMode", "ContinuousTimeMode"}};
+                           "Terminated", "EventMode", "ContinuousTimeMode",
+                           "IntermediateUpdateMode"}};
 
 #define I ((Instance *)instance)
 #define STATUS(call) ((fmi3Status)(call))
@@ -46,20 +47,38 @@ fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String in
                        resourcePath, loggingOn, instanceEnvironment, logMessage);
 }
 
-/* The FMUs have no event mode in Co-Simulation and no intermediate update: eventModeUsed,
-   earlyReturnAllowed and the intermediate variables change nothing (modelDescription:
-   hasEventMode, providesIntermediateUpdate false). */
+/* The host's callback inside a step: it may read the outputs and set the inputs (the
+   variables declared intermediateUpdate), and ask the step to return early. */
+static int intermediate_update(Instance *instance, double t, int can_return_early) {
+    fmi3Boolean early = false;
+    fmi3Float64 early_time = t;
+    ((fmi3IntermediateUpdateCallback)instance->intermediate_context)(
+        instance->log.environment, t, true, true, true, can_return_early, &early, &early_time);
+    return early;
+}
+
+/* eventModeUsed: a tyre's step that returned early at its contact asks for event handling;
+   earlyReturnAllowed: steps return early there, or where the host asks in an intermediate
+   update; intermediateUpdate: called at the integrator's internal steps inside a step.
+   Every input and output is an intermediate variable, so the list asked for changes
+   nothing. */
 fmi3Instance fmi3InstantiateCoSimulation(
     fmi3String instanceName, fmi3String instantiationToken, fmi3String resourcePath,
     fmi3Boolean visible, fmi3Boolean loggingOn, fmi3Boolean eventModeUsed,
     fmi3Boolean earlyReturnAllowed, const fmi3ValueReference requiredIntermediateVariables[],
     size_t nRequiredIntermediateVariables, fmi3InstanceEnvironment instanceEnvironment,
     fmi3LogMessageCallback logMessage, fmi3IntermediateUpdateCallback intermediateUpdate) {
-    (void)visible, (void)eventModeUsed, (void)earlyReturnAllowed;
-    (void)requiredIntermediateVariables, (void)nRequiredIntermediateVariables;
-    (void)intermediateUpdate;
-    return instantiate(__func__, CO_SIMULATION, instanceName, instantiationToken,
-                       resourcePath, loggingOn, instanceEnvironment, logMessage);
+    (void)visible, (void)requiredIntermediateVariables, (void)nRequiredIntermediateVariables;
+    Instance *instance = instantiate(__func__, CO_SIMULATION, instanceName, instantiationToken,
+                                     resourcePath, loggingOn, instanceEnvironment, logMessage);
+    if (instance == NULL) return NULL;
+    instance->event_mode_used = eventModeUsed;
+    instance->early_return_allowed = earlyReturnAllowed;
+    if (intermediateUpdate != NULL) {
+        instance->intermediate_update = intermediate_update;
+        instance->intermediate_context = (void *)intermediateUpdate;
+    }
+    return instance;
 }
 
 fmi3Instance fmi3InstantiateScheduledExecution(
@@ -453,10 +472,8 @@ fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *nConti
 
 /* --- co-simulation ----------------------------------------------------------------------- */
 
-/* Step Mode follows initialization at once (no event mode in Co-Simulation). */
 fmi3Status fmi3EnterStepMode(fmi3Instance instance) {
-    if (!call_begin(I, STEP_COMPLETE, __func__)) return fmi3Error;
-    return STATUS(call_end(I, STATUS_OK));
+    return STATUS(core_enter_step_mode(I, __func__));
 }
 
 fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference vr[],
@@ -475,9 +492,10 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     fmi3Status status = STATUS(core_do_step(I, __func__, currentCommunicationPoint,
                                             communicationStepSize));
     if (status > fmi3Discard) return status;
-    if (eventHandlingNeeded) *eventHandlingNeeded = false;
+    if (eventHandlingNeeded)
+        *eventHandlingNeeded = I->returned_early == RETURNED_AT_CONTACT && I->event_mode_used;
     if (terminateSimulation) *terminateSimulation = false;
-    if (earlyReturn) *earlyReturn = false;
+    if (earlyReturn) *earlyReturn = I->returned_early != 0;
     if (lastSuccessfulTime) *lastSuccessfulTime = I->s.last_successful_time;
     return status;
 }

@@ -35,19 +35,42 @@ static int counted(Instance *instance, const char *function, size_t given, size_
     return 0;
 }
 
+/* Model Exchange; and Co-Simulation from Step Mode for a host that asked for event mode
+   at instantiation (FMI 3.0: after a step returned early at a tyre's contact). */
 Status core_enter_event_mode(Instance *instance, const char *function) {
-    if (!call_begin(instance, ME_STATES, function)) return STATUS_ERROR;
-    if (!model_exchange(instance, function)) return call_end(instance, STATUS_ERROR);
+    if (!call_begin(instance, ME_STATES | STEP_COMPLETE, function)) return STATUS_ERROR;
+    if (instance->type == CO_SIMULATION && !instance->event_mode_used) {
+        log_status(instance, STATUS_ERROR, "%s: this Co-Simulation instance was made without "
+                   "eventModeUsed", function);
+        return call_end(instance, STATUS_ERROR);
+    }
+    if (instance->type == CO_SIMULATION && instance->s.mode != STEP_COMPLETE) {
+        call_refused(instance, 1, STEP_COMPLETE, function); /* logs, and ends the call */
+        return STATUS_ERROR;
+    }
     instance->s.mode = EVENT_MODE;
     return call_end(instance, STATUS_OK);
 }
 
 /* A contact's mode follows the sign of x at each event; nothing else changes (the face
-   answers: no new discrete states needed, no next event time, nothing else changed). */
+   answers: no new discrete states needed, no next event time, nothing else changed). In
+   Co-Simulation the step itself follows the contact: nothing to update. */
 Status core_update_discrete_states(Instance *instance, const char *function) {
     if (!call_begin(instance, EVENT_MODE, function)) return STATUS_ERROR;
-    if (!model_exchange(instance, function)) return call_end(instance, STATUS_ERROR);
-    instance->s.contact = contact_at(instance->s.deflection, instance->s.rate);
+    if (instance->type == MODEL_EXCHANGE)
+        instance->s.contact = contact_at(instance->s.deflection, instance->s.rate);
+    return call_end(instance, STATUS_OK);
+}
+
+/* Co-Simulation: from event mode (or straight after initialization) into Step Mode. */
+Status core_enter_step_mode(Instance *instance, const char *function) {
+    if (!call_begin(instance, STEP_COMPLETE | EVENT_MODE, function)) return STATUS_ERROR;
+    if (instance->type != CO_SIMULATION) {
+        log_status(instance, STATUS_ERROR, "%s: this instance was made for Model Exchange",
+                   function);
+        return call_end(instance, STATUS_ERROR);
+    }
+    instance->s.mode = STEP_COMPLETE;
     return call_end(instance, STATUS_OK);
 }
 

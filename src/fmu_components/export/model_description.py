@@ -144,7 +144,8 @@ def model_description_fmi3(definition, *, guid, model_identifier, source_files=(
                            nominals=()):
     """The FMI 3.0 modelDescription.xml of a native FMU: the same variables, value
     references, units and structure as its FMI 2.0 one, and what FMI 3.0 adds (the outputs'
-    first time derivatives, adjoint derivatives, the event indicator as a variable)."""
+    first time derivatives, adjoint derivatives, the event indicator as a variable,
+    intermediate update and early return; event mode in Co-Simulation for a contact)."""
     view = definition.equations.continuous
     root = _root(definition, "3.0", "instantiationToken", guid)
     common = {"modelIdentifier": model_identifier, "needsExecutionTool": "false",
@@ -154,9 +155,11 @@ def model_description_fmi3(definition, *, guid, model_identifier, source_files=(
     SubElement(root, "ModelExchange", {**common, "needsCompletedIntegratorStep": "false"})
     SubElement(root, "CoSimulation", {
         **common, "canHandleVariableCommunicationStepSize": "true",
-        "maxOutputDerivativeOrder": "1", "hasEventMode": "false",
-        "providesIntermediateUpdate": "false", "canReturnEarlyAfterIntermediateUpdate": "false",
-        "mightReturnEarlyFromDoStep": "false", "providesEvaluateDiscreteStates": "false"})
+        "maxOutputDerivativeOrder": "1",
+        # a contact's step can end where the contact begins or ends (c/cosimulation.c)
+        "hasEventMode": str(definition.equations.unilateral).lower(),
+        "providesIntermediateUpdate": "true", "canReturnEarlyAfterIntermediateUpdate": "true",
+        "mightReturnEarlyFromDoStep": "true", "providesEvaluateDiscreteStates": "false"})
     _common_elements(root, definition)
     variables = SubElement(root, "ModelVariables")
     # after the Float64 variables, the Boolean parameter and the event indicator's place
@@ -173,6 +176,8 @@ def model_description_fmi3(definition, *, guid, model_identifier, source_files=(
         node = SubElement(variables, "Float64", _variable_attributes(variable, vr))
         node.attrib.update(_real_attributes(variable, nominal.get(variable.name),
                                             derivative_of.get(variable.name)))
+        if variable.causality in ("input", "output"):  # read and set inside a step too
+            node.set("intermediateUpdate", "true")
     for switch in definition.switches:
         SubElement(variables, "Boolean", {
             "name": switch.name, "valueReference": str(definition.switch_reference(switch.name)),
