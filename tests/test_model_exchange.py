@@ -65,21 +65,27 @@ def test_directional_derivatives_match_central_differences(native_fmus, name, in
     assert worst <= 1e-6 and compared > 40 * knowns, (compared, kinks, worst)
 
 
-def test_a_host_setting_states_straight_after_event_mode_is_served_with_one_warning(native_fmus):
-    """The call pattern of importers that skip fmi2EnterContinuousTimeMode before setting
-    the states (spec section 7)."""
-    path = native_fmus["TrackBushTorsion"]
+def logged_instance(path, name):
+    """A Model Exchange instance through fmpy, and the list its messages land in as
+    (status, text)."""
     description = read_model_description(str(path))
     messages = []
     fmu = FMU2Model(guid=description.guid, unzipDirectory=extract(str(path)),
-                    modelIdentifier=description.modelExchange.modelIdentifier,
-                    instanceName="importer")
+                    modelIdentifier=description.modelExchange.modelIdentifier, instanceName=name)
     callbacks = fmi2CallbackFunctions()
     callbacks.logger = fmi2CallbackLoggerTYPE(
         lambda env, name, status, category, message: messages.append((status, message.decode())))
     callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
     callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
     fmu.instantiate(callbacks=callbacks)
+    fmu.callbacks_kept = callbacks  # alive as long as the instance
+    return fmu, messages
+
+
+def test_a_host_setting_states_straight_after_event_mode_is_served_with_one_warning(native_fmus):
+    """The call pattern of importers that skip fmi2EnterContinuousTimeMode before setting
+    the states (spec section 7)."""
+    fmu, messages = logged_instance(native_fmus["TrackBushTorsion"], "importer")
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
     fmu.setReal([0, 1], [math.radians(10), 0.1])
@@ -104,12 +110,7 @@ def test_a_host_setting_states_straight_after_event_mode_is_served_with_one_warn
 
 
 def test_the_damper_refuses_states_past_its_region_with_discard(native_fmus):
-    path = native_fmus["RotaryDamper"]
-    description = read_model_description(str(path))
-    fmu = FMU2Model(guid=description.guid, unzipDirectory=extract(str(path)),
-                    modelIdentifier=description.modelExchange.modelIdentifier,
-                    instanceName="damper")
-    fmu.instantiate()
+    fmu, messages = logged_instance(native_fmus["RotaryDamper"], "damper")
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
     fmu.exitInitializationMode()
@@ -119,6 +120,9 @@ def test_the_damper_refuses_states_past_its_region_with_discard(native_fmus):
     with pytest.raises(FMICallException) as refused:
         fmu.getDerivatives((c_double * 2)(), 2)
     assert refused.value.status == 2  # fmi2Discard: the host retries a smaller step
+    assert messages[-1] == (2, "fmi2GetDerivatives: at t = 0 s the states (state.z = 25.0, "
+                               "state.omega_r = 0.0) are outside the region the model is "
+                               "defined in; retry with a smaller step")
     fmu.setContinuousStates((c_double * 2)(0.5, 0.0), 2)
     derivatives = (c_double * 2)()
     fmu.getDerivatives(derivatives, 2)
@@ -130,18 +134,7 @@ def test_the_damper_refuses_states_past_its_region_with_discard(native_fmus):
 def test_an_output_driven_to_infinity_is_answered_with_discard_and_the_value(native_fmus):
     """In Model Exchange the host's inputs and states go in unchecked until it reads: an
     overflowing output is a Discard that names it, never an infinite value with OK."""
-    path = native_fmus["RoadWheelTyre"]
-    description = read_model_description(str(path))
-    messages = []
-    fmu = FMU2Model(guid=description.guid, unzipDirectory=extract(str(path)),
-                    modelIdentifier=description.modelExchange.modelIdentifier,
-                    instanceName="overflow")
-    callbacks = fmi2CallbackFunctions()
-    callbacks.logger = fmi2CallbackLoggerTYPE(
-        lambda env, name, status, category, message: messages.append((status, message.decode())))
-    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-    fmu.instantiate(callbacks=callbacks)
+    fmu, messages = logged_instance(native_fmus["RoadWheelTyre"], "overflow")
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
     fmu.setReal([0, 1], [2e-3, 0.0])
