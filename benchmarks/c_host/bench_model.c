@@ -49,7 +49,7 @@ int main(int argc, char **argv) {
     for (int r = 0; r < repeats; r++) {
         double started = now();
         for (long i = 0; i < steps; i++, k++) {
-            if (cosim_input_problem(instance, x[k], message, sizeof message)) return 3;
+            if (cosim_input_problem(instance, x[k], v[k], message, sizeof message)) return 3;
             cosim_take_inputs(instance, x[k], v[k]);
             if (cosim_do_step(instance, k * 1e-3, 1e-3, message, sizeof message) != STEP_DONE)
                 return 3;
