@@ -39,5 +39,9 @@ typedef struct {
    give NULL; fmi2GetStatus gives fmi2Error, fmi2GetRealStatus the last successful time
    that fmi3DoStep gave. */
 int fmi3_as_fmi2(void *library, Fmi2Table *table);
+/* The inputs and the output the intermediate update callback reads. */
+void fmi3_as_fmi2_variables(const fmi2ValueReference inputs[2], fmi2ValueReference output);
+/* How many intermediate updates the FMU has called back so far. */
+unsigned long fmi3_as_fmi2_intermediate_updates(void);
 
 #endif

@@ -4,6 +4,10 @@
  * against the FMI 3.0 face too. The fmi2Component the host holds is a Shim: the FMI 3.0
  * instance, the host's callbacks (FMI 3.0 logs through one function and an environment)
  * and the experiment that fmi2SetupExperiment gives and fmi3EnterInitializationMode takes.
+ * A Co-Simulation instance is made with early return, event mode and an intermediate
+ * update callback, so every probe also runs through steps taken in pieces: fmi2DoStep
+ * finishes a step that returned early (through event mode, if asked), and the callback
+ * reads the inputs and the output and sets the rate it read (which changes nothing).
  */
 #define _GNU_SOURCE
 #include <dlfcn.h>
@@ -40,6 +44,9 @@ static struct {
     fmi3SerializeFMUStateTYPE *SerializeFMUState;
     fmi3DeserializeFMUStateTYPE *DeserializeFMUState;
     fmi3DoStepTYPE *DoStep;
+    fmi3EnterEventModeTYPE *EnterEventMode;
+    fmi3UpdateDiscreteStatesTYPE *UpdateDiscreteStates;
+    fmi3EnterStepModeTYPE *EnterStepMode;
 } fmi3;
 
 typedef struct {
@@ -53,6 +60,33 @@ typedef struct {
 } Shim;
 
 static fmi3Instance instance_of(fmi2Component c) { return c ? ((Shim *)c)->instance : NULL; }
+
+static fmi3ValueReference inputs[2] = {0, 1}, output = 2;
+static unsigned long intermediate_updates;
+
+void fmi3_as_fmi2_variables(const fmi2ValueReference given_inputs[2], fmi2ValueReference given_output) {
+    inputs[0] = given_inputs[0];
+    inputs[1] = given_inputs[1];
+    output = given_output;
+}
+
+unsigned long fmi3_as_fmi2_intermediate_updates(void) {
+    return __atomic_load_n(&intermediate_updates, __ATOMIC_SEQ_CST);
+}
+
+static void intermediate_update(fmi3InstanceEnvironment environment, fmi3Float64 time,
+                                fmi3Boolean set_requested, fmi3Boolean get_allowed,
+                                fmi3Boolean finished, fmi3Boolean can_return_early,
+                                fmi3Boolean *early_requested, fmi3Float64 *early_time) {
+    (void)time, (void)finished, (void)can_return_early, (void)early_time;
+    Shim *shim = environment;
+    __atomic_add_fetch(&intermediate_updates, 1, __ATOMIC_SEQ_CST);
+    fmi3Float64 values[2], out;
+    *early_requested = false;
+    if (get_allowed && fmi3.GetFloat64(shim->instance, inputs, 2, values, 2) == fmi3OK &&
+        fmi3.GetFloat64(shim->instance, &output, 1, &out, 1) == fmi3OK && set_requested)
+        fmi3.SetFloat64(shim->instance, &inputs[1], 1, &values[1], 1);
+}
 
 static void log_message(fmi3InstanceEnvironment environment, fmi3Status status,
                         fmi3String category, fmi3String message) {
@@ -103,8 +137,9 @@ static fmi2Component Instantiate(fmi2String name, fmi2Type type, fmi2String guid
     char *path = path_of(uri);
     fmi3LogMessageCallback logger = callbacks->logger ? log_message : NULL;
     if (type == fmi2CoSimulation)
-        shim->instance = fmi3.InstantiateCoSimulation(name, guid, path, visible, logging, false,
-                                                      false, NULL, 0, shim, logger, NULL);
+        shim->instance = fmi3.InstantiateCoSimulation(name, guid, path, visible, logging, true,
+                                                      true, NULL, 0, shim, logger,
+                                                      intermediate_update);
     else
         shim->instance = fmi3.InstantiateModelExchange(name, guid, path, visible, logging, shim,
                                                        logger);
@@ -225,12 +260,35 @@ static fmi2Status DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], s
                                                 state);
 }
 
+/* A step that returns early is finished from where it returned, after event mode if the
+   FMU asks for it: what an FMI 2.0 host expects of fmi2DoStep. If the rest then fails, the
+   state from before the step is restored, so that a refused fmi2DoStep changes nothing. */
 static fmi2Status DoStep(fmi2Component c, fmi2Real time, fmi2Real step, fmi2Boolean no_rollback) {
-    fmi3Boolean event_needed, terminate, early_return;
-    fmi3Float64 last_time = NAN;
-    fmi2Status status = (fmi2Status)fmi3.DoStep(instance_of(c), time, step, no_rollback,
+    fmi3Instance instance = instance_of(c);
+    fmi3FMUState before = NULL;
+    if (instance && fmi3.GetFMUState(instance, &before) != fmi3OK) before = NULL;
+    fmi3Boolean event_needed = false, terminate, early_return = false;
+    fmi3Float64 last_time = NAN, end = time + step;
+    fmi2Status status = (fmi2Status)fmi3.DoStep(instance, time, step, no_rollback,
                                                 &event_needed, &terminate, &early_return,
                                                 &last_time);
+    for (int pieces = 0; status <= fmi2Warning && early_return && last_time < end; pieces++) {
+        fmi2Status next = fmi2Error; /* also for a step that never ends */
+        if (pieces < 1000 &&
+            (!event_needed || (fmi3.EnterEventMode(instance) == fmi3OK &&
+                               fmi3.UpdateDiscreteStates(instance, NULL, NULL, NULL, NULL, NULL,
+                                                         NULL) == fmi3OK &&
+                               fmi3.EnterStepMode(instance) == fmi3OK)))
+            next = (fmi2Status)fmi3.DoStep(instance, last_time, end - last_time, no_rollback,
+                                           &event_needed, &terminate, &early_return,
+                                           &last_time);
+        if (next > fmi2Warning && before) {
+            fmi3.SetFMUState(instance, before);
+            last_time = time;
+        }
+        status = next > status ? next : status;
+    }
+    if (before) fmi3.FreeFMUState(instance, &before);
     if (c && status <= fmi2Discard) ((Shim *)c)->last_successful_time = last_time;
     return status;
 }
@@ -254,7 +312,8 @@ int fmi3_as_fmi2(void *library, Fmi2Table *table) {
     LOOKUP(Terminate) LOOKUP(Reset) LOOKUP(GetFloat64) LOOKUP(SetFloat64) LOOKUP(GetInt32)
     LOOKUP(SetInt32) LOOKUP(GetBoolean) LOOKUP(SetBoolean) LOOKUP(GetString) LOOKUP(SetString)
     LOOKUP(GetFMUState) LOOKUP(SetFMUState) LOOKUP(FreeFMUState) LOOKUP(SerializedFMUStateSize)
-    LOOKUP(SerializeFMUState) LOOKUP(DeserializeFMUState) LOOKUP(DoStep)
+    LOOKUP(SerializeFMUState) LOOKUP(DeserializeFMUState) LOOKUP(DoStep) LOOKUP(EnterEventMode)
+    LOOKUP(UpdateDiscreteStates) LOOKUP(EnterStepMode)
 #undef LOOKUP
     *table = (Fmi2Table){Instantiate, FreeInstance, SetDebugLogging, SetupExperiment,
                          EnterInitializationMode, ExitInitializationMode, Terminate, Reset,

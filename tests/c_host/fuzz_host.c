@@ -911,6 +911,7 @@ int main(int argc, char **argv) {
     vr_in[0] = (fmi2ValueReference)strtoul(argv[5], NULL, 10);
     vr_in[1] = (fmi2ValueReference)strtoul(argv[6], NULL, 10);
     vr_out = (fmi2ValueReference)strtoul(argv[7], NULL, 10);
+    fmi3_as_fmi2_variables(vr_in, vr_out);
     static char name[256];
     const char *slash = strrchr(argv[2], '/');
     snprintf(name, sizeof name, "%s", slash ? slash + 1 : argv[2]);
@@ -931,6 +932,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(mode, "thread-states") && argc > 8) status = run_thread_states(atol(argv[8]));
     else if (!strcmp(mode, "unload")) status = run_unload(argv[2], &library);
     else { fprintf(stderr, "unknown mode or missing arguments: %s\n", mode); return 1; }
+    if (fmi3_binary) printf("intermediate_updates %lu\n", fmi3_as_fmi2_intermediate_updates());
     printf("failures %lu\n", failures);
     dlclose(library);
     return status;

@@ -132,9 +132,20 @@ enum { RETURNED_AT_CONTACT = 1, RETURNED_ON_REQUEST = 2 };
    returned (call_flag.h), or a state where FMI does not allow the call (logged). */
 int call_refused(Instance *instance, int claimed, int allowed, const char *function);
 
+#ifndef THREAD_LOCAL
+#if defined(_MSC_VER)
+#define THREAD_LOCAL __declspec(thread)
+#else
+#define THREAD_LOCAL __thread
+#endif
+#endif
+/* The instance whose intermediate update this thread is inside (cosimulation.c): its step
+   keeps the call flag, and the host's calls from the callback, on this thread, go in. */
+extern THREAD_LOCAL Instance *updating_instance;
+
 static inline int call_begin(Instance *instance, int allowed, const char *function) {
     if (instance != NULL && instance->magic == INSTANCE_MAGIC) {
-        int claimed = call_claim(&instance->call);
+        int claimed = updating_instance == instance || call_claim(&instance->call);
         if (claimed && (instance->s.mode & allowed)) return 1;
         return call_refused(instance, claimed, allowed, function);
     }
@@ -142,7 +153,7 @@ static inline int call_begin(Instance *instance, int allowed, const char *functi
 }
 
 static inline Status call_end(Instance *instance, Status status) {
-    call_release(&instance->call);
+    if (updating_instance != instance) call_release(&instance->call);
     return status;
 }
 
