@@ -181,19 +181,16 @@ void log_outside_region(const Instance *instance, const char *function, const do
 
 int non_finite(Instance *instance, const char *function, unsigned first, const double *values,
                int n, double x, double v) {
-    for (int i = 0; i < n; i++) {
-        if (isfinite(values[i])) continue;
-        const VariableInfo *input = MODEL_INFO.variables;
-        char a[REPR_SIZE], b[REPR_SIZE], c[REPR_SIZE];
-        log_status(instance, STATUS_DISCARD, "%s: %s would be %s at %s = %s %s, %s = %s %s: "
-                   "beyond what the model can give; retry with a smaller step or smaller "
-                   "inputs", function, MODEL_INFO.variables[first + i].name,
-                   format_repr(values[i], a), input[INPUT_DEFLECTION].name, format_repr(x, b),
-                   input[INPUT_DEFLECTION].unit, input[INPUT_RATE].name, format_repr(v, c),
-                   input[INPUT_RATE].unit);
-        return 1;
-    }
-    return 0;
+    int i = first_non_finite(values, n);
+    if (i < 0) return 0;
+    const VariableInfo *input = MODEL_INFO.variables;
+    char a[REPR_SIZE], b[REPR_SIZE], c[REPR_SIZE];
+    log_status(instance, STATUS_DISCARD, "%s: %s would be %s at %s = %s %s, %s = %s %s: "
+               "beyond what the model can give; retry with a smaller step or smaller inputs",
+               function, MODEL_INFO.variables[first + i].name, format_repr(values[i], a),
+               input[INPUT_DEFLECTION].name, format_repr(x, b), input[INPUT_DEFLECTION].unit,
+               input[INPUT_RATE].name, format_repr(v, c), input[INPUT_RATE].unit);
+    return 1;
 }
 
 /* The outputs, states and derivatives now, into outputs and locals (NaN while the

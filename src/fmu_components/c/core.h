@@ -14,6 +14,7 @@
 #ifndef CORE_H
 #define CORE_H
 
+#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -188,6 +189,13 @@ int variable_problem(unsigned vr, double value, char *message, size_t size);
 /* STATUS_DISCARD, logged with the time and the continuous states X, for states outside the
    model's region (the damper's |z| < Z_LIMIT). */
 void log_outside_region(const Instance *instance, const char *function, const double *X);
+/* The index of the first of n values that is not finite, or -1. */
+static inline int first_non_finite(const double *values, int n) {
+    for (int i = 0; i < n; i++)
+        if (!isfinite(values[i])) return i;
+    return -1;
+}
+
 /* 1, logged as STATUS_DISCARD with the inputs, when one of the n values (variables from
    value reference `first` on) is not finite: an input or a host's state beyond the
    model's range overflowed it. */

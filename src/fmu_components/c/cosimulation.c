@@ -32,13 +32,6 @@ static int guard_watches(double deflection, double rate) {
              FINITE_RATE_LOW <= rate && rate <= FINITE_RATE_HIGH);
 }
 
-/* The first output that is not finite, or -1. */
-static int non_finite_output(const double *outputs) {
-    for (int i = 0; i < MODEL_OUTPUTS; i++)
-        if (!isfinite(outputs[i])) return i;
-    return -1;
-}
-
 int cosim_input_problem(Instance *instance, double deflection, double rate, char *message,
                         size_t size) {
     if (!instance->s.initialized) return 0;
@@ -49,7 +42,7 @@ int cosim_input_problem(Instance *instance, double deflection, double rate, char
     memcpy(state, instance->s.state, sizeof state);
     model_take_input(&instance->data, state, deflection);
     model_outputs(&instance->data, state, deflection, rate, outputs);
-    int bad = non_finite_output(outputs);
+    int bad = first_non_finite(outputs, MODEL_OUTPUTS);
     if (bad < 0) return 0;
     const VariableInfo *x = &MODEL_INFO.variables[INPUT_DEFLECTION];
     const VariableInfo *v = &MODEL_INFO.variables[INPUT_RATE];
@@ -169,7 +162,7 @@ static int guarded_step(Instance *instance, double current_time, double step_siz
     int outcome = unguarded_step(instance, current_time, step_size, message, size);
     if (outcome != STEP_DONE && outcome != STEP_WARNED) return outcome;
     const double *outputs = cosim_outputs(instance);
-    int bad = non_finite_output(outputs);
+    int bad = first_non_finite(outputs, MODEL_OUTPUTS);
     if (bad < 0) return outcome;
     char a[REPR_SIZE], b[REPR_SIZE];
     snprintf(message, size, "step from t = %.9g s by %.6g s failed: it would drive %s to %s "
@@ -182,12 +175,18 @@ static int guarded_step(Instance *instance, double current_time, double step_siz
     return STEP_FAILED_TO_COMPLETE;
 }
 
+/* The held rate the next step will use: the input, or with rate_from_deflection the
+   backward difference over the last step. */
+static double next_rate(const Snapshot *s) {
+    if (s->has_previous && s->rate_from_deflection)
+        return (s->deflection - s->previous_deflection) / s->previous_step;
+    return s->rate;
+}
+
 int cosim_do_step(Instance *instance, double current_time, double step_size, char *message,
                   size_t size) {
     const Snapshot *s = &instance->s;
-    double rate = s->rate;
-    if (s->has_previous && s->rate_from_deflection)
-        rate = (s->deflection - s->previous_deflection) / s->previous_step;
+    double rate = next_rate(s);
     if (0.0 < step_size && step_size < INFINITY &&
         guard_watches(s->deflection + rate * step_size, rate))
         return guarded_step(instance, current_time, step_size, message, size);
@@ -216,7 +215,7 @@ static int unguarded_step(Instance *instance, double current_time, double step_s
     int warn = 0;
     if (s->has_previous) {
         if (s->rate_from_deflection) /* backward difference over the last step, held */
-            s->rate = (s->deflection - s->previous_deflection) / s->previous_step;
+            s->rate = next_rate(s);
         else if (!s->rate_warned)
             warn = rate_inconsistency(s, &secant);
     }
@@ -260,20 +259,12 @@ const double *cosim_outputs(Instance *instance) {
     return instance->outputs;
 }
 
-/* The held rate the next step will use (as cosim_do_step derives it). */
-static double next_rate(const Snapshot *s) {
-    if (s->has_previous && s->rate_from_deflection)
-        return (s->deflection - s->previous_deflection) / s->previous_step;
-    return s->rate;
-}
-
-/* The time from now until a contact's deflection crosses 0 within h, or 0 if it does not. */
+/* The time from now until a contact's deflection crosses 0 within h (the first of the
+   step's two rate segments), or 0 if it does not. */
 static double until_contact_changes(const Snapshot *s, double h) {
-    if (!MODEL_INFO.unilateral) return 0.0;
-    double x = s->deflection, v = next_rate(s);
-    if ((x > 0.0) == (x + v * h > 0.0) || v == 0.0) return 0.0;
-    double crossing = -x / v;
-    return crossing > 0.0 && crossing < h ? crossing : 0.0;
+    Segment segments[2];
+    return rate_segments(s->deflection, next_rate(s), h, segments) == 2 ? segments[0].duration
+                                                                           : 0.0;
 }
 
 THREAD_LOCAL Instance *updating_instance;

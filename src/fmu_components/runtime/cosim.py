@@ -68,21 +68,22 @@ class FiniteGuard:
     def watches(self, deflection, rate):
         return not (self.x_low <= deflection <= self.x_high and self.v_low <= rate <= self.v_high)
 
+    def _first_non_finite(self, outputs):
+        return next(((name, value) for name, value in zip(self.output_names, outputs)
+                     if not math.isfinite(value)), None)
+
     def input_problem(self, outputs, deflection, rate):
         """A message if an output is not finite at these inputs, else None."""
-        for name, value in zip(self.output_names, outputs):
-            if not math.isfinite(value):
-                return (f"{self.x_name} = {deflection!r} {self.x_unit} with {self.v_name} = "
-                        f"{rate!r} {self.v_unit} would drive {name} to {value!r}")
-        return None
+        bad = self._first_non_finite(outputs)
+        return bad and (f"{self.x_name} = {deflection!r} {self.x_unit} with {self.v_name} = "
+                        f"{rate!r} {self.v_unit} would drive {bad[0]} to {bad[1]!r}")
 
     def step_problem(self, outputs, deflection):
         """A message if an output is not finite after a step, else None."""
-        for name, value in zip(self.output_names, outputs):
-            if not math.isfinite(value):
-                return (f"it would drive {name} to {value!r} ({self.x_name} = {deflection!r} "
-                        f"{self.x_unit} at its end); nothing changed: take a smaller step")
-        return None
+        bad = self._first_non_finite(outputs)
+        return bad and (f"it would drive {bad[0]} to {bad[1]!r} ({self.x_name} = "
+                        f"{deflection!r} {self.x_unit} at its end); nothing changed: take a "
+                        f"smaller step")
 
 
 class CoSimulation:
@@ -148,18 +149,27 @@ class CoSimulation:
         if not -slack <= current_time - time <= slack:
             return REFUSED, (f"current time {current_time!r} s does not follow from the last "
                              f"step, which ended at {time!r} s")
-        held_rate, previous, secant = self.rate, self.previous, None
         guard = self.guard
         if guard is not None:
-            rate = held_rate
-            if previous is not None and self.rate_from_deflection:
-                rate = (self.deflection - previous[0]) / previous[2]
+            rate = self._next_rate()
             if guard.watches(self.deflection + rate * step_size, rate):
                 return self._guarded_step(current_time, step_size)
+        return self._step(current_time, step_size)
+
+    def _next_rate(self):
+        """The rate the next step holds: the input, or with rate_from_deflection the
+        backward difference over the last step."""
+        previous = self.previous
+        if previous is not None and self.rate_from_deflection:
+            return (self.deflection - previous[0]) / previous[2]
+        return self.rate
+
+    def _step(self, current_time, step_size):
+        """do_step once the call has been checked."""
+        held_rate, previous, secant = self.rate, self.previous, None
         if previous is not None:
             if self.rate_from_deflection:
-                # Backward difference over the last step, held over this one.
-                self.rate = (self.deflection - previous[0]) / previous[2]
+                self.rate = self._next_rate()
             elif self.rate_floors is not None and not self.rate_warned:
                 secant = rate_inconsistency(previous[0], previous[1], previous[2],
                                             self.deflection, self.rate, self.rate_floors)
@@ -187,15 +197,11 @@ class CoSimulation:
     def _guarded_step(self, current_time, step_size):
         """A step that ends beyond the guard's bounds: taken, and undone with FAILED if an
         output after it is not finite."""
-        before, guard = self.snapshot(), self.guard
-        self.guard = None
-        try:
-            outcome = self.do_step(current_time, step_size)
-        finally:
-            self.guard = guard
+        before = self.snapshot()
+        outcome = self._step(current_time, step_size)
         if outcome is not None and outcome[0] != WARNED:
             return outcome
-        problem = guard.step_problem(self.outputs(), self.deflection)
+        problem = self.guard.step_problem(self.outputs(), self.deflection)
         if problem is None:
             return outcome
         self.restore(before)
