@@ -41,6 +41,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "call_flag.h"
 #include "fmi2Functions.h"
@@ -447,7 +448,14 @@ static void find_python(const char *root, const char *relative, PythonFiles *fil
         char path[8192];
         snprintf(path, sizeof path, "%s%s%s", relative, relative[0] ? "/" : "", name);
         size_t n = strlen(name);
-        if (entry->d_type == DT_DIR) {
+        int folder_entry = entry->d_type == DT_DIR;
+        if (entry->d_type == DT_UNKNOWN) { /* file systems that do not say, such as older XFS */
+            char full[16384];
+            struct stat status;
+            snprintf(full, sizeof full, "%s/%s", root, path);
+            folder_entry = stat(full, &status) == 0 && S_ISDIR(status.st_mode);
+        }
+        if (folder_entry) {
             find_python(root, path, files);
         } else if (n > 3 && strcmp(name + n - 3, ".py") == 0) {
             if (files->count == MAX_PYTHON_FILES) files->overflow = 1;
