@@ -41,7 +41,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 
 #include "call_flag.h"
 #include "fmi2Functions.h"
@@ -449,11 +448,13 @@ static void find_python(const char *root, const char *relative, PythonFiles *fil
         snprintf(path, sizeof path, "%s%s%s", relative, relative[0] ? "/" : "", name);
         size_t n = strlen(name);
         int folder_entry = entry->d_type == DT_DIR;
-        if (entry->d_type == DT_UNKNOWN) { /* file systems that do not say, such as older XFS */
+        if (entry->d_type == DT_UNKNOWN) { /* file systems that do not say, such as older XFS;
+                                              opendir, not stat (GLIBC_2.33: glibc_floor.h) */
             char full[16384];
-            struct stat status;
             snprintf(full, sizeof full, "%s/%s", root, path);
-            folder_entry = stat(full, &status) == 0 && S_ISDIR(status.st_mode);
+            DIR *inner = opendir(full);
+            folder_entry = inner != NULL;
+            if (inner) closedir(inner);
         }
         if (folder_entry) {
             find_python(root, path, files);
