@@ -3,7 +3,10 @@ process each run their own code, neither runs the host's `fmu_components` or pyt
 making instances leaves the host's sys.path as it was; a copy whose Python was edited after
 the build is refused, since it would share the build's module names."""
 
+import ast
+import math
 import shutil
+import subprocess
 import sys
 import zipfile
 
@@ -125,3 +128,46 @@ def test_a_copy_whose_python_was_edited_after_the_build_is_refused(python_fmus, 
     assert "not to " in errors[0] and "Build the FMU again" in errors[0]
     assert np.array_equal(first_output(python_fmus[NAME]), shipped)
 
+
+
+# A host thread with a small stack makes an instance (fmpy in a thread of the given stack
+# size) and prints the first output after one step.
+SMALL_STACK_HOST = """
+import sys, threading
+from fmpy import read_model_description
+from fmpy.fmi2 import FMU2Slave
+folder, stack = sys.argv[1], int(sys.argv[2])
+description = read_model_description(folder)
+forces = []
+def run():
+    fmu = FMU2Slave(guid=description.guid, unzipDirectory=folder, instanceName="small",
+                    modelIdentifier=description.coSimulation.modelIdentifier)
+    fmu.instantiate()
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    fmu.doStep(0.0, 1e-3)
+    forces.append(fmu.getReal([2])[0])
+    fmu.freeInstance()
+threading.stack_size(stack)
+thread = threading.Thread(target=run)
+thread.start()
+thread.join()
+print(forces)
+"""
+
+
+def test_the_content_hash_runs_on_a_small_thread_stack(python_fmus, tmp_path):
+    """The guard hashes the resources folder inside fmi2Instantiate, on the host's thread:
+    a folder nested eight deep (no Python in it, so the hash is the build's) on a 256 KiB
+    thread stack must not overflow it, as a walk that recursed with 32 KiB of buffers per
+    folder did."""
+    folder = tmp_path / NAME
+    with zipfile.ZipFile(python_fmus[NAME]) as archive:
+        archive.extractall(folder)
+    (folder / "resources" / "a" / "b" / "c" / "d" / "e" / "f" / "g" / "h").mkdir(parents=True)
+    run = subprocess.run([sys.executable, "-c", SMALL_STACK_HOST, str(folder), str(256 * 1024)],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-2000:]
+    forces = ast.literal_eval(run.stdout.strip())
+    assert len(forces) == 1 and math.isfinite(forces[0])  # the thread made its step

@@ -6,6 +6,7 @@ The layers, each importing only those above it in this list:
 * ``runtime``: the one definition of the equations (expressions, rubber, damper, catalog)
   and the Python runtime that travels inside the Python FMUs (standard library only);
   ``c/``, the native runtime that travels as sources inside the native FMUs;
+  ``guard/``, the Python FMUs' binary in C, which takes shared pieces from ``c/``;
 * ``coupling``: the host-side coupling library that steps the FMUs with a multibody host
   (fmpy and numpy only; it imports nothing else of this package, so any Python host can
   use it alone);

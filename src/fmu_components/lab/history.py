@@ -4,7 +4,7 @@ inner simulation.
     force = simulate("TrackBushRadial", {"k3": 2e7}, times, deflection)
 
 The component's generated model (``cgen.ModelCode``), the native runtime (``c/``) and the
-driver ``c/history.c`` are compiled into one shared library with the native build's gcc
+driver ``history.c`` beside this module are compiled into one shared library with the native build's gcc
 flags (``build.C_FLAGS``), once per content: the library is cached under
 ``$FMU_COMPONENTS_CACHE`` (default ``~/.cache/fmu-components``) by a hash of everything
 that goes into it. The driver makes the FMI calls a host makes, so the forces are the
@@ -31,7 +31,7 @@ from ..runtime import catalog
 from ..runtime.catalog import component_definition
 from .signals import secant_rates
 
-DRIVER = "history.c"
+DRIVER = Path(__file__).with_name("history.c")  # the FMI calls of a host, in C
 STRUCTURES = tuple(catalog.STRUCTURES)
 
 
@@ -53,8 +53,8 @@ def _content_key(definition):
     digest.update(code.config_header().encode())
     digest.update(code.source().encode())
     sources, headers = runtime_files()
-    for name in sources + headers + (DRIVER,):
-        digest.update((C_SOURCE / name).read_bytes())
+    for path in [C_SOURCE / name for name in sources + headers] + [DRIVER]:
+        digest.update(path.read_bytes())
     return f"{definition.name}-{digest.hexdigest()[:20]}"
 
 
@@ -64,16 +64,16 @@ def compiled_library(definition):
     folder = cache_folder() / _content_key(definition)
     library = folder / "history.so"
     if not library.exists():
-        from ..export.build import C_SOURCE, compile_native, native_sources
+        from ..export.build import compile_native, native_sources
 
         folder.parent.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryDirectory(dir=folder.parent) as tmp:
             work = Path(tmp) / "work"
             guid, files = native_sources(definition, work / "sources")
-            shutil.copy2(C_SOURCE / DRIVER, work / "sources" / DRIVER)
+            shutil.copy2(DRIVER, work / "sources" / DRIVER.name)
             try:
-                compile_native("gcc", work / "sources", [*files, DRIVER], work / "history.so",
-                               ["-fPIC"])
+                compile_native("gcc", work / "sources", [*files, DRIVER.name],
+                               work / "history.so", ["-fPIC"])
             except (OSError, subprocess.CalledProcessError) as error:
                 raise HistoryError(f"cannot compile {definition.name}'s native model for the "
                                    f"fast simulation ({error}); install gcc") from None

@@ -9,7 +9,7 @@ is done here once for all four components. The modelDescription is the project's
 How a call reports its outcome: the status it logs. pythonfmu itself can only return
 fmi2OK, fmi2Discard (do_step returned False) or fmi2Fatal (a Python exception, after which
 pythonfmu drops the instance and the next call crashes the host). The FMU's binary
-(c/fmi2_guard.c) returns the worst status logged during a call instead. So a method
+(guard/fmi2_guard.c) returns the worst status logged during a call instead. So a method
 here never raises: it logs fmi2Error (or fmi2Warning, fmi2Discard) with a message that
 names the variable and the value, and leaves the instance as it was before the call.
 """
@@ -97,7 +97,7 @@ def fmi_call(name, allowed, on_failure=None):
 
 @functools.lru_cache(maxsize=None)
 def guard_log_function(resources):
-    """The guard's fmu_guard_log (c/fmi2_guard.c) in the FMU's own binary, or None (the
+    """The guard's fmu_guard_log (guard/fmi2_guard.c) in the FMU's own binary, or None (the
     adapter run without it): messages then go through pythonfmu's log queue."""
     import glob
     import os
