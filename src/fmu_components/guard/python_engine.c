@@ -225,6 +225,7 @@ static void load_engine(void) {
     snprintf(path, sizeof path, "%.*s%s", folder, self.dli_fname, PYTHONFMU_ENGINE);
     void *loaded_before = dlopen(path, RTLD_NOW | RTLD_LOCAL | RTLD_NOLOAD);
     if (loaded_before) dlclose(loaded_before); /* only asked: the count stays as it was */
+    else dlerror();                             /* and no error left for the host to read */
     void *library = dlopen(path, RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
     if (library == NULL) {
         snprintf(engine_problem, sizeof engine_problem, "cannot load %s: %s", path, dlerror());
