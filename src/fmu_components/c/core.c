@@ -139,6 +139,7 @@ static void reset_instance(Instance *instance) {
     }
     s->tolerance = DEFAULT_RTOL;
     instance->outputs_fresh = 0;
+    instance->returned_early = 0;
 }
 
 int model_now(Instance *instance, Now *now) {
@@ -313,7 +314,10 @@ Status core_exit_initialization_mode(Instance *instance, const char *function) {
     }
     cosim_start(instance);
     instance->s.contact = contact_at(instance->s.deflection, instance->s.rate);
-    instance->s.mode = instance->type == CO_SIMULATION ? STEP_COMPLETE : EVENT_MODE;
+    /* FMI 3.0 section 3.2.3: Co-Simulation goes on in Event Mode when the host uses it, else
+       in Step Mode; Model Exchange in Event Mode. */
+    int step_mode = instance->type == CO_SIMULATION && !instance->event_mode_used;
+    instance->s.mode = step_mode ? STEP_COMPLETE : EVENT_MODE;
     return call_end(instance, STATUS_OK);
 }
 

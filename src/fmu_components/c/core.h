@@ -122,6 +122,10 @@ typedef struct Instance {
     IntermediateUpdate intermediate_update; /* NULL: the host takes none */
     void *intermediate_context;            /* the face's: the host's callback */
     int returned_early; /* the last step: 0 whole, RETURNED_AT_CONTACT or RETURNED_ON_REQUEST */
+    /* The contact change the last step returned at: its time, and 1 if the contact began
+       there (0 if it ended). */
+    double contact_change_time;
+    int contact_change_to;
 } Instance;
 
 enum { RETURNED_AT_CONTACT = 1, RETURNED_ON_REQUEST = 2 };
