@@ -356,10 +356,11 @@ Status core_get_float64(Instance *instance, const char *function, const unsigned
     }
     if (arrays_missing(instance, function, nvr, vr, value))
         return call_end(instance, STATUS_ERROR);
-    int want_indicator = 0;
+    int want_indicator = 0, fmi3 = instance->face->declares_fmi3_variables;
     for (size_t i = 0; i < nvr; i++) {
         want_indicator |= IS_EVENT_INDICATOR(vr[i]);
-        if (vr[i] >= MODEL_VARIABLES && !IS_EVENT_INDICATOR(vr[i]) && vr[i] != TIME_REFERENCE) {
+        if (vr[i] >= MODEL_VARIABLES &&
+            !(fmi3 && (IS_EVENT_INDICATOR(vr[i]) || vr[i] == TIME_REFERENCE))) {
             log_status(instance, STATUS_ERROR, "%s: no variable has value reference %u",
                        function, (unsigned)vr[i]);
             for (size_t k = 0; k < nvr; k++) value[k] = NAN;
@@ -421,7 +422,12 @@ Status core_set_float64(Instance *instance, const char *function, const unsigned
             inputs_set = 1;
             continue;
         }
-        if (reference >= MODEL_VARIABLES) {
+        if (reference >= MODEL_VARIABLES && instance->face->declares_fmi3_variables &&
+            (IS_EVENT_INDICATOR(reference) || reference == TIME_REFERENCE)) {
+            snprintf(problem, sizeof problem, "value reference %u is %s, calculated and not set",
+                     reference, reference == TIME_REFERENCE ? "the independent variable time"
+                                                            : "the contact's event indicator");
+        } else if (reference >= MODEL_VARIABLES) {
             snprintf(problem, sizeof problem, "no variable has value reference %u", reference);
         } else if (MODEL_INFO.variables[reference].causality == CAUSALITY_OUTPUT) {
             snprintf(problem, sizeof problem, "%s is an output",

@@ -52,6 +52,7 @@ typedef enum { MODEL_EXCHANGE, CO_SIMULATION } Interface; /* fmi2Type's values *
 typedef struct {
     const char *prefix; /* "fmi2", "fmi3" */
     const char *mode_names[MODES];
+    int declares_fmi3_variables; /* the event indicator and time are variables */
 } Face;
 
 struct Instance;
@@ -95,11 +96,10 @@ typedef struct {
 
 /* The Boolean parameter's value reference: after every Real variable. */
 #define RATE_FROM_DEFLECTION MODEL_VARIABLES
-/* A contact's event indicator, a variable in FMI 3.0 (model_description_fmi3). */
-#define EVENT_INDICATOR (RATE_FROM_DEFLECTION + 1)
-#define IS_EVENT_INDICATOR(vr) (MODEL_EVENT_INDICATORS > 0 && (vr) == EVENT_INDICATOR)
-/* The independent variable, declared in FMI 3.0 (readable in both). */
-#define TIME_REFERENCE (RATE_FROM_DEFLECTION + 2)
+/* A contact's event indicator and the independent variable: Float64 variables that FMI 3.0
+   declares and FMI 2.0 does not (Face.declares_fmi3_variables). */
+#define IS_EVENT_INDICATOR(vr) (MODEL_EVENT_INDICATORS > 0 && (vr) == MODEL_EVENT_INDICATOR_REFERENCE)
+#define TIME_REFERENCE MODEL_TIME_REFERENCE
 
 struct Instance;
 /* The host's intermediate update at time t inside a step (FMI 3.0 Co-Simulation): 1 when

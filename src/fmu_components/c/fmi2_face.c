@@ -11,7 +11,8 @@
 static const Face FMI2 = {"fmi2",
                           {"Instantiated", "InitializationMode", "StepComplete", "StepFailed",
                            "Terminated", "EventMode", "ContinuousTimeMode",
-                           "IntermediateUpdateMode"}};
+                           "IntermediateUpdateMode"},
+                          0};
 
 #define I ((Instance *)c)
 #define STATUS(call) ((fmi2Status)(call))

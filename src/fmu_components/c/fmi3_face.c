@@ -13,7 +13,8 @@
 static const Face FMI3 = {"fmi3",
                           {"Instantiated", "InitializationMode", "StepMode", "StepDiscarded",
                            "Terminated", "EventMode", "ContinuousTimeMode",
-                           "IntermediateUpdateMode"}};
+                           "IntermediateUpdateMode"},
+                          1};
 
 #define I ((Instance *)instance)
 #define STATUS(call) ((fmi3Status)(call))
