@@ -9,7 +9,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "core.h"
+#include "cosimulation.h"
 #include "text.h"
 
 #define N MODEL_INTEGRATED
@@ -267,8 +267,6 @@ static double until_contact_changes(const Snapshot *s, double h) {
     return rate_segments(s->deflection, next_rate(s), h, segments) == 2 ? segments[0].duration
                                                                            : 0.0;
 }
-
-THREAD_LOCAL Instance *updating_instance;
 
 /* 1 when a contact change `crossing` after a step's start at `start` is no reason to return
    early: the one the last step returned at, met again because the host set the inputs

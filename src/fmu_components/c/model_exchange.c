@@ -12,7 +12,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "core.h"
+#include "model_exchange.h"
 #include "text.h"
 
 #define ME_STATES (EVENT_MODE | CONTINUOUS_TIME_MODE)
