@@ -65,26 +65,37 @@ def test_imports_go_down_or_across_never_up(module):
     assert not upward, f"{module} imports from a higher layer: {upward}"
 
 
-def test_no_module_imports_itself_through_others():
-    graph = {m: {i for i in imports_of(p) if i in MODULES and i != m} for m, p in MODULES.items()}
-    # Depth-first search for a back edge.
+def circle_in(graph):
+    """A circle in {node: nodes it depends on} as a list of nodes, or None (a depth-first
+    search for a back edge)."""
     state, path = {}, []
 
-    def visit(module):
-        state[module] = "open"
-        path.append(module)
-        for target in graph[module]:
+    def visit(node):
+        state[node] = "open"
+        path.append(node)
+        for target in sorted(graph.get(node, ())):
             if state.get(target) == "open":
-                cycle = path[path.index(target):] + [target]
-                pytest.fail("circle: " + " -> ".join(cycle))
+                return path[path.index(target):] + [target]
             if target not in state:
-                visit(target)
-        state[module] = "done"
+                found = visit(target)
+                if found:
+                    return found
+        state[node] = "done"
         path.pop()
+        return None
 
-    for module in sorted(graph):
-        if module not in state:
-            visit(module)
+    for node in sorted(graph):
+        if node not in state:
+            found = visit(node)
+            if found:
+                return found
+    return None
+
+
+def test_no_module_imports_itself_through_others():
+    graph = {m: {i for i in imports_of(p) if i in MODULES and i != m} for m, p in MODULES.items()}
+    circle = circle_in(graph)
+    assert circle is None, "circle: " + " -> ".join(circle or [])
 
 
 # --- the C sources ---------------------------------------------------------------------------
@@ -178,23 +189,8 @@ def test_no_c_units_include_each_other_in_a_circle():
         graph.setdefault(unit, set()).update(
             (target.parent, c_unit(target)) for _, target in c_includes(path)
             if isinstance(target, Path) and (target.parent, c_unit(target)) != unit)
-    state, trail = {}, []
-
-    def visit(unit):
-        state[unit] = "open"
-        trail.append(unit)
-        for target in sorted(graph.get(unit, ())):
-            if state.get(target) == "open":
-                cycle = trail[trail.index(target):] + [target]
-                pytest.fail("circle: " + " -> ".join(name for _, name in cycle))
-            if target not in state:
-                visit(target)
-        state[unit] = "done"
-        trail.pop()
-
-    for unit in sorted(graph):
-        if unit not in state:
-            visit(unit)
+    circle = circle_in(graph)
+    assert circle is None, "circle: " + " -> ".join(name for _, name in circle or [])
 
 
 def c_source_params():

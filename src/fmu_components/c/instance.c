@@ -25,12 +25,10 @@ const char *mode_name(const Instance *instance, int mode) {
 }
 
 void log_status(const Instance *instance, Status status, const char *format, ...) {
-    char message[MESSAGE_SIZE];
     va_list args;
     va_start(args, format);
-    vsnprintf(message, sizeof message, format, args);
+    host_log_formatted(&instance->log, status, format, args);
     va_end(args);
-    host_log(&instance->log, status, message);
 }
 
 int call_refused(Instance *instance, int claimed, int allowed, const char *function) {
