@@ -171,13 +171,15 @@ fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], 
     fmi3Status function(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,  \
                         type values[], size_t nValues) {                                   \
         (void)values, (void)nValues;                                                       \
-        return fmi3_status(core_no_variable_of_type(instance, #function, nvr, vr, READABLE)); \
+        return fmi3_status(                                                                \
+            core_no_variable_of_type(instance, #function, nvr, vr, READABLE));             \
     }
 #define NO_SETTER(function, type)                                                          \
     fmi3Status function(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,  \
                         const type values[], size_t nValues) {                             \
         (void)values, (void)nValues;                                                       \
-        return fmi3_status(core_no_variable_of_type(instance, #function, nvr, vr, SETTABLE)); \
+        return fmi3_status(                                                                \
+            core_no_variable_of_type(instance, #function, nvr, vr, SETTABLE));             \
     }
 NO_GETTER(fmi3GetFloat32, fmi3Float32)
 NO_GETTER(fmi3GetInt8, fmi3Int8)
