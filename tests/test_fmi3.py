@@ -184,7 +184,9 @@ def run_tyre(path, early_return, event_mode, steps=2000):
     (time, eventHandlingNeeded)."""
     tyre = Instance(path, earlyReturnAllowed=early_return, eventModeUsed=event_mode)
     tyre.start(*contact_sine(0.0))
-    tyre.fmu.enterStepMode()
+    if event_mode:  # initialization ends in Event Mode
+        tyre.fmu.updateDiscreteStates()
+        tyre.fmu.enterStepMode()
     forces, returns = [], []
     for k in range(steps):
         t, end = k * STEP, (k + 1) * STEP
@@ -221,11 +223,67 @@ def test_the_tyre_returns_early_where_its_contact_begins_and_ends(fmi3, event_mo
     assert np.max(np.abs(forces - whole)) <= 1e-12 * np.ptp(whole)
 
 
+def test_an_early_return_at_the_contact_is_not_met_again_by_inputs_set_there(fmi3):
+    """A host that sets the inputs again at lastSuccessfulTime, the compression a hair to
+    the side the contact was on (interpolation's round-off), steps on from there: the
+    crossing just reported is no reason to return again, nor is one a round-off after the
+    step's start."""
+    tyre = Instance(fmi3["RoadWheelTyre"], earlyReturnAllowed=True)
+    tyre.start(5e-6, -0.01)
+    _, _, early, last = tyre.fmu.doStep(0.0, STEP)
+    assert early and last == pytest.approx(5e-4, rel=1e-12)
+    for hair in (4.5e-20, 1e-22):  # still in contact by a hair, lifting off
+        tyre.fmu.setFloat64(tyre.inputs, [hair, -0.01])
+        _, _, early, end = tyre.fmu.doStep(last, STEP)
+        assert not early and end == last + STEP
+        last = end
+        tyre.fmu.setFloat64(tyre.inputs, [-5e-6, 0.01])  # landing: reported...
+        _, _, early, at = tyre.fmu.doStep(last, STEP)
+        assert early and at == pytest.approx(last + 5e-4, rel=1e-9)
+        tyre.fmu.setFloat64(tyre.inputs, [-hair, 0.01])  # ...and met again from below
+        _, _, early, end = tyre.fmu.doStep(at, STEP)
+        assert not early and end == at + STEP
+        tyre.fmu.setFloat64(tyre.inputs, [5e-6, -0.01])  # a lift-off of its own
+        _, _, early, last = tyre.fmu.doStep(end, STEP)
+        assert early and last == pytest.approx(end + 5e-4, rel=1e-9)
+    assert tyre.fmu.getFloat64([tyre.vr["force"]])[0] == 0.0
+    assert not [m for m in tyre.messages if m[0] >= 2], tyre.messages
+    tyre.free()
+
+
+@pytest.mark.parametrize("event_mode", [True, False], ids=["event-mode", "step-mode"])
+def test_initialization_ends_in_event_mode_when_the_host_uses_it(fmi3, event_mode):
+    """FMI 3.0 section 3.2.3: fmi3ExitInitializationMode leads a Co-Simulation instance to
+    Event Mode when it was made with eventModeUsed, else to Step Mode; fmi3EnterStepMode
+    leads from Event Mode only."""
+    tyre = Instance(fmi3["RoadWheelTyre"], earlyReturnAllowed=True, eventModeUsed=event_mode)
+    tyre.start(1e-3, 0.0)
+
+    def refused(call):
+        try:
+            call()
+        except FMICallException:
+            return True
+        return False
+
+    assert refused(tyre.fmu.updateDiscreteStates) != event_mode
+    assert refused(tyre.fmu.enterStepMode) != event_mode
+    assert refused(tyre.fmu.enterStepMode)  # now in Step Mode either way
+    assert "fmi3EnterStepMode is not allowed in state StepMode" in tyre.messages[-1][1]
+    tyre.fmu.doStep(0.0, STEP)
+    assert refused(tyre.fmu.enterEventMode) != event_mode
+    if event_mode:
+        assert refused(lambda: tyre.fmu.doStep(STEP, STEP))  # not in Event Mode
+        tyre.fmu.updateDiscreteStates()
+        tyre.fmu.enterStepMode()
+    tyre.fmu.doStep(STEP, STEP)
+    tyre.free()
+
+
 def damper_run(path, callback=None, early_return=False, steps=100, h=0.02):
     """The damper on a 0.75 Hz sine at 20 ms steps (several internal steps each)."""
     damper = Instance(path, intermediateUpdate=callback, earlyReturnAllowed=early_return)
     damper.start(0.0, 0.0)
-    damper.fmu.enterStepMode()
     rate = lambda t: 0.2 * 1.5 * math.pi * math.cos(1.5 * math.pi * t)  # noqa: E731
     angle = lambda t: 0.2 * math.sin(1.5 * math.pi * t)  # noqa: E731
     return damper, angle, rate, h, steps

@@ -3,6 +3,7 @@ included, goes to the module's own layer or one below it, and no modules import 
 in a circle."""
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -64,23 +65,147 @@ def test_imports_go_down_or_across_never_up(module):
     assert not upward, f"{module} imports from a higher layer: {upward}"
 
 
-def test_no_module_imports_itself_through_others():
-    graph = {m: {i for i in imports_of(p) if i in MODULES and i != m} for m, p in MODULES.items()}
-    # Depth-first search for a back edge.
+def circle_in(graph):
+    """A circle in {node: nodes it depends on} as a list of nodes, or None (a depth-first
+    search for a back edge)."""
     state, path = {}, []
 
-    def visit(module):
-        state[module] = "open"
-        path.append(module)
-        for target in graph[module]:
+    def visit(node):
+        state[node] = "open"
+        path.append(node)
+        for target in sorted(graph.get(node, ())):
             if state.get(target) == "open":
-                cycle = path[path.index(target):] + [target]
-                pytest.fail("circle: " + " -> ".join(cycle))
+                return path[path.index(target):] + [target]
             if target not in state:
-                visit(target)
-        state[module] = "done"
+                found = visit(target)
+                if found:
+                    return found
+        state[node] = "done"
         path.pop()
+        return None
 
-    for module in sorted(graph):
-        if module not in state:
-            visit(module)
+    for node in sorted(graph):
+        if node not in state:
+            found = visit(node)
+            if found:
+                return found
+    return None
+
+
+def test_no_module_imports_itself_through_others():
+    graph = {m: {i for i in imports_of(p) if i in MODULES and i != m} for m, p in MODULES.items()}
+    circle = circle_in(graph)
+    assert circle is None, "circle: " + " -> ".join(circle or [])
+
+
+# --- the C sources ---------------------------------------------------------------------------
+# The native runtime (c/: what ships in every native FMU) stands on levels of its own, by
+# unit (a .c and its .h): an #include "..." goes to the file's own level or one below, and no
+# units include each other in a circle. The Python flavour's guard and the fit's history
+# driver stand above the runtime and may include from c/; c/ never includes from them.
+
+C_RUNTIME = PACKAGE / "c"
+C_LEVELS = {
+    # what everything may take: plain definitions, and the generated model's sizes
+    "arithmetic": 0, "status": 0, "call_flag": 0, "glibc_floor": 0, "model_config": 0,
+    # tools that know no model and no instance
+    "text": 1, "host_log": 1, "hermite": 1, "state_envelope": 1,
+    # the generated model's interface, the instantiation checks
+    "model": 2, "instantiation": 2,
+    # the integrator (over the model), the FMI 2.0 host's callbacks
+    "integrator": 3, "fmi2_host": 3,
+    # an instance: its values, its model data, its call sequence
+    "instance": 4,
+    # what the calls do: co-simulation, Model Exchange, FMU states
+    "cosimulation": 5, "model_exchange": 5, "state": 5,
+    # the calls every face makes
+    "core": 6,
+    # one face per FMI version
+    "fmi2_face": 7, "fmi3_face": 7,
+}
+OUTSIDE_RUNTIME = 8  # the guard (guard/) and the history driver (lab/history.c)
+GUARD_UNITS = {"fmi2_guard", "python_engine", "python_content", "history"}
+STANDARD_HEADERS = re.compile(r"fmi[23](Functions|FunctionTypes|TypesPlatform|PlatformTypes)\.h")
+C_LINE_LIMIT = 600
+
+
+def c_sources():
+    """Every C source of the package: c/, guard/ and lab/'s history driver (where they are)."""
+    return sorted(p for p in PACKAGE.rglob("*") if p.suffix in (".c", ".h"))
+
+
+def c_unit(path):
+    return path.stem
+
+
+def c_level(path):
+    if path.parent == C_RUNTIME and c_unit(path) not in GUARD_UNITS:
+        return C_LEVELS[c_unit(path)]
+    return OUTSIDE_RUNTIME
+
+
+def c_includes(path):
+    """The files an #include "..." names, resolved beside the file and then in c/; None for
+    the generated model sizes and the FMI standard's headers."""
+    found = []
+    for name in re.findall(r'^\s*#\s*include\s+"([^"]+)"', path.read_text(), re.MULTILINE):
+        if name == "model_config.h" or STANDARD_HEADERS.fullmatch(name):
+            found.append((name, None))
+            continue
+        for folder in (path.parent, C_RUNTIME):
+            if (folder / name).exists():
+                found.append((name, folder / name))
+                break
+        else:
+            found.append((name, "missing"))
+    return found
+
+
+C_SOURCES = c_sources()
+
+
+def test_every_runtime_source_has_a_level():
+    units = {c_unit(p) for p in C_SOURCES if p.parent == C_RUNTIME} - GUARD_UNITS
+    assert units <= set(C_LEVELS), f"give these a level in C_LEVELS: {units - set(C_LEVELS)}"
+
+
+@pytest.mark.parametrize("path", C_SOURCES, ids=lambda p: str(p.relative_to(PACKAGE)))
+def test_c_includes_go_down_or_across_never_up(path):
+    for name, target in c_includes(path):
+        assert target != "missing", f"{path.name} includes {name}, which is not in the package"
+        if target is None:
+            continue
+        if path.parent == C_RUNTIME:
+            assert target.parent == C_RUNTIME and c_unit(target) not in GUARD_UNITS or \
+                c_unit(path) in GUARD_UNITS, f"c/{path.name} includes {target} from outside the runtime"
+        assert c_level(target) <= c_level(path), \
+            f"{path.name} (level {c_level(path)}) includes {name} (level {c_level(target)})"
+
+
+def test_no_c_units_include_each_other_in_a_circle():
+    graph = {}
+    for path in C_SOURCES:
+        unit = (path.parent, c_unit(path))
+        graph.setdefault(unit, set()).update(
+            (target.parent, c_unit(target)) for _, target in c_includes(path)
+            if isinstance(target, Path) and (target.parent, c_unit(target)) != unit)
+    circle = circle_in(graph)
+    assert circle is None, "circle: " + " -> ".join(name for _, name in circle or [])
+
+
+def c_source_params():
+    """Each C source; the guard's while it still stands in c/ undivided (it moves to guard/,
+    split by duty) is expected over the limit."""
+    params = []
+    for path in C_SOURCES:
+        pending = path.parent == C_RUNTIME and c_unit(path) == "fmi2_guard"
+        marks = [pytest.mark.xfail(reason="moves out of c/, split by duty", strict=False)] \
+            if pending else []
+        params.append(pytest.param(path, marks=marks, id=str(path.relative_to(PACKAGE))))
+    return params
+
+
+@pytest.mark.parametrize("path", c_source_params())
+def test_no_c_source_is_over_the_line_limit(path):
+    lines = len(path.read_text().splitlines())
+    assert lines <= C_LINE_LIMIT, f"{path.relative_to(PACKAGE)} has {lines} lines"

@@ -9,6 +9,7 @@ import zlib
 
 import numpy as np
 import pytest
+from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2LastSuccessfulTime
 
@@ -478,3 +479,47 @@ def test_a_state_of_another_fmu_is_refused(built_fmus):
     assert tyre.read() == before
     bush.free()
     tyre.free()
+
+
+def declared(description, *types):
+    return {v.valueReference for v in description.modelVariables if v.type in types}
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+@pytest.mark.parametrize("flavour", ["native", "python", "fmi3"])
+def test_a_value_reference_the_model_description_does_not_declare_is_refused_by_number(
+        all_fmus, flavour, name):
+    """Every reference the modelDescription declares is answered; every other one (the
+    gaps, the next few, FMI 3.0's event indicator and time in FMI 2.0, the largest) gets
+    Error naming it, in getReal/getFloat64, setReal/setFloat64 and getBoolean."""
+    path = all_fmus[flavour][name]
+    if flavour == "fmi3":
+        from test_fmi3 import Instance
+        instance = Instance(path)
+        instance.start(*[0.0] * 2)
+        fmu, get_real, set_real = instance.fmu, instance.fmu.getFloat64, instance.fmu.setFloat64
+        get_boolean = fmu.getBoolean
+        messages = instance.messages
+    else:
+        runner = FmuRunner(path)
+        runner.initialize(0.0, 0.0)
+        fmu, get_real, set_real = runner.fmu, runner.fmu.getReal, runner.fmu.setReal
+        get_boolean = fmu.getBoolean
+        messages = runner.messages
+    description = read_model_description(str(path))
+    reals = declared(description, "Real", "Float64")
+    booleans = declared(description, "Boolean")
+    probes = set(range(max(reals | booleans) + 5)) | {2 ** 31, 2 ** 32 - 1}
+    assert all(math.isfinite(value) for value in get_real(sorted(reals)))
+    assert get_boolean(sorted(booleans))
+    for vr in sorted(probes - reals):
+        for call in (lambda: get_real([vr]), lambda: set_real([vr], [0.0])):
+            with pytest.raises(FMICallException):
+                call()
+            assert str(vr) in messages[-1][1], (vr, messages[-1])
+    for vr in sorted(probes - booleans):
+        with pytest.raises(FMICallException):
+            get_boolean([vr])
+        assert str(vr) in messages[-1][1], (vr, messages[-1])
+    fmu.terminate()
+    fmu.freeInstance()

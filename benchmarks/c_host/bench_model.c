@@ -13,6 +13,7 @@
 #include <time.h>
 
 #include "core.h"
+#include "cosimulation.h"
 #include "fmi2Functions.h"
 
 static double now(void) {

@@ -57,6 +57,7 @@ typedef struct {
     fmi2Real tolerance, start, stop;
     fmi3Float64 last_successful_time; /* fmi3DoStep's, for fmi2GetRealStatus */
     int in_logger;                    /* the FMU is inside a call that logs */
+    int co_simulation;                /* made with eventModeUsed: initialization ends in Event Mode */
 } Shim;
 
 static fmi3Instance instance_of(fmi2Component c) { return c ? ((Shim *)c)->instance : NULL; }
@@ -136,6 +137,7 @@ static fmi2Component Instantiate(fmi2String name, fmi2Type type, fmi2String guid
     shim->name = name ? strdup(name) : NULL;
     char *path = path_of(uri);
     fmi3LogMessageCallback logger = callbacks->logger ? log_message : NULL;
+    shim->co_simulation = type == fmi2CoSimulation;
     if (type == fmi2CoSimulation)
         shim->instance = fmi3.InstantiateCoSimulation(name, guid, path, visible, logging, true,
                                                       true, NULL, 0, shim, logger,
@@ -188,8 +190,18 @@ static fmi2Status EnterInitializationMode(fmi2Component c) {
                                                     shim->stop_defined, shim->stop);
 }
 
+/* FMI 2.0 Co-Simulation goes on in Step Mode; an FMI 3.0 instance made with eventModeUsed
+   is in Event Mode after initialization, and gets there through it. */
 static fmi2Status ExitInitializationMode(fmi2Component c) {
-    return (fmi2Status)fmi3.ExitInitializationMode(instance_of(c));
+    fmi3Instance instance = instance_of(c);
+    fmi2Status status = (fmi2Status)fmi3.ExitInitializationMode(instance);
+    if (status > fmi2Warning || c == NULL || !((Shim *)c)->co_simulation) return status;
+    fmi2Status update = (fmi2Status)fmi3.UpdateDiscreteStates(instance, NULL, NULL, NULL, NULL,
+                                                              NULL, NULL);
+    if (update > fmi2Warning) return update;
+    fmi2Status step_mode = (fmi2Status)fmi3.EnterStepMode(instance);
+    status = update > status ? update : status;
+    return step_mode > status ? step_mode : status;
 }
 static fmi2Status Terminate(fmi2Component c) { return (fmi2Status)fmi3.Terminate(instance_of(c)); }
 static fmi2Status Reset(fmi2Component c) { return (fmi2Status)fmi3.Reset(instance_of(c)); }

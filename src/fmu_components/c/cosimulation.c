@@ -4,11 +4,12 @@
  * step the rate is held and the deflection moves with it; a step either completes or
  * leaves everything as it was.
  */
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
-#include "core.h"
+#include "cosimulation.h"
 #include "text.h"
 
 #define N MODEL_INTEGRATED
@@ -267,18 +268,34 @@ static double until_contact_changes(const Snapshot *s, double h) {
                                                                            : 0.0;
 }
 
-THREAD_LOCAL Instance *updating_instance;
+/* 1 when a contact change `crossing` after a step's start at `start` is no reason to return
+   early: the one the last step returned at, met again because the host set the inputs
+   interpolated there (a hair off 0, to the same side), or one within a round-off of the
+   step's start, where returning would make no progress. The step still takes it: the
+   rate segments switch the rubber there. */
+static int crossing_already_met(const Instance *instance, double start, double piece,
+                                double crossing) {
+    const Snapshot *s = &instance->s;
+    if (crossing <= 4.0 * DBL_EPSILON * fmax(fabs(start), piece)) return 1;
+    int reported = instance->returned_early == RETURNED_AT_CONTACT &&
+                   s->time == instance->contact_change_time;
+    int same_side = instance->contact_change_to == (next_rate(s) > 0.0);
+    return reported && same_side && crossing <= 1e-9 * fmax(1.0, fabs(start));
+}
 
 int cosim_do_step_in_pieces(Instance *instance, double current_time, double step_size,
                             char *message, size_t size) {
     Snapshot *s = &instance->s, before = *s;
-    instance->returned_early = 0;
     double t = current_time, done = 0.0, first_deflection = 0.0, first_rate = 0.0;
     int outcome = STEP_DONE, pieces = 0;
     char warning[MESSAGE_SIZE] = "";
     for (;;) {
         double piece = step_size - done;
         double crossing = instance->early_return_allowed ? until_contact_changes(s, piece) : 0.0;
+        if (crossing > 0.0 && done == 0.0 &&
+            crossing_already_met(instance, current_time, piece, crossing))
+            crossing = 0.0;
+        if (done == 0.0) instance->returned_early = 0;
         if (crossing > 0.0) piece = crossing;
         if (instance->intermediate_update && s->memory.has_h_next && s->memory.h_next < piece)
             piece = s->memory.h_next; /* one internal step of the integrator */
@@ -303,9 +320,11 @@ int cosim_do_step_in_pieces(Instance *instance, double current_time, double step
             break;
         }
         if (crossing > 0.0 && piece == crossing) {
+            instance->contact_change_to = s->rate > 0.0; /* 1: the contact begins */
             s->deflection = 0.0; /* where the contact changes: x + v t is 0 but for rounding */
             instance->outputs_fresh = 0;
             instance->returned_early = RETURNED_AT_CONTACT;
+            instance->contact_change_time = s->time;
             break;
         }
         if (instance->intermediate_update) {

@@ -11,10 +11,12 @@
 static const Face FMI2 = {"fmi2",
                           {"Instantiated", "InitializationMode", "StepComplete", "StepFailed",
                            "Terminated", "EventMode", "ContinuousTimeMode",
-                           "IntermediateUpdateMode"}};
+                           "IntermediateUpdateMode"},
+                          0};
 
-#define I ((Instance *)c)
-#define STATUS(call) ((fmi2Status)(call))
+/* The core's status as FMI 2.0's (the same numbers). The host's handle is the core's
+   Instance, passed on as it is. */
+static inline fmi2Status fmi2_status(Status status) { return (fmi2Status)status; }
 
 const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
 const char *fmi2GetVersion(void) { return fmi2Version; }
@@ -32,47 +34,47 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     return core_instantiate(log, instanceName, (Interface)fmuType, &FMI2, loggingOn);
 }
 
-void fmi2FreeInstance(fmi2Component c) { core_free_instance(I, __func__); }
+void fmi2FreeInstance(fmi2Component c) { core_free_instance(c, __func__); }
 
 fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
                                const fmi2String categories[]) {
-    return STATUS(core_set_debug_logging(I, __func__, loggingOn, nCategories, categories));
+    return fmi2_status(core_set_debug_logging(c, __func__, loggingOn, nCategories, categories));
 }
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                fmi2Real startTime, fmi2Boolean stopTimeDefined,
                                fmi2Real stopTime) {
     (void)stopTimeDefined, (void)stopTime;
-    return STATUS(core_setup_experiment(I, __func__, toleranceDefined, tolerance, startTime));
+    return fmi2_status(core_setup_experiment(c, __func__, toleranceDefined, tolerance, startTime));
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
-    return STATUS(core_enter_initialization_mode(I, __func__));
+    return fmi2_status(core_enter_initialization_mode(c, __func__));
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
-    return STATUS(core_exit_initialization_mode(I, __func__));
+    return fmi2_status(core_exit_initialization_mode(c, __func__));
 }
 
-fmi2Status fmi2Terminate(fmi2Component c) { return STATUS(core_terminate(I, __func__)); }
-fmi2Status fmi2Reset(fmi2Component c) { return STATUS(core_reset(I, __func__)); }
+fmi2Status fmi2Terminate(fmi2Component c) { return fmi2_status(core_terminate(c, __func__)); }
+fmi2Status fmi2Reset(fmi2Component c) { return fmi2_status(core_reset(c, __func__)); }
 
 /* --- values ----------------------------------------------------------------------------- */
 
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        fmi2Real value[]) {
-    return STATUS(core_get_float64(I, __func__, vr, nvr, value));
+    return fmi2_status(core_get_float64(c, __func__, vr, nvr, value));
 }
 
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        const fmi2Real value[]) {
-    return STATUS(core_set_float64(I, __func__, vr, nvr, value));
+    return fmi2_status(core_set_float64(c, __func__, vr, nvr, value));
 }
 
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           fmi2Boolean value[]) {
     int flag;
-    fmi2Status status = STATUS(core_get_boolean(I, __func__, vr, nvr, value, &flag));
+    fmi2Status status = fmi2_status(core_get_boolean(c, __func__, vr, nvr, value, &flag));
     if (status <= fmi2Error && value != NULL && vr != NULL)
         for (size_t i = 0; i < nvr; i++) value[i] = flag ? fmi2True : fmi2False;
     return status;
@@ -81,31 +83,31 @@ fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           const fmi2Boolean value[]) {
     int last = nvr > 0 && value != NULL && value[nvr - 1] != fmi2False;
-    return STATUS(core_set_boolean(I, __func__, vr, nvr, value, last));
+    return fmi2_status(core_set_boolean(c, __func__, vr, nvr, value, last));
 }
 
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           fmi2Integer value[]) {
     (void)value;
-    return STATUS(core_no_variable_of_type(I, __func__, nvr, vr, READABLE));
+    return fmi2_status(core_no_variable_of_type(c, __func__, nvr, vr, READABLE));
 }
 
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                          fmi2String value[]) {
     (void)value;
-    return STATUS(core_no_variable_of_type(I, __func__, nvr, vr, READABLE));
+    return fmi2_status(core_no_variable_of_type(c, __func__, nvr, vr, READABLE));
 }
 
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           const fmi2Integer value[]) {
     (void)value;
-    return STATUS(core_no_variable_of_type(I, __func__, nvr, vr, SETTABLE));
+    return fmi2_status(core_no_variable_of_type(c, __func__, nvr, vr, SETTABLE));
 }
 
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                          const fmi2String value[]) {
     (void)value;
-    return STATUS(core_no_variable_of_type(I, __func__, nvr, vr, SETTABLE));
+    return fmi2_status(core_no_variable_of_type(c, __func__, nvr, vr, SETTABLE));
 }
 
 /* --- co-simulation ------------------------------------------------------------------------- */
@@ -113,31 +115,32 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                        const fmi2Integer order[], const fmi2Real value[]) {
     (void)vr, (void)nvr, (void)order, (void)value;
-    return STATUS(core_not_offered(I, __func__, "the FMU holds the rate input over a step and "
-                                   "takes no input derivatives (canInterpolateInputs is false)"));
+    return fmi2_status(core_not_offered(c, __func__, "the FMU holds the rate input over a step "
+                                        "and takes no input derivatives (canInterpolateInputs is "
+                                        "false)"));
 }
 
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[],
                                         size_t nvr, const fmi2Integer order[],
                                         fmi2Real value[]) {
     (void)vr, (void)nvr, (void)order, (void)value;
-    return STATUS(core_not_offered(I, __func__, "maxOutputDerivativeOrder is 0"));
+    return fmi2_status(core_not_offered(c, __func__, "maxOutputDerivativeOrder is 0"));
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c) {
-    return STATUS(core_not_offered(I, __func__, "steps run synchronously; there is none to "
-                                   "cancel"));
+    return fmi2_status(core_not_offered(c, __func__, "steps run synchronously; there is none to "
+                                        "cancel"));
 }
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                       fmi2Real communicationStepSize, fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
     (void)noSetFMUStatePriorToCurrentPoint;
-    return STATUS(core_do_step(I, __func__, currentCommunicationPoint, communicationStepSize));
+    return fmi2_status(core_do_step(c, __func__, currentCommunicationPoint, communicationStepSize));
 }
 
 static fmi2Status no_status(fmi2Component c, const char *function) {
-    return STATUS(core_not_offered(I, function, "steps run synchronously, there is no status "
-                                   "to ask for"));
+    return fmi2_status(core_not_offered(c, function, "steps run synchronously, there is no status "
+                                        "to ask for"));
 }
 
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
@@ -147,7 +150,7 @@ fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *va
 
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
     if (s != fmi2LastSuccessfulTime) return no_status(c, __func__);
-    return STATUS(core_last_successful_time(I, __func__, value));
+    return fmi2_status(core_last_successful_time(c, __func__, value));
 }
 
 fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
@@ -158,7 +161,7 @@ fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Int
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
     if (s != fmi2Terminated) return no_status(c, __func__);
     double time; /* the call's checks are the last successful time's */
-    fmi2Status status = STATUS(core_last_successful_time(I, __func__, value ? &time : NULL));
+    fmi2Status status = fmi2_status(core_last_successful_time(c, __func__, value ? &time : NULL));
     if (status == fmi2OK) *value = fmi2False; /* the FMU never asks to end the simulation */
     return status;
 }
@@ -171,12 +174,12 @@ fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2Stri
 /* --- model exchange ------------------------------------------------------------------------ */
 
 fmi2Status fmi2EnterEventMode(fmi2Component c) {
-    return STATUS(core_enter_event_mode(I, __func__));
+    return fmi2_status(core_enter_event_mode(c, __func__));
 }
 
 fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
-    if (eventInfo == NULL) return STATUS(core_not_offered(I, __func__, "eventInfo is NULL"));
-    fmi2Status status = STATUS(core_update_discrete_states(I, __func__));
+    if (eventInfo == NULL) return fmi2_status(core_not_offered(c, __func__, "eventInfo is NULL"));
+    fmi2Status status = fmi2_status(core_update_discrete_states(c, __func__));
     if (status == fmi2OK) {
         eventInfo->newDiscreteStatesNeeded = fmi2False;
         eventInfo->terminateSimulation = fmi2False;
@@ -189,13 +192,13 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
 }
 
 fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
-    return STATUS(core_enter_continuous_time_mode(I, __func__));
+    return fmi2_status(core_enter_continuous_time_mode(c, __func__));
 }
 
 fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
                                        fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation) {
     (void)noSetFMUStatePriorToCurrentPoint;
-    fmi2Status status = STATUS(core_completed_integrator_step(I, __func__));
+    fmi2Status status = fmi2_status(core_completed_integrator_step(c, __func__));
     if (status == fmi2OK) {
         if (enterEventMode) *enterEventMode = fmi2False;
         if (terminateSimulation) *terminateSimulation = fmi2False;
@@ -204,63 +207,63 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
 }
 
 fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
-    return STATUS(core_set_time(I, __func__, time));
+    return fmi2_status(core_set_time(c, __func__, time));
 }
 
 fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {
-    return STATUS(core_set_continuous_states(I, __func__, x, nx));
+    return fmi2_status(core_set_continuous_states(c, __func__, x, nx));
 }
 
 fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx) {
-    return STATUS(core_get_derivatives(I, __func__, derivatives, nx));
+    return fmi2_status(core_get_derivatives(c, __func__, derivatives, nx));
 }
 
 fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni) {
-    return STATUS(core_get_event_indicators(I, __func__, eventIndicators, ni));
+    return fmi2_status(core_get_event_indicators(c, __func__, eventIndicators, ni));
 }
 
 fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {
-    return STATUS(core_get_continuous_states(I, __func__, x, nx));
+    return fmi2_status(core_get_continuous_states(c, __func__, x, nx));
 }
 
 fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx) {
-    return STATUS(core_get_nominals(I, __func__, x_nominal, nx));
+    return fmi2_status(core_get_nominals(c, __func__, x_nominal, nx));
 }
 
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[],
                                         size_t nUnknown, const fmi2ValueReference vKnown_ref[],
                                         size_t nKnown, const fmi2Real dvKnown[],
                                         fmi2Real dvUnknown[]) {
-    return STATUS(core_get_directional_derivative(I, __func__, vUnknown_ref, nUnknown,
-                                                  vKnown_ref, nKnown, dvKnown, dvUnknown));
+    return fmi2_status(core_get_directional_derivative(c, __func__, vUnknown_ref, nUnknown,
+                                                       vKnown_ref, nKnown, dvKnown, dvUnknown));
 }
 
 /* --- FMU states ------------------------------------------------------------------------------ */
 
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    return STATUS(core_get_state(I, __func__, FMUstate));
+    return fmi2_status(core_get_state(c, __func__, FMUstate));
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
-    return STATUS(core_set_state(I, __func__, FMUstate));
+    return fmi2_status(core_set_state(c, __func__, FMUstate));
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    return STATUS(core_free_state(I, __func__, FMUstate));
+    return fmi2_status(core_free_state(c, __func__, FMUstate));
 }
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
-    return STATUS(core_serialized_state_size(I, __func__, FMUstate, size));
+    return fmi2_status(core_serialized_state_size(c, __func__, FMUstate, size));
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate,
                                  fmi2Byte serializedState[], size_t size) {
-    return STATUS(core_serialize_state(I, __func__, FMUstate,
-                                       (unsigned char *)serializedState, size));
+    return fmi2_status(core_serialize_state(c, __func__, FMUstate,
+                                            (unsigned char *)serializedState, size));
 }
 
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
                                    fmi2FMUstate *FMUstate) {
-    return STATUS(core_deserialize_state(I, __func__, (const unsigned char *)serializedState,
-                                         size, FMUstate));
+    return fmi2_status(core_deserialize_state(c, __func__, (const unsigned char *)serializedState,
+                                              size, FMUstate));
 }

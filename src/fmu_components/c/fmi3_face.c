@@ -13,10 +13,12 @@
 static const Face FMI3 = {"fmi3",
                           {"Instantiated", "InitializationMode", "StepMode", "StepDiscarded",
                            "Terminated", "EventMode", "ContinuousTimeMode",
-                           "IntermediateUpdateMode"}};
+                           "IntermediateUpdateMode"},
+                          1};
 
-#define I ((Instance *)instance)
-#define STATUS(call) ((fmi3Status)(call))
+/* The core's status as FMI 3.0's (the same numbers). The host's handle is the core's
+   Instance, passed on as it is. */
+static inline fmi3Status fmi3_status(Status status) { return (fmi3Status)status; }
 
 static void send_fmi3(const HostLog *log, Status status, const char *category,
                       const char *message) {
@@ -95,28 +97,34 @@ fmi3Instance fmi3InstantiateScheduledExecution(
     return NULL;
 }
 
-void fmi3FreeInstance(fmi3Instance instance) { core_free_instance(I, __func__); }
+void fmi3FreeInstance(fmi3Instance instance) { core_free_instance(instance, __func__); }
 
 fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, size_t nCategories,
                                const fmi3String categories[]) {
-    return STATUS(core_set_debug_logging(I, __func__, loggingOn, nCategories, categories));
+    return fmi3_status(core_set_debug_logging(instance, __func__, loggingOn, nCategories,
+                                              categories));
 }
 
 fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean toleranceDefined,
                                        fmi3Float64 tolerance, fmi3Float64 startTime,
                                        fmi3Boolean stopTimeDefined, fmi3Float64 stopTime) {
     (void)stopTimeDefined, (void)stopTime;
-    fmi3Status status = STATUS(core_setup_experiment(I, __func__, toleranceDefined, tolerance,
-                                                     startTime));
-    return status > fmi3Warning ? status : STATUS(core_enter_initialization_mode(I, __func__));
+    fmi3Status status = fmi3_status(core_setup_experiment(instance, __func__, toleranceDefined,
+                                                          tolerance, startTime));
+    if (status > fmi3Warning) return status;
+    return fmi3_status(core_enter_initialization_mode(instance, __func__));
 }
 
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
-    return STATUS(core_exit_initialization_mode(I, __func__));
+    return fmi3_status(core_exit_initialization_mode(instance, __func__));
 }
 
-fmi3Status fmi3Terminate(fmi3Instance instance) { return STATUS(core_terminate(I, __func__)); }
-fmi3Status fmi3Reset(fmi3Instance instance) { return STATUS(core_reset(I, __func__)); }
+fmi3Status fmi3Terminate(fmi3Instance instance) {
+    return fmi3_status(core_terminate(instance, __func__));
+}
+fmi3Status fmi3Reset(fmi3Instance instance) {
+    return fmi3_status(core_reset(instance, __func__));
+}
 
 /* --- values: Float64 variables and one Boolean parameter, all scalars -------------------- */
 
@@ -124,29 +132,29 @@ fmi3Status fmi3Reset(fmi3Instance instance) { return STATUS(core_reset(I, __func
 static int counts_differ(fmi3Instance instance, const char *function, size_t nvr,
                          size_t nValues) {
     if (nvr == nValues) return 0;
-    core_not_offered(I, function, nvr > nValues ? "fewer values than value references (every "
-                     "variable is a scalar); call ignored" : "more values than value references "
-                     "(every variable is a scalar); call ignored");
+    core_not_offered(instance, function, nvr > nValues ? "fewer values than value references "
+                     "(every variable is a scalar); call ignored" : "more values than value "
+                     "references (every variable is a scalar); call ignored");
     return 1;
 }
 
 fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                           fmi3Float64 values[], size_t nValues) {
     if (counts_differ(instance, __func__, nvr, nValues)) return fmi3Error;
-    return STATUS(core_get_float64(I, __func__, vr, nvr, values));
+    return fmi3_status(core_get_float64(instance, __func__, vr, nvr, values));
 }
 
 fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                           const fmi3Float64 values[], size_t nValues) {
     if (counts_differ(instance, __func__, nvr, nValues)) return fmi3Error;
-    return STATUS(core_set_float64(I, __func__, vr, nvr, values));
+    return fmi3_status(core_set_float64(instance, __func__, vr, nvr, values));
 }
 
 fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                           fmi3Boolean values[], size_t nValues) {
     if (counts_differ(instance, __func__, nvr, nValues)) return fmi3Error;
     int flag;
-    fmi3Status status = STATUS(core_get_boolean(I, __func__, vr, nvr, values, &flag));
+    fmi3Status status = fmi3_status(core_get_boolean(instance, __func__, vr, nvr, values, &flag));
     if (status <= fmi3Error && values != NULL && vr != NULL)
         for (size_t i = 0; i < nvr; i++) values[i] = flag != 0;
     return status;
@@ -156,20 +164,22 @@ fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], 
                           const fmi3Boolean values[], size_t nValues) {
     if (counts_differ(instance, __func__, nvr, nValues)) return fmi3Error;
     int last = nvr > 0 && values != NULL && values[nvr - 1];
-    return STATUS(core_set_boolean(I, __func__, vr, nvr, values, last));
+    return fmi3_status(core_set_boolean(instance, __func__, vr, nvr, values, last));
 }
 
 #define NO_GETTER(function, type)                                                          \
     fmi3Status function(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,  \
                         type values[], size_t nValues) {                                   \
         (void)values, (void)nValues;                                                       \
-        return STATUS(core_no_variable_of_type(I, #function, nvr, vr, READABLE));          \
+        return fmi3_status(                                                                \
+            core_no_variable_of_type(instance, #function, nvr, vr, READABLE));             \
     }
 #define NO_SETTER(function, type)                                                          \
     fmi3Status function(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,  \
                         const type values[], size_t nValues) {                             \
         (void)values, (void)nValues;                                                       \
-        return STATUS(core_no_variable_of_type(I, #function, nvr, vr, SETTABLE));          \
+        return fmi3_status(                                                                \
+            core_no_variable_of_type(instance, #function, nvr, vr, SETTABLE));             \
     }
 NO_GETTER(fmi3GetFloat32, fmi3Float32)
 NO_GETTER(fmi3GetInt8, fmi3Int8)
@@ -195,32 +205,32 @@ NO_SETTER(fmi3SetString, fmi3String)
 fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                          size_t valueSizes[], fmi3Binary values[], size_t nValues) {
     (void)valueSizes, (void)values, (void)nValues;
-    return STATUS(core_no_variable_of_type(I, __func__, nvr, vr, READABLE));
+    return fmi3_status(core_no_variable_of_type(instance, __func__, nvr, vr, READABLE));
 }
 
 fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                          const size_t valueSizes[], const fmi3Binary values[], size_t nValues) {
     (void)valueSizes, (void)values, (void)nValues;
-    return STATUS(core_no_variable_of_type(I, __func__, nvr, vr, SETTABLE));
+    return fmi3_status(core_no_variable_of_type(instance, __func__, nvr, vr, SETTABLE));
 }
 
 fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                         fmi3Clock values[]) {
     (void)values;
-    return STATUS(core_no_variable_of_type(I, __func__, nvr, vr, READABLE));
+    return fmi3_status(core_no_variable_of_type(instance, __func__, nvr, vr, READABLE));
 }
 
 fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                         const fmi3Clock values[]) {
     (void)values;
-    return STATUS(core_no_variable_of_type(I, __func__, nvr, vr, SETTABLE));
+    return fmi3_status(core_no_variable_of_type(instance, __func__, nvr, vr, SETTABLE));
 }
 
 /* --- what the FMUs do not have: clocks, configuration, per-element dependencies ---------- */
 
 #define NO_CLOCKS "the FMU has no clocks"
 static fmi3Status no_clocks(fmi3Instance instance, const char *function) {
-    return STATUS(core_not_offered(I, function, NO_CLOCKS));
+    return fmi3_status(core_not_offered(instance, function, NO_CLOCKS));
 }
 
 fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[],
@@ -286,20 +296,23 @@ fmi3Status fmi3ActivateModelPartition(fmi3Instance instance, fmi3ValueReference 
 }
 
 fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance) {
-    return STATUS(core_not_offered(I, __func__, "the FMU has no structural parameters"));
+    return fmi3_status(core_not_offered(instance, __func__, "the FMU has no structural "
+                                        "parameters"));
 }
 
 fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance) {
-    return STATUS(core_not_offered(I, __func__, "the FMU has no structural parameters"));
+    return fmi3_status(core_not_offered(instance, __func__, "the FMU has no structural "
+                                        "parameters"));
 }
 
 fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance instance,
                                                fmi3ValueReference valueReference,
                                                size_t *nDependencies) {
     (void)valueReference, (void)nDependencies;
-    return STATUS(core_not_offered(I, __func__, "every variable is a scalar: the dependencies "
-                                   "are the modelDescription's ModelStructure "
-                                   "(providesPerElementDependencies is false)"));
+    return fmi3_status(core_not_offered(instance, __func__, "every variable is a scalar: the "
+                                        "dependencies are the modelDescription's "
+                                        "ModelStructure (providesPerElementDependencies is "
+                                        "false)"));
 }
 
 fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference dependent,
@@ -310,38 +323,39 @@ fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference
                                        size_t nDependencies) {
     (void)dependent, (void)elementIndicesOfDependent, (void)independents;
     (void)elementIndicesOfIndependents, (void)dependencyKinds, (void)nDependencies;
-    return STATUS(core_not_offered(I, __func__, "every variable is a scalar: the dependencies "
-                                   "are the modelDescription's ModelStructure "
-                                   "(providesPerElementDependencies is false)"));
+    return fmi3_status(core_not_offered(instance, __func__, "every variable is a scalar: the "
+                                        "dependencies are the modelDescription's "
+                                        "ModelStructure (providesPerElementDependencies is "
+                                        "false)"));
 }
 
 /* --- FMU states -------------------------------------------------------------------------- */
 
 fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
-    return STATUS(core_get_state(I, __func__, FMUState));
+    return fmi3_status(core_get_state(instance, __func__, FMUState));
 }
 
 fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState) {
-    return STATUS(core_set_state(I, __func__, FMUState));
+    return fmi3_status(core_set_state(instance, __func__, FMUState));
 }
 
 fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
-    return STATUS(core_free_state(I, __func__, FMUState));
+    return fmi3_status(core_free_state(instance, __func__, FMUState));
 }
 
 fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState FMUState,
                                       size_t *size) {
-    return STATUS(core_serialized_state_size(I, __func__, FMUState, size));
+    return fmi3_status(core_serialized_state_size(instance, __func__, FMUState, size));
 }
 
 fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState,
                                  fmi3Byte serializedState[], size_t size) {
-    return STATUS(core_serialize_state(I, __func__, FMUState, serializedState, size));
+    return fmi3_status(core_serialize_state(instance, __func__, FMUState, serializedState, size));
 }
 
 fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte serializedState[],
                                    size_t size, fmi3FMUState *FMUState) {
-    return STATUS(core_deserialize_state(I, __func__, serializedState, size, FMUState));
+    return fmi3_status(core_deserialize_state(instance, __func__, serializedState, size, FMUState));
 }
 
 /* --- derivatives ------------------------------------------------------------------------- */
@@ -353,8 +367,8 @@ fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueRe
     if (counts_differ(instance, __func__, nKnowns, nSeed) ||
         counts_differ(instance, __func__, nUnknowns, nSensitivity))
         return fmi3Error;
-    return STATUS(core_get_directional_derivative(I, __func__, unknowns, nUnknowns, knowns,
-                                                  nKnowns, seed, sensitivity));
+    return fmi3_status(core_get_directional_derivative(instance, __func__, unknowns, nUnknowns,
+                                                       knowns, nKnowns, seed, sensitivity));
 }
 
 /* The adjoint: sensitivity_j = sum_i seed_i d(unknown_i)/d(known_j), one directional
@@ -368,15 +382,15 @@ fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueRefere
         return fmi3Error;
     if ((nUnknowns && (unknowns == NULL || seed == NULL)) ||
         (nKnowns && (knowns == NULL || sensitivity == NULL)))
-        return STATUS(core_not_offered(I, __func__, "an array is NULL; call ignored"));
+        return fmi3_status(core_not_offered(instance, __func__, "an array is NULL; call ignored"));
     fmi3Status worst = fmi3OK;
     double column[MODEL_VARIABLES], one = 1.0;
     if (nUnknowns > MODEL_VARIABLES)
-        return STATUS(core_not_offered(I, __func__, "more unknowns than the FMU has variables; "
-                                       "call ignored"));
+        return fmi3_status(core_not_offered(instance, __func__, "more unknowns than the FMU has "
+                                            "variables; call ignored"));
     for (size_t j = 0; j < nKnowns; j++) {
-        fmi3Status status = STATUS(core_get_directional_derivative(
-            I, __func__, unknowns, nUnknowns, &knowns[j], 1, &one, column));
+        fmi3Status status = fmi3_status(core_get_directional_derivative(
+            instance, __func__, unknowns, nUnknowns, &knowns[j], 1, &one, column));
         if (status > fmi3Warning) return status;
         if (status > worst) worst = status;
         double sum = 0.0;
@@ -389,7 +403,7 @@ fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueRefere
 /* --- model exchange ---------------------------------------------------------------------- */
 
 fmi3Status fmi3EnterEventMode(fmi3Instance instance) {
-    return STATUS(core_enter_event_mode(I, __func__));
+    return fmi3_status(core_enter_event_mode(instance, __func__));
 }
 
 fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discreteStatesNeedUpdate,
@@ -398,7 +412,7 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
                                     fmi3Boolean *valuesOfContinuousStatesChanged,
                                     fmi3Boolean *nextEventTimeDefined,
                                     fmi3Float64 *nextEventTime) {
-    fmi3Status status = STATUS(core_update_discrete_states(I, __func__));
+    fmi3Status status = fmi3_status(core_update_discrete_states(instance, __func__));
     if (status != fmi3OK) return status;
     /* FMI 3.0: NULL for what the host does not want to know */
     if (discreteStatesNeedUpdate) *discreteStatesNeedUpdate = false;
@@ -411,7 +425,7 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
 }
 
 fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance) {
-    return STATUS(core_enter_continuous_time_mode(I, __func__));
+    return fmi3_status(core_enter_continuous_time_mode(instance, __func__));
 }
 
 fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance,
@@ -419,7 +433,7 @@ fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance,
                                        fmi3Boolean *enterEventMode,
                                        fmi3Boolean *terminateSimulation) {
     (void)noSetFMUStatePriorToCurrentPoint;
-    fmi3Status status = STATUS(core_completed_integrator_step(I, __func__));
+    fmi3Status status = fmi3_status(core_completed_integrator_step(instance, __func__));
     if (status == fmi3OK) {
         if (enterEventMode) *enterEventMode = false;
         if (terminateSimulation) *terminateSimulation = false;
@@ -428,44 +442,49 @@ fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance,
 }
 
 fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time) {
-    return STATUS(core_set_time(I, __func__, time));
+    return fmi3_status(core_set_time(instance, __func__, time));
 }
 
 fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 continuousStates[],
                                    size_t nContinuousStates) {
-    return STATUS(core_set_continuous_states(I, __func__, continuousStates, nContinuousStates));
+    return fmi3_status(core_set_continuous_states(instance, __func__, continuousStates,
+                                                  nContinuousStates));
 }
 
 fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 derivatives[],
                                              size_t nContinuousStates) {
-    return STATUS(core_get_derivatives(I, __func__, derivatives, nContinuousStates));
+    return fmi3_status(core_get_derivatives(instance, __func__, derivatives, nContinuousStates));
 }
 
 fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndicators[],
                                   size_t nEventIndicators) {
-    return STATUS(core_get_event_indicators(I, __func__, eventIndicators, nEventIndicators));
+    return fmi3_status(core_get_event_indicators(instance, __func__, eventIndicators,
+                                                 nEventIndicators));
 }
 
 fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 continuousStates[],
                                    size_t nContinuousStates) {
-    return STATUS(core_get_continuous_states(I, __func__, continuousStates, nContinuousStates));
+    return fmi3_status(core_get_continuous_states(instance, __func__, continuousStates,
+                                                  nContinuousStates));
 }
 
 fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 nominals[],
                                              size_t nContinuousStates) {
-    return STATUS(core_get_nominals(I, __func__, nominals, nContinuousStates));
+    return fmi3_status(core_get_nominals(instance, __func__, nominals, nContinuousStates));
 }
 
 fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *nEventIndicators) {
     if (nEventIndicators == NULL)
-        return STATUS(core_not_offered(I, __func__, "the place for the number is NULL"));
+        return fmi3_status(core_not_offered(instance, __func__, "the place for the number is "
+                                            "NULL"));
     *nEventIndicators = MODEL_EVENT_INDICATORS;
     return fmi3OK;
 }
 
 fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *nContinuousStates) {
     if (nContinuousStates == NULL)
-        return STATUS(core_not_offered(I, __func__, "the place for the number is NULL"));
+        return fmi3_status(core_not_offered(instance, __func__, "the place for the number is "
+                                            "NULL"));
     *nContinuousStates = MODEL_CONTINUOUS;
     return fmi3OK;
 }
@@ -473,14 +492,14 @@ fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *nConti
 /* --- co-simulation ----------------------------------------------------------------------- */
 
 fmi3Status fmi3EnterStepMode(fmi3Instance instance) {
-    return STATUS(core_enter_step_mode(I, __func__));
+    return fmi3_status(core_enter_step_mode(instance, __func__));
 }
 
 fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference vr[],
                                     size_t nvr, const fmi3Int32 orders[], fmi3Float64 values[],
                                     size_t nValues) {
     if (counts_differ(instance, __func__, nvr, nValues)) return fmi3Error;
-    return STATUS(core_output_derivatives(I, __func__, vr, nvr, orders, values));
+    return fmi3_status(core_output_derivatives(instance, __func__, vr, nvr, orders, values));
 }
 
 fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoint,
@@ -489,13 +508,15 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
                       fmi3Boolean *eventHandlingNeeded, fmi3Boolean *terminateSimulation,
                       fmi3Boolean *earlyReturn, fmi3Float64 *lastSuccessfulTime) {
     (void)noSetFMUStatePriorToCurrentPoint;
-    fmi3Status status = STATUS(core_do_step(I, __func__, currentCommunicationPoint,
-                                            communicationStepSize));
+    const Instance *core = instance;
+    fmi3Status status = fmi3_status(core_do_step(instance, __func__, currentCommunicationPoint,
+                                                 communicationStepSize));
     if (status > fmi3Discard) return status;
     if (eventHandlingNeeded)
-        *eventHandlingNeeded = I->returned_early == RETURNED_AT_CONTACT && I->event_mode_used;
+        *eventHandlingNeeded = core->returned_early == RETURNED_AT_CONTACT &&
+                               core->event_mode_used;
     if (terminateSimulation) *terminateSimulation = false;
-    if (earlyReturn) *earlyReturn = I->returned_early != 0;
-    if (lastSuccessfulTime) *lastSuccessfulTime = I->s.last_successful_time;
+    if (earlyReturn) *earlyReturn = core->returned_early != 0;
+    if (lastSuccessfulTime) *lastSuccessfulTime = core->s.last_successful_time;
     return status;
 }

@@ -51,6 +51,12 @@ int host_log_wants(const HostLog *log, Status status, const char *category) {
     return 0;
 }
 
+void host_log_formatted(const HostLog *log, Status status, const char *format, va_list args) {
+    char message[MESSAGE_SIZE];
+    vsnprintf(message, sizeof message, format, args);
+    host_log(log, status, message);
+}
+
 void host_log(const HostLog *log, Status status, const char *message) {
     const char *category = log_category(status);
     if (host_log_wants(log, status, category)) host_log_send(log, status, category, message);

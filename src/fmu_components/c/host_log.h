@@ -7,6 +7,7 @@
 #ifndef HOST_LOG_H
 #define HOST_LOG_H
 
+#include <stdarg.h>
 #include <stddef.h>
 
 #include "call_flag.h"
@@ -42,6 +43,8 @@ void host_log_send(const HostLog *log, Status status, const char *category,
 
 /* Log a message under its status's category, if the host wants it. */
 void host_log(const HostLog *log, Status status, const char *message);
+/* As host_log, the message formatted from format and args (cut to MESSAGE_SIZE). */
+void host_log_formatted(const HostLog *log, Status status, const char *format, va_list args);
 
 /* fmi2SetDebugLogging, fmi3SetDebugLogging (`function`): 0, or 1 with the reason in
    problem[MESSAGE_SIZE]. */

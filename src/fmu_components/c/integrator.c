@@ -9,7 +9,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "core.h"
+#include "integrator.h"
 
 #define N MODEL_INTEGRATED
 

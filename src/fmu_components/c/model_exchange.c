@@ -12,7 +12,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "core.h"
+#include "model_exchange.h"
 #include "text.h"
 
 #define ME_STATES (EVENT_MODE | CONTINUOUS_TIME_MODE)
@@ -62,9 +62,10 @@ Status core_update_discrete_states(Instance *instance, const char *function) {
     return call_end(instance, STATUS_OK);
 }
 
-/* Co-Simulation: from event mode (or straight after initialization) into Step Mode. */
+/* Co-Simulation: from Event Mode into Step Mode (FMI 3.0 section 3.2.3), the only way there
+   for a host that uses event mode. */
 Status core_enter_step_mode(Instance *instance, const char *function) {
-    if (!call_begin(instance, STEP_COMPLETE | EVENT_MODE, function)) return STATUS_ERROR;
+    if (!call_begin(instance, EVENT_MODE, function)) return STATUS_ERROR;
     if (instance->type != CO_SIMULATION) {
         log_status(instance, STATUS_ERROR, "%s: this instance was made for Model Exchange",
                    function);

@@ -12,9 +12,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "core.h"
-#include "text.h"
+#include "state.h"
 #include "state_envelope.h"
+#include "text.h"
 
 #define STATE_FORMAT_VERSION 2u
 #define STATE_MAGIC 0x53544154u /* "STAT" */

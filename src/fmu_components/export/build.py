@@ -56,9 +56,11 @@ GUID_NAMESPACE = uuid.UUID("6c1f4b7e-4f5e-4a8e-9c71-2f4d8e3b9a10")
 
 # The native runtime, hand-written once for all components, and the FMI headers.
 # The core (every FMI version), then each version's face.
-RUNTIME_SOURCES = ("core.c", "model_exchange.c", "cosimulation.c", "integrator.c", "state.c",
-                   "hermite.c", "text.c", "host_log.c", "state_envelope.c", "instantiation.c")
-RUNTIME_HEADERS = ("core.h", "model.h", "arithmetic.h", "hermite.h", "text.h", "host_log.h",
+RUNTIME_SOURCES = ("core.c", "instance.c", "model_exchange.c", "cosimulation.c", "integrator.c",
+                   "state.c", "hermite.c", "text.c", "host_log.c", "state_envelope.c",
+                   "instantiation.c")
+RUNTIME_HEADERS = ("core.h", "instance.h", "cosimulation.h", "model_exchange.h", "state.h",
+                   "integrator.h", "model.h", "arithmetic.h", "hermite.h", "text.h", "host_log.h",
                    "status.h", "state_envelope.h", "instantiation.h", "call_flag.h")
 FACE_SOURCES = {2: ("fmi2_face.c", "fmi2_host.c"), 3: ("fmi3_face.c",)}
 FACE_HEADERS = {2: ("fmi2_host.h",), 3: ()}

@@ -21,6 +21,7 @@ from ..runtime.expressions import FUNCTIONS, Format, GenerationError, Printer, S
 from ..runtime import cosim, integrator
 from ..runtime.catalog import LARGEST_PARAMETER, SMALLEST_PARAMETER
 from ..runtime.integrator import ROS34PW2, factor_statements, step_statements
+from .model_description import EVENT_INDICATOR, fmi3_references
 
 C_KEYWORDS = set("""auto break case char const continue default do double else enum extern float
 for goto if inline int long register restrict return short signed sizeof static struct switch
@@ -162,6 +163,7 @@ class ModelCode:
     def config_header(self):
         d, e = self.definition, self.equations
         table_points = max([len(t.abscissae) for t in e.tables], default=0)
+        extra = fmi3_references(d)
         return "\n".join([
             f"/* {d.name}: sizes of the generated model (fmu_components.export.cgen). Generated at build",
             "   time; do not edit. */",
@@ -179,6 +181,9 @@ class ModelCode:
             f"#define LARGEST_PARAMETER {c_number(LARGEST_PARAMETER)}",
             f"#define MODEL_CONTINUOUS {e.continuous.states}",
             f"#define MODEL_EVENT_INDICATORS {len(e.continuous.event_indicators)}",
+            "/* What FMI 3.0 declares beyond FMI 2.0 (export/model_description.py). */",
+            f"#define MODEL_EVENT_INDICATOR_REFERENCE {extra.get(EVENT_INDICATOR, 0xFFFFFFFF)}u",
+            f"#define MODEL_TIME_REFERENCE {extra['time']}u",
             "/* The integrator's constants (runtime/integrator.py) and the controller's power of",
             f"   the squared error norm for the {self.tableau.name} tableau. */",
             f"#define DEFAULT_RTOL {integrator.DEFAULT_RTOL!r}",

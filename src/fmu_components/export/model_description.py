@@ -140,6 +140,19 @@ def _real_attributes(variable, nominal, derivative_of):
 EVENT_INDICATOR = "contact_indicator"  # FMI 3 declares the contact's event indicator
 
 
+def fmi3_references(definition):
+    """The Float64 variables FMI 3.0 declares and FMI 2.0 does not, {name: value reference},
+    after every variable and Boolean parameter: a contact's event indicator, and the
+    independent variable time. The C runtime takes these numbers from model_config.h
+    (export/cgen.py) and answers them in FMI 3.0 only."""
+    first = len(definition.variables) + len(definition.switches)
+    references = {}
+    if definition.equations.continuous.event_indicators:
+        references[EVENT_INDICATOR] = first
+    references["time"] = first + 1
+    return references
+
+
 def model_description_fmi3(definition, *, guid, model_identifier, source_files=(),
                            nominals=()):
     """The FMI 3.0 modelDescription.xml of a native FMU: the same variables, value
@@ -162,10 +175,9 @@ def model_description_fmi3(definition, *, guid, model_identifier, source_files=(
         "mightReturnEarlyFromDoStep": "true", "providesEvaluateDiscreteStates": "false"})
     _common_elements(root, definition)
     variables = SubElement(root, "ModelVariables")
-    # after the Float64 variables, the Boolean parameter and the event indicator's place
-    # (c/core.h: TIME_REFERENCE)
+    extra = fmi3_references(definition)
     SubElement(variables, "Float64", {
-        "name": "time", "valueReference": str(len(definition.variables) + 2),
+        "name": "time", "valueReference": str(extra["time"]),
         "causality": "independent", "variability": "continuous",
         "description": "Simulation time"})
     nominal = dict(zip((v.name for v in definition.states), nominals))
@@ -185,8 +197,8 @@ def model_description_fmi3(definition, *, guid, model_identifier, source_files=(
             "variability": "fixed", "initial": "exact",
             "start": "true" if switch.start else "false"})
     indicators = []
-    if view.event_indicators:
-        vr = len(definition.variables) + len(definition.switches)
+    if EVENT_INDICATOR in extra:
+        vr = extra[EVENT_INDICATOR]
         x = definition.inputs[0]
         SubElement(variables, "Float64", {
             "name": EVENT_INDICATOR, "valueReference": str(vr), "causality": "local",

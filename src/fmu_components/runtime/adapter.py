@@ -413,7 +413,8 @@ class ComponentSlave(Fmi2Slave):
     def get_boolean(self, vrs):
         unknown = [vr for vr in vrs if vr not in self._switch_vrs]
         if unknown:
-            self._error(f"fmi2GetBoolean: no Boolean variable has value reference {unknown[0]}")
+            self._error(f"fmi2GetBoolean: no Boolean variable has value reference "
+                        f"{unsigned(unknown[0])}")
             return [False] * len(vrs)
         return [self._switches[vr - self._switch_vrs.start] for vr in vrs]
 
@@ -428,8 +429,8 @@ class ComponentSlave(Fmi2Slave):
     def set_boolean(self, vrs, values):
         for vr in vrs:
             if vr not in self._switch_vrs:
-                self._error(f"fmi2SetBoolean: no Boolean variable has value reference {vr}; "
-                            f"nothing set")
+                self._error(f"fmi2SetBoolean: no Boolean variable has value reference "
+                            f"{unsigned(vr)}; nothing set")
                 return
             if self._mode not in (INSTANTIATED, INITIALIZATION):
                 name = self.definition.switches[vr - self._switch_vrs.start].name
