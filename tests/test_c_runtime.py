@@ -11,7 +11,7 @@ import zlib
 
 import pytest
 
-from fmu_components.runtime.catalog import DAMPER_TABLE_RATES, DAMPER_TABLE_TORQUES
+from fmu_components.runtime.damper_part import DAMPER_TABLE_RATES, DAMPER_TABLE_TORQUES
 from fmu_components.runtime.hermite import MonotoneCubic
 
 from conftest import ROOT

@@ -19,7 +19,7 @@ import re
 
 from ..runtime.expressions import FUNCTIONS, Format, GenerationError, Printer, Symbol, Tangent
 from ..runtime import cosim, integrator
-from ..runtime.catalog import LARGEST_PARAMETER, SMALLEST_PARAMETER
+from ..runtime.definition import LARGEST_PARAMETER, PARAMETER_MAGNITUDES, SMALLEST_PARAMETER
 from ..runtime.integrator import ROS34PW2, factor_statements, step_statements
 
 C_KEYWORDS = set("""auto break case char const continue default do double else enum extern float
@@ -75,10 +75,12 @@ class CPrinter(Printer):
                 for name, c in sorted(self.used.items(), key=lambda item: self.indices[item[0]])]
 
     def _print_Logical(self, node):
-        level = self.AND if node.op == "and" else self.OR
-        op = "&&" if node.op == "and" else "||"
-        return (f"{self._operand(node.left, level)} {op} "
-                f"{self._operand(node.right, level + 1)}", level)
+        if node.op == "and":
+            return (f"{self._operand(node.left, self.AND)} && "
+                    f"{self._operand(node.right, self.AND + 1)}", self.AND)
+        # either side of || in parentheses unless it binds tighter than && (-Wparentheses)
+        return (f"{self._operand(node.left, self.NOT)} || "
+                f"{self._operand(node.right, self.NOT)}", self.OR)
 
     def _print_Not(self, node):
         return f"!{self._operand(node.operand, self.ATOM)}", self.UNARY
@@ -177,6 +179,7 @@ class ModelCode:
             f"#define MODEL_PARAMETERS {len(d.parameters)}",
             f"#define SMALLEST_PARAMETER {c_number(SMALLEST_PARAMETER)}",
             f"#define LARGEST_PARAMETER {c_number(LARGEST_PARAMETER)}",
+            f"#define PARAMETER_MAGNITUDES {c_string(PARAMETER_MAGNITUDES)}",
             f"#define MODEL_CONTINUOUS {e.continuous.states}",
             f"#define MODEL_EVENT_INDICATORS {len(e.continuous.event_indicators)}",
             "/* The integrator's constants (runtime/integrator.py) and the controller's power of",
@@ -204,7 +207,8 @@ class ModelCode:
     def source(self):
         return "\n\n".join([self._preamble(), self._info(), self._derive(),
                             self._initial_state(), self._start(), self._factor(), self._step(),
-                            self._exact(), self._outputs(), self._input_problem(),
+                            self._exact(), self._outputs(), self._contact(),
+                            self._input_problem(),
                             self._take_input(), self._failure_hint(), self._nominals(),
                             self._rates(), self._continuous_outputs(),
                             self._event_indicators(), self._outputs_direction()]) + "\n"
@@ -328,6 +332,13 @@ class ModelCode:
             prologue=["(void)state, (void)v;"],
             epilogue=lambda printer: [f"outputs[{i}] = {printer.expression(value)};"
                                       for i, value in enumerate(e.outputs)])
+
+    def _contact(self):
+        """The contact's mode at x and v (model.Equations.contact_mode)."""
+        printer = self.printer(["x", "v"])
+        mode = printer.expression(self.equations.contact_mode())
+        return "\n".join(["double model_contact(double x, double v) {", "    (void)x, (void)v;",
+                          f"    return {mode};", "}"])
 
     def _input_problem(self):
         limit = self.equations.input_limit
