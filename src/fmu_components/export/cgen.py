@@ -5,9 +5,12 @@ The same expression trees the pythonfmu flavour prints as Python at run time
 same tableau (``runtime/integrator.py``) are printed here by ``CPrinter`` into two files per
 component, written at build time and never committed:
 
-* ``model_config.h``: the component's sizes, for the runtime's arrays;
-* ``model.c``: ``MODEL_INFO`` (variables, constraints, ranges, tables: the catalog as C
-  data) and the ``model_*`` functions that ``c/model.h`` declares.
+* ``model_config.h``: the component's sizes, for the runtime's arrays, and the constants
+  the runtime shares with the Python flavour (the parameter bounds and their message, the
+  integrator's and the rate check's);
+* ``model.c``: ``MODEL_INFO`` (variables, constraints, ranges, tables: the component's
+  definition as C data) and the ``model_*`` functions that ``c/model.h`` declares (the
+  contact's mode among them).
 
 Everything else (the FMI calls, the co-simulation step, the integrator's loop, the Hermite
 curve, states and logging) is the hand-written runtime in ``c/``, the same for every
