@@ -9,9 +9,11 @@ at the same step, with what it cost.
     cost         per host step and FMU: doSteps, state saves and restores; the host's
                  solves per step; wall seconds per simulated second
 
-Also the example scripts' `--csv`: each run's histories as CSV, SI units.
+Also the example scripts' `--csv`: each run's histories as CSV, each column headed by its
+name and SI unit.
 """
 
+import contextlib
 import csv
 import math
 import sys
@@ -19,6 +21,7 @@ import time
 import warnings
 
 import numpy as np
+from tqdm import tqdm
 
 from fmu_components.coupling import DEFAULT_SCHEME, SCHEMES
 
@@ -126,18 +129,15 @@ def _percent(value):
     return f"{value:.2g} %" if value >= 0.01 else f"{value:.1e} %"
 
 
-def write_csv(path, result, columns):
-    """Histories as CSV: `columns` maps a column name to a history (1-D) or a list of
-    (name, 1-D) for a history with one column per joint or link."""
+def write_csv(path, columns, units):
+    """Histories as CSV, each column headed by its name and SI unit ("time (s)"):
+    `columns` maps a name to a history (1-D) or a list of (name, 1-D) for a history with one
+    column per joint or link; `units` maps each of its names to the unit."""
     names, data = [], []
     for name, values in columns.items():
-        if isinstance(values, list):
-            for sub, column in values:
-                names.append(sub)
-                data.append(np.asarray(column, dtype=float))
-        else:
-            names.append(name)
-            data.append(np.asarray(values, dtype=float))
+        for sub, column in values if isinstance(values, list) else [(name, values)]:
+            names.append(f"{sub} ({units[name]})")
+            data.append(np.asarray(column, dtype=float))
     with open(path, "w", newline="") as stream:
         writer = csv.writer(stream)
         writer.writerow(names)
@@ -158,6 +158,23 @@ def add_arguments(parser, study_help):
 def progress(scheme, step):
     """A study's progress, on stderr (the table goes to stdout)."""
     print(f"  {scheme} at {step * 1e3:g} ms done", file=sys.stderr, flush=True)
+
+
+@contextlib.contextmanager
+def time_progress(description, end_time, show=True):
+    """A bar on stderr over the simulated time of a long run; yields the function that
+    moves it to a time reached (None when not shown)."""
+    if not show:
+        yield None
+        return
+    with tqdm(total=end_time, desc=description, file=sys.stderr, unit="s",
+              bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.3f}/{total:.3f} s "
+                         "simulated [{elapsed}<{remaining}]") as bar:
+        def reached(t):
+            if t > bar.n:
+                bar.update(min(t, end_time) - bar.n)
+
+        yield reached
 
 
 def write_study(out, text):

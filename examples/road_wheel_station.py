@@ -46,8 +46,8 @@ from fmu_components.coupling.exudyn_host import connector_state, solve
 from fmu_components.coupling.kelvin import KelvinElement, harmonic_kelvin_equivalent
 
 from coupling_study import (STUDY_GRID, STUDY_SCHEMES, STUDY_STEPS, add_arguments,
-                            format_table, history_error, progress, study, write_csv,
-                            write_study)
+                            format_table, history_error, progress, study, time_progress,
+                            write_csv, write_study)
 from example_fmus import fmu_path
 
 GRAVITY = 9.81
@@ -163,9 +163,12 @@ class Linearisation:
 class Station:
     """The station in exudyn with its two components; `run` drives it at one speed."""
 
-    def __init__(self, speed, profile, fmu_dir=None, linear=None, coupling=DEFAULT_SCHEME):
+    def __init__(self, speed, profile, fmu_dir=None, linear=None, coupling=DEFAULT_SCHEME,
+                 reached=None):
         """linear: a Linearisation, whose Kelvin elements replace both components; without
-        it both components are the FMUs."""
+        it both components are the FMUs. reached(t), if given, hears every accepted host
+        step's time (a progress bar)."""
+        self.reached = reached
         self.speed = speed
         self.profile = profile
         SC = exu.SystemContainer()
@@ -284,6 +287,8 @@ class Station:
         hull_acceleration = mbs.GetNodeOutput(self.hull_node, exu.OutputVariableType.Acceleration)[1]
         pivot_force = mbs.GetObjectOutput(self.pivot, exu.OutputVariableType.Force)[1]
         damper = self.damper.outputs
+        if self.reached is not None:
+            self.reached(t)
         self.records.append((
             t, hull_acceleration, pivot_force, self.damper.deflection, damper["torque"],
             damper.get("dashpot_torque", math.nan), damper.get("rotor_rate", math.nan),
@@ -302,11 +307,11 @@ SETTLE_TIME = 1.0  # s after the bump: the body's bounce dies out
 
 
 def simulate(speed, profile, step, fmu_dir=None, linear=None, end_time=None,
-             coupling=DEFAULT_SCHEME):
+             coupling=DEFAULT_SCHEME, reached=None):
     """One drive at `speed` (m/s); histories plus the damper's energy balance."""
     if end_time is None:
         end_time = profile.end / speed + SETTLE_TIME
-    station = Station(speed, profile, fmu_dir, linear, coupling)
+    station = Station(speed, profile, fmu_dir, linear, coupling, reached)
     result = station.run(end_time, step)
     result["costs"] = station.coupling.costs()
     # Work done on the damper, and what its dashpot dissipated (FMU only): J.
@@ -409,11 +414,15 @@ def coupling_study(speed, profile, fmu_dir=None, steps=STUDY_STEPS, schemes=STUD
     if end_time is None:
         end_time = profile.end / speed + SETTLE_TIME
     t_eval = np.arange(0.0, end_time + 1e-12, REFERENCE_OUTPUT)
+    show = progress is not None  # the study's own runs report through it
     started = time.perf_counter()
-    reference = solve_reference(speed, profile, end_time, t_eval, fmu_dir)
+    with time_progress("reference (Radau)", end_time, show) as reached:
+        reference = solve_reference(speed, profile, end_time, t_eval, fmu_dir,
+                                    reached=reached)
     reference["wall"] = time.perf_counter() - started
-    fine = simulate(speed, profile, FINE_STEP, fmu_dir, end_time=end_time,
-                    coupling="converged")
+    with time_progress(f"converged at {FINE_STEP * 1e3:g} ms", end_time, show) as reached:
+        fine = simulate(speed, profile, FINE_STEP, fmu_dir, end_time=end_time,
+                        coupling="converged", reached=reached)
     agreement = {key: history_error(fine, reference, key) for key in STUDY_KEYS}
     table = study(lambda scheme, step: simulate(speed, profile, step, fmu_dir,
                                                 end_time=end_time, coupling=scheme),
@@ -452,8 +461,17 @@ def plot_study(path, table, steps=STUDY_STEPS, key="hull_acceleration"):
     save_figure(figure, path)
 
 
-CSV_COLUMNS = ("time", "hull_acceleration", "hull_force", "tyre_force", "damper_torque",
-               "arm_angle", "tyre_compression", "dashpot_torque", "rotor_rate")
+# The CSV's columns and their SI units. The linear station's damper is a Kelvin element,
+# with no dashpot or rotor of its own: its CSV leaves the last two out.
+CSV_COLUMNS = {"time": "s", "hull_acceleration": "m/s2", "hull_force": "N", "tyre_force": "N",
+               "damper_torque": "N.m", "arm_angle": "rad", "tyre_compression": "m",
+               "dashpot_torque": "N.m", "rotor_rate": "rad/s"}
+DAMPER_INSIDE = ("dashpot_torque", "rotor_rate")
+
+
+def csv_columns(result, linear):
+    return {name: result[name] for name in CSV_COLUMNS
+            if not (linear and name in DAMPER_INSIDE)}
 
 
 # --- command line -------------------------------------------------------------------------
@@ -507,7 +525,7 @@ def main(argv=None):
     runs = {}
     print(f"\n{'speed':>6s} {'model':>7s} {'peak |a| hull':>14s} {'hull force max':>15s} "
           f"{'min':>8s} {'tyre max':>9s} {'damper |T|':>10s} {'damper work':>11s} "
-          f"{'ripple: rms a':>14s} {'rms T':>7s}")
+          f"{'ripple: rms a':>14s} {'rms T':>11s}")
     for speed in args.speeds:
         nonlinear = simulate(speed, profile, args.step, args.fmu_dir, end_time=args.end_time,
                              coupling=args.coupling)
@@ -521,11 +539,11 @@ def main(argv=None):
                   f"{p['max_tyre_force'] / 1e3:6.1f} kN {p['peak_damper_torque'] / 1e3:6.2f} kNm "
                   f"{p['damper_work'] / 1e3:8.2f} kJ "
                   f"{p.get('ripple_rms_hull_acceleration', math.nan):9.2f} m/s2 "
-                  f"{p.get('ripple_rms_damper_torque', math.nan):7.0f}")
+                  f"{p.get('ripple_rms_damper_torque', math.nan):7.0f} N.m")
             if args.csv:
                 suffix = "" if model == "FMUs" else "_linear"
-                write_csv(args.out / f"station_{speed:g}mps{suffix}.csv", result,
-                          {name: result[name] for name in CSV_COLUMNS})
+                write_csv(args.out / f"station_{speed:g}mps{suffix}.csv",
+                          csv_columns(result, linear=model == "linear"), CSV_COLUMNS)
         plot_speed(args.out / f"station_{speed:g}mps.png", speed, profile, nonlinear, linearised)
     plot_difference(args.out / "station_difference.png", runs)
     print(f"\nstatic hull force {HULL_MASS * GRAVITY / 1e3:.2f} kN; wrote plots"

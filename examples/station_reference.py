@@ -31,9 +31,10 @@ C = station.ARM_MASS * L / 2 + station.WHEEL_MASS * L
 ARM_INERTIA = station.ARM_MASS * L ** 2 / 12  # about its centre, as the exudyn model has it
 
 
-def solve_reference(speed, profile, end_time, t_eval, fmu_dir=None, rtol=1e-10):
+def solve_reference(speed, profile, end_time, t_eval, fmu_dir=None, rtol=1e-10, reached=None):
     """Histories of the station at `speed` (m/s) over `profile`, at t_eval: the same
-    names as Station.run."""
+    names as Station.run. reached(t), if given, hears the times the solver evaluates (a
+    progress bar)."""
     static_compression, static_load = station.static_tyre_point(fmu_dir)
     preload = station.torsion_bar_preload(station.TYRES_PER_WHEEL * static_load)
     masses = station.HULL_MASS + station.ARM_MASS + station.WHEEL_MASS
@@ -52,6 +53,8 @@ def solve_reference(speed, profile, end_time, t_eval, fmu_dir=None, rtol=1e-10):
         return -q[1], -qdot[1]
 
     def accelerations(t, q, qdot, loads):
+        if reached is not None:
+            reached(t)
         tyre_force, damper_torque = loads
         y, psi = q
         psidot = qdot[1]

@@ -286,6 +286,10 @@ def coupling_study(links=10, lift=0.01, frequency=6.0, fmu_dir=None, end_time=1.
     return reference, study(run, reference, STUDY_KEYS, steps, schemes, progress)
 
 
+CSV_UNITS = {"time": "s", "lift": "m", "link_height": "m", "link_acceleration": "m/s2",
+             "joint_angle": "rad", "joint_torque": "N.m", "radial_force": "N"}
+
+
 def csv_columns(result):
     joints = result["joint_torque"].shape[1]
     links = result["link_height"].shape[1]
@@ -347,7 +351,7 @@ def main(argv=None):
     plot_span(args.out / "track_span.png", result, span)
     plot_shapes(args.out / "track_span_shapes.png", result, span)
     if args.csv:
-        write_csv(args.out / "track_span.csv", result, csv_columns(result))
+        write_csv(args.out / "track_span.csv", csv_columns(result), CSV_UNITS)
     print(f"wrote plots{' and CSV' if args.csv else ''} to {args.out}/; "
           f"wall time {wall:.1f} s")
 

@@ -11,7 +11,7 @@ import zlib
 
 import pytest
 
-from fmu_components.runtime.catalog import DAMPER_TABLE_RATES, DAMPER_TABLE_TORQUES
+from fmu_components.runtime.damper_part import DAMPER_TABLE_RATES, DAMPER_TABLE_TORQUES
 from fmu_components.runtime.hermite import MonotoneCubic
 
 from conftest import ROOT
@@ -101,3 +101,65 @@ def test_state_envelope_checksum_is_zlibs_crc32(harness):
     data = bytes(range(200))
     crc = subprocess.run([str(harness), "crc"], input=data, capture_output=True, check=True)
     assert int(crc.stdout) == zlib.crc32(data)
+
+
+# --- what both runtimes take from the definition ------------------------------------------
+
+CONTACT_HARNESS = r"""
+#include <stdio.h>
+#include <stdlib.h>
+%s
+
+int main(void) {
+    char line[256];
+    while (fgets(line, sizeof line, stdin)) {
+        char *rest;
+        double x = strtod(line, &rest);
+        printf("%%a\n", model_contact(x, strtod(rest, NULL)));
+    }
+    return 0;
+}
+"""
+CONTACT_CASES = [(1e-3, 0.0), (1e-300, -5.0), (0.0, 1.0), (-0.0, 1.0), (0.0, 0.0),
+                 (0.0, -1.0), (-1e-300, 5.0), (-2e-3, 0.1), (5e-324, -1.0)]
+
+
+@pytest.mark.parametrize("name", ["RoadWheelTyre", "TrackBushRadial"])
+def test_the_contact_rule_is_the_definitions_in_both_runtimes(name, tmp_path):
+    """model_contact in model.c and Model.contact are printed from the same expression:
+    the same mode at every case, a touching tyre in contact only while pressing on."""
+    from fmu_components.export.cgen import ModelCode
+    from fmu_components.runtime.catalog import COMPONENTS
+
+    definition = COMPONENTS[name]
+    source = ModelCode(definition, "guid").source()
+    function = source[source.index("double model_contact("):]
+    function = function[:function.index("\n}\n") + 3]
+    (tmp_path / "contact.c").write_text(CONTACT_HARNESS % function)
+    subprocess.run(["gcc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-o",
+                    str(tmp_path / "contact"), str(tmp_path / "contact.c")], check=True)
+    native = run(tmp_path / "contact", stdin="".join(f"{x!r} {v!r}\n" for x, v in CONTACT_CASES))
+    model = definition.build_model(definition.default_parameters())
+    python = [model.contact(x, v) for x, v in CONTACT_CASES]
+    assert [float.fromhex(m) for m in native] == python
+    if definition.equations.unilateral:
+        assert python == [1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]
+    else:
+        assert python == [1.0] * len(CONTACT_CASES)
+
+
+def test_the_parameter_bounds_message_is_generated_for_both_runtimes():
+    """The bounds' text comes from the bounds themselves, into the Python message and
+    model_config.h; the hand-written C holds no bound of its own."""
+    from fmu_components.export.cgen import ModelCode, c_string
+    from fmu_components.runtime import definition
+    from fmu_components.runtime.catalog import COMPONENTS
+
+    assert definition.PARAMETER_MAGNITUDES == "zero or 1e-100 to 1e100 in size"
+    parameter = COMPONENTS["RoadWheelTyre"].parameters[0]
+    message = definition.magnitude_problem(parameter, 1e-310)
+    assert message.endswith(f"({definition.PARAMETER_MAGNITUDES})")
+    header = ModelCode(COMPONENTS["RoadWheelTyre"], "guid").config_header()
+    assert f"#define PARAMETER_MAGNITUDES {c_string(definition.PARAMETER_MAGNITUDES)}" in header
+    for path in C.glob("*.[ch]"):
+        assert "1e100" not in path.read_text() and "1e-100" not in path.read_text(), path

@@ -7,8 +7,8 @@ import pytest
 from fmpy import simulate_fmu
 from scipy.interpolate import PchipInterpolator
 
-from fmu_components.runtime.catalog import (DAMPER_TABLE_RATES, DAMPER_TABLE_TORQUES,
-                                            ROTARY_DAMPER)
+from fmu_components.runtime.catalog import ROTARY_DAMPER
+from fmu_components.runtime.damper_part import DAMPER_TABLE_RATES, DAMPER_TABLE_TORQUES
 from fmu_components.runtime.cosim import CoSimulation
 from fmu_components.runtime.hermite import MonotoneCubic
 from fmu_components.lab.signals import input_table

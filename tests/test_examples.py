@@ -246,21 +246,40 @@ def test_the_coupling_study_benchmark_prints_both_tables():
         assert heading in run.stdout
     rows = [line for line in run.stdout.splitlines() if line.startswith("| corrected | 2 ms")]
     assert len(rows) == 2 and all("| 2.00 | 1.00 | 1.00 | 2.00 |" in row for row in rows)
+    # The station's long silent parts, the reference solve and its fine co-simulation, show
+    # their progress on stderr, up to the end of the run.
+    for bar in ("reference (Radau)", "converged at 0.03125 ms"):
+        assert re.search(re.escape(bar) + r": 100%.*0\.040/0\.040 s simulated", run.stderr), bar
 
 
 @needs_exudyn
-def test_station_csv_and_scheme_from_the_command_line(native_fmus, tmp_path):
+def test_station_csv_and_scheme_from_the_command_line(native_fmus, tmp_path, capsys):
+    """Every CSV column and printed figure carries its unit; the linear station's CSV has
+    no columns of the dashpot and rotor it does not have."""
+    import csv
+
     import road_wheel_station as station
 
     station.main(["--speeds", "8", "--step", "2e-3", "--end-time", "0.1", "--coupling",
                   "explicit", "--csv", "--out", str(tmp_path),
                   "--fmu-dir", str(native_fmus["RoadWheelTyre"].parent)])
-    data = np.genfromtxt(tmp_path / "station_8mps.csv", delimiter=",", names=True)
-    assert {"time", "hull_acceleration", "hull_force", "tyre_force",
-            "damper_torque"} <= set(data.dtype.names)
-    assert data["time"][-1] == pytest.approx(0.1)
-    assert data["tyre_force"][0] == pytest.approx(station.STATION_MASS * station.GRAVITY,
-                                                  rel=1e-9)  # N, both half-wheels
+    columns = ["time (s)", "hull_acceleration (m/s2)", "hull_force (N)", "tyre_force (N)",
+               "damper_torque (N.m)", "arm_angle (rad)", "tyre_compression (m)"]
+    inside = ["dashpot_torque (N.m)", "rotor_rate (rad/s)"]
+    tables = {}
+    for suffix, expected in (("", columns + inside), ("_linear", columns)):
+        with open(tmp_path / f"station_8mps{suffix}.csv", newline="") as f:
+            rows = list(csv.reader(f))
+        assert rows[0] == expected
+        tables[suffix] = data = np.array(rows[1:], dtype=float)
+        assert not np.isnan(data).all(axis=0).any()  # no column of NaN alone
+    data = dict(zip(columns + inside, tables[""].T))
+    assert data["time (s)"][-1] == pytest.approx(0.1)
+    assert data["tyre_force (N)"][0] == pytest.approx(station.STATION_MASS * station.GRAVITY,
+                                                      rel=1e-9)  # N, both half-wheels
+    printed = capsys.readouterr().out.splitlines()
+    rows = [line for line in printed if re.match(r"\s*8\s+(FMUs|linear)\s", line)]
+    assert len(rows) == 2 and all(line.rstrip().endswith(" N.m") for line in rows), rows
 
 
 @needs_exudyn
@@ -328,6 +347,8 @@ def test_track_span_prints_the_link_heights_it_plots(native_fmus, tmp_path, caps
                      "--fmu-dir", str(native_fmus["TrackBushRadial"].parent)])
     printed = re.search(r"link heights from static (-?[\d.]+) to (-?[\d.]+) mm",
                         capsys.readouterr().out)
+    header = (tmp_path / "track_span.csv").read_text().splitlines()[0].split(",")
+    assert all(re.fullmatch(r"\w+ \((s|m|m/s2|rad|N\.m|N)\)", name) for name in header), header
     data = np.genfromtxt(tmp_path / "track_span.csv", delimiter=",", names=True)
     heights = np.column_stack([data[n] for n in data.dtype.names
                                if n.startswith("link_height_")])

@@ -107,10 +107,10 @@ def test_generated_c_uses_only_the_whitelisted_functions(name):
                "hermite_slope", "invert", "snprintf",
                # the signatures of the generated functions themselves
                "model_derive", "model_initial_state", "model_start", "model_factor",
-               "model_step", "model_exact", "model_outputs", "model_input_problem",
-               "model_take_input", "model_failure_hint", "model_nominals", "model_rates",
-               "model_continuous_outputs", "model_event_indicators", "model_outputs_direction",
-               "if", "defined"}
+               "model_step", "model_exact", "model_outputs", "model_contact",
+               "model_input_problem", "model_take_input", "model_failure_hint", "model_nominals",
+               "model_rates", "model_continuous_outputs", "model_event_indicators",
+               "model_outputs_direction", "if", "defined"}
     assert called <= allowed, called - allowed
 
 

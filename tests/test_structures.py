@@ -152,3 +152,16 @@ def test_another_structure_has_another_guid_than_the_shipped_fmu(structure_fmus,
             other = read_model_description(
                 str(structure_fmus[structure][flavour]["TrackBushTorsion"])).guid
             assert other != shipped, (flavour, structure)
+
+
+@pytest.mark.parametrize("name, structure", [(name, "final") for name in sorted(COMPONENTS)]
+                         + OTHER_STRUCTURES)
+def test_the_state_nominals_are_read_from_the_definition(name, structure):
+    """What the modelDescription declares, from the nominals' expressions alone: the
+    compiled model's own figures, to the bit, for the thesis's values and a part's own."""
+    definition = component_definition(name, structure)
+    for values in (None, {p.name: 2.5 * p.start for p in definition.parameters}):
+        model = definition.build_model(values or definition.default_parameters())
+        assert definition.state_nominals(values) == model.nominals
+        assert len(model.nominals) == len(definition.states)
+

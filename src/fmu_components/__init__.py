@@ -3,8 +3,9 @@ definition of their equations: native C and pythonfmu.
 
 The layers, each importing only those above it in this list:
 
-* ``runtime``: the one definition of the equations (expressions, rubber, damper, catalog)
-  and the Python runtime that travels inside the Python FMUs (standard library only);
+* ``runtime``: the one definition of the equations (expressions, rubber, damper) and of
+  the components (definition, rubber_parts, damper_part, catalog), and the Python runtime
+  that travels inside the Python FMUs (standard library only);
   ``c/``, the native runtime that travels as sources inside the native FMUs;
   ``guard/``, the Python FMUs' binary in C, which takes shared pieces from ``c/``;
 * ``coupling``: the host-side coupling library that steps the FMUs with a multibody host

@@ -136,7 +136,7 @@ Status core_exit_initialization_mode(Instance *instance, const char *function) {
         return call_end(instance, STATUS_ERROR);
     }
     cosim_start(instance);
-    instance->s.contact = contact_at(instance->s.deflection, instance->s.rate);
+    instance->s.contact = model_contact(instance->s.deflection, instance->s.rate);
     /* FMI 3.0 section 3.2.3: Co-Simulation goes on in Event Mode when the host uses it, else
        in Step Mode; Model Exchange in Event Mode. */
     int step_mode = instance->type == CO_SIMULATION && !instance->event_mode_used;

@@ -83,12 +83,12 @@ int parameter_problem(const double *values, char *message, size_t size) {
             snprintf(message, size, "parameter %s", problem);
             return 1;
         }
-        /* As catalog.magnitude_problem: outside these, 1/k or k*k overflows. */
+        /* As definition.magnitude_problem: outside these, 1/k or k*k overflows. */
         double size_of = fabs(values[vr]);
         if (values[vr] != 0.0 && !(size_of >= SMALLEST_PARAMETER && size_of <= LARGEST_PARAMETER)) {
             char text[REPR_SIZE];
             snprintf(message, size, "parameter %s = %s %s is outside the magnitudes the model's "
-                     "arithmetic takes (zero or 1e-100 to 1e100 in size)",
+                     "arithmetic takes (" PARAMETER_MAGNITUDES ")",
                      MODEL_INFO.variables[vr].name, format_repr(values[vr], text),
                      MODEL_INFO.variables[vr].unit);
             return 1;
@@ -152,16 +152,12 @@ int model_now(Instance *instance, Now *now) {
     if (parameter_problem(s->values, problem, sizeof problem)) return 0;
     now->x = s->values[INPUT_DEFLECTION];
     now->v = s->values[INPUT_RATE];
-    now->contact = contact_at(now->x, now->v);
+    now->contact = model_contact(now->x, now->v);
     build_model_data(&now->scratch, s->values);
     model_initial_state(&now->scratch, now->x, now->v, now->relaxed);
     now->data = &now->scratch;
     now->state = now->relaxed;
     return 1;
-}
-
-double contact_at(double x, double v) {
-    return !MODEL_INFO.unilateral || x > 0.0 || (x == 0.0 && v > 0.0) ? 1.0 : 0.0;
 }
 
 void log_outside_region(const Instance *instance, const char *function, const double *X) {

@@ -164,9 +164,6 @@ typedef struct {
 } Now;
 /* 0 while the parameters make no sense. */
 int model_now(Instance *instance, Now *now);
-/* A contact's mode at deflection x and rate v: 1 in contact, or touching and pressing on
-   (always, for two-sided components). */
-double contact_at(double x, double v);
 
 /* --- values and model data ------------------------------------------------------------ */
 

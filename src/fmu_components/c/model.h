@@ -80,6 +80,9 @@ int model_step(ModelData *m, const double *y, double u, double h, double rtol,
                const double *w, double *y_new, double *error_norm);
 void model_exact(ModelData *m, double *state, double x, double u, double h);
 void model_outputs(ModelData *m, const double *state, double x, double v, double *outputs);
+/* A contact's mode at deflection x and rate v: 1 in contact, or touching and pressing on
+   (always, for two-sided components). */
+double model_contact(double x, double v);
 /* 1, with the reason in message, when the model cannot take deflection x. */
 int model_input_problem(ModelData *m, const double *state, double x, char *message,
                         size_t size);

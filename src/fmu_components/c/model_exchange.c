@@ -58,7 +58,7 @@ Status core_enter_event_mode(Instance *instance, const char *function) {
 Status core_update_discrete_states(Instance *instance, const char *function) {
     if (!call_begin(instance, EVENT_MODE, function)) return STATUS_ERROR;
     if (instance->type == MODEL_EXCHANGE)
-        instance->s.contact = contact_at(instance->s.deflection, instance->s.rate);
+        instance->s.contact = model_contact(instance->s.deflection, instance->s.rate);
     return call_end(instance, STATUS_OK);
 }
 
@@ -282,7 +282,7 @@ Status core_output_derivatives(Instance *instance, const char *function, const u
     }
     Snapshot *s = &instance->s;
     double f[SLOTS(N)], outputs[MODEL_OUTPUTS], doutputs[MODEL_OUTPUTS];
-    double contact = contact_at(s->deflection, s->rate);
+    double contact = model_contact(s->deflection, s->rate);
     if (!model_rates(&instance->data, s->state, s->deflection, s->rate, contact, NULL, 0.0, 0.0,
                      f, NULL) ||
         !model_continuous_outputs(&instance->data, s->state, s->deflection, s->rate, f, s->rate,

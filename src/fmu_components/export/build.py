@@ -118,10 +118,6 @@ def guid_for(flavour, name, *contents):
     return str(uuid.uuid5(GUID_NAMESPACE, digest.hexdigest()))
 
 
-def state_nominals(definition):
-    return definition.build_model(definition.default_parameters()).nominals
-
-
 def write_fmu(path, files):
     """A zip of {archive name: bytes or a Path}."""
     temporary = path.with_suffix(".tmp")
@@ -263,11 +259,11 @@ def build_native(names, destination, staging, structure="final", own=None, fmi_v
         if fmi_version == 2:
             description = model_description(definition, guid=guid, model_identifier=identifier,
                                              native=True, source_files=files,
-                                             nominals=state_nominals(definition))
+                                             nominals=definition.state_nominals())
         else:
             description = model_description_fmi3(definition, guid=guid,
                                                   model_identifier=identifier,
-                                                  nominals=state_nominals(definition))
+                                                  nominals=definition.state_nominals())
             (sources / "buildDescription.xml").write_text(build_description(identifier, files))
         built[name] = write_fmu(destination / f"{identifier}.fmu", {
             "modelDescription.xml": description, **binaries,
@@ -374,7 +370,7 @@ def build_python(names, destination, staging, structure="final", own=None):
                   **{f"{package_name}/{path}": content for path, content in package.items()}}
         guard = compile_guard(staging / "python", identifier, guid, python_content_hash(python))
         description = model_description(definition, guid=guid, model_identifier=identifier,
-                                         native=False, nominals=state_nominals(definition))
+                                         native=False, nominals=definition.state_nominals())
         files = {"modelDescription.xml": description,
                  f"binaries/linux64/{identifier}.so": guard,
                  f"binaries/linux64/{PYTHONFMU_ENGINE}": engine,

@@ -5,9 +5,12 @@ The same expression trees the pythonfmu flavour prints as Python at run time
 same tableau (``runtime/integrator.py``) are printed here by ``CPrinter`` into two files per
 component, written at build time and never committed:
 
-* ``model_config.h``: the component's sizes, for the runtime's arrays;
-* ``model.c``: ``MODEL_INFO`` (variables, constraints, ranges, tables: the catalog as C
-  data) and the ``model_*`` functions that ``c/model.h`` declares.
+* ``model_config.h``: the component's sizes, for the runtime's arrays, and the constants
+  the runtime shares with the Python flavour (the parameter bounds and their message, the
+  integrator's and the rate check's);
+* ``model.c``: ``MODEL_INFO`` (variables, constraints, ranges, tables: the component's
+  definition as C data) and the ``model_*`` functions that ``c/model.h`` declares (the
+  contact's mode among them).
 
 Everything else (the FMI calls, the co-simulation step, the integrator's loop, the Hermite
 curve, states and logging) is the hand-written runtime in ``c/``, the same for every
@@ -19,7 +22,7 @@ import re
 
 from ..runtime.expressions import FUNCTIONS, Format, GenerationError, Printer, Symbol, Tangent
 from ..runtime import cosim, integrator
-from ..runtime.catalog import LARGEST_PARAMETER, SMALLEST_PARAMETER
+from ..runtime.definition import LARGEST_PARAMETER, PARAMETER_MAGNITUDES, SMALLEST_PARAMETER
 from ..runtime.integrator import ROS34PW2, factor_statements, step_statements
 from .model_description import EVENT_INDICATOR, fmi3_references
 
@@ -76,10 +79,12 @@ class CPrinter(Printer):
                 for name, c in sorted(self.used.items(), key=lambda item: self.indices[item[0]])]
 
     def _print_Logical(self, node):
-        level = self.AND if node.op == "and" else self.OR
-        op = "&&" if node.op == "and" else "||"
-        return (f"{self._operand(node.left, level)} {op} "
-                f"{self._operand(node.right, level + 1)}", level)
+        if node.op == "and":
+            return (f"{self._operand(node.left, self.AND)} && "
+                    f"{self._operand(node.right, self.AND + 1)}", self.AND)
+        # either side of || in parentheses unless it binds tighter than && (-Wparentheses)
+        return (f"{self._operand(node.left, self.NOT)} || "
+                f"{self._operand(node.right, self.NOT)}", self.OR)
 
     def _print_Not(self, node):
         return f"!{self._operand(node.operand, self.ATOM)}", self.UNARY
@@ -179,6 +184,7 @@ class ModelCode:
             f"#define MODEL_PARAMETERS {len(d.parameters)}",
             f"#define SMALLEST_PARAMETER {c_number(SMALLEST_PARAMETER)}",
             f"#define LARGEST_PARAMETER {c_number(LARGEST_PARAMETER)}",
+            f"#define PARAMETER_MAGNITUDES {c_string(PARAMETER_MAGNITUDES)}",
             f"#define MODEL_CONTINUOUS {e.continuous.states}",
             f"#define MODEL_EVENT_INDICATORS {len(e.continuous.event_indicators)}",
             "/* What FMI 3.0 declares beyond FMI 2.0 (export/model_description.py). */",
@@ -209,7 +215,8 @@ class ModelCode:
     def source(self):
         return "\n\n".join([self._preamble(), self._info(), self._derive(),
                             self._initial_state(), self._start(), self._factor(), self._step(),
-                            self._exact(), self._outputs(), self._input_problem(),
+                            self._exact(), self._outputs(), self._contact(),
+                            self._input_problem(),
                             self._take_input(), self._failure_hint(), self._nominals(),
                             self._rates(), self._continuous_outputs(),
                             self._event_indicators(), self._outputs_direction()]) + "\n"
@@ -333,6 +340,13 @@ class ModelCode:
             prologue=["(void)state, (void)v;"],
             epilogue=lambda printer: [f"outputs[{i}] = {printer.expression(value)};"
                                       for i, value in enumerate(e.outputs)])
+
+    def _contact(self):
+        """The contact's mode at x and v (model.Equations.contact_mode)."""
+        printer = self.printer(["x", "v"])
+        mode = printer.expression(self.equations.contact_mode())
+        return "\n".join(["double model_contact(double x, double v) {", "    (void)x, (void)v;",
+                          f"    return {mode};", "}"])
 
     def _input_problem(self):
         limit = self.equations.input_limit

@@ -296,8 +296,7 @@ class ComponentSlave(Fmi2Slave):
             return
         model, state, x, v = now
         states = list(state[:n])
-        contact = 1.0 if x > 0.0 or (x == 0.0 and v > 0.0) or not model.equations.unilateral else 0.0
-        rates = model.rates(states, x, v, contact)
+        rates = model.rates(states, x, v, model.contact(x, v))
         self._values[self._local_vrs.start:] = states + list(rates or [math.nan] * n)
 
     def get_real(self, vrs):

@@ -21,7 +21,8 @@ Names the statements use:
 
 import math
 
-from .expressions import FUNCTIONS, Assign, Element, PythonPrinter, Require, Symbol, wrap
+from .expressions import (FUNCTIONS, Assign, Element, PythonPrinter, Require, Symbol, all_of,
+                          any_of, equal, where, wrap)
 from .hermite import check_monotone_table, shared_curve
 from .integrator import compile_python, jacobian_statements
 
@@ -147,6 +148,15 @@ class Equations:
     def constant_names(self):
         return [statement.target.name for statement in self.constants]
 
+    def contact_mode(self):
+        """The contact's mode at deflection x and rate v, as both runtimes take it where no
+        event has set it: 1 in contact, or touching and pressing on, else 0; always 1 for a
+        two-sided component."""
+        if not self.unilateral:
+            return wrap(1.0)
+        x, v = Symbol("x"), Symbol("v")
+        return where(any_of(x > 0.0, all_of(equal(x, 0.0), v > 0.0)), 1.0, 0.0)
+
     # --- the continuous-time view: what Model Exchange and directional derivatives print ---
 
     def rate_statements(self):
@@ -215,6 +225,8 @@ class Model:
                 "rates(X, x, v, contact)", equations.rate_statements(),
                 self._tuple([f"f{i}" for i in range(view.states)]),
                 [f"({''.join(name + ', ' for name in Ys)}) = X"], extra=Ys)
+        self.contact = self._function("contact(x, v)", [],
+                                      self._print(equations.contact_mode(), (), ("x", "v")))
         n = equations.integrated
         Y = [f"Y{i}" for i in range(n)]
         unpack = [f"({''.join(name + ', ' for name in Y)}) = y"] if n else []
