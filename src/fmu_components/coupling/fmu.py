@@ -236,6 +236,7 @@ class FmuComponent:
         it gave up, and save the state for the trials to come."""
         if self._stepped:
             self._restore()
+        self.instance.time = self.time
         self.instance.get_state(self._state)
         self.saves += 1
         self._saved = True

@@ -253,7 +253,8 @@ class FmuInstance:
         if status == DISCARD and step is not None:
             raise StepDiscarded(self.name, self.time, step,
                                 self.messages[-1] if self.messages else "no message")
-        raise CouplingError(self.name, self.time, f"{function} returned "
+        step = f" by {step:.6g} s" if step is not None else ""
+        raise CouplingError(self.name, self.time, f"{function}{step} returned "
                             f"{status_name(self.version, status)}{self.said()}")
 
     def call(self, method, *args):
