@@ -5,6 +5,7 @@ at the arm pivot, coupled to the host by fmu_components.coupling (docs/coupling.
     python examples/road_wheel_station.py                  # speeds 3, 8 and 15 m/s
     python examples/road_wheel_station.py --speeds 8 --step 1e-3 --coupling explicit --csv
     python examples/road_wheel_station.py --speeds 8 --coupling-study  # accuracy and cost
+    python examples/road_wheel_station.py --speeds 8 --fmi 3           # the FMI 3.0 FMUs (fmus/fmi3/)
 
 Every speed is run twice: with the FMUs, and with both components replaced by their linear
 Kelvin equivalents at the static point (Eqs. 10.1-2 and 10.1-3, thesis section 10.1). The
@@ -48,7 +49,7 @@ from fmu_components.coupling.kelvin import KelvinElement, harmonic_kelvin_equiva
 from coupling_study import (STUDY_GRID, STUDY_SCHEMES, STUDY_STEPS, add_arguments,
                             format_table, history_error, progress, study, time_progress,
                             write_csv, write_study)
-from example_fmus import fmu_path
+from example_fmus import add_fmu_arguments, fmu_dir_of, fmu_path
 
 GRAVITY = 9.81
 STATIONS = 12
@@ -492,11 +493,12 @@ def main(argv=None):
                         metavar=("AMPLITUDE", "FREQUENCY"),
                         help="sine (m, Hz) the tyre's Kelvin equivalent is fitted to")
     parser.add_argument("--end-time", type=float, help="s; default: bump passed + 1 s")
-    parser.add_argument("--fmu-dir", type=Path, help="default: fmus/")
+    add_fmu_arguments(parser)
     parser.add_argument("--out", type=Path, default=Path("reports") / "road_wheel_station")
     add_arguments(parser, "every scheme at host steps of 4 to 0.25 ms against the "
                           "independent reference, at the first speed, instead of the runs")
     args = parser.parse_args(argv)
+    args.fmu_dir = fmu_dir_of(args)
     profile = RoadProfile(args.bump_height, args.bump_length, ripple_depth=args.ripple_depth)
     args.out.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()

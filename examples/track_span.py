@@ -7,6 +7,7 @@ fmu_components.coupling (docs/coupling.md). One end of the span is lifted sinuso
     python examples/track_span.py --links 12 --frequency 4 --lift 0.02
     python examples/track_span.py --step 1e-3 --coupling explicit --csv
     python examples/track_span.py --coupling-study       # accuracy and cost
+    python examples/track_span.py --fmi 3                # the FMI 3.0 FMUs (fmus/fmi3/)
 
 The plots go to reports/track_span/ (or --out).
 
@@ -45,7 +46,7 @@ from fmu_components.coupling.exudyn_host import connector_state, solve
 
 from coupling_study import (STUDY_GRID, STUDY_SCHEMES, STUDY_STEPS, add_arguments,
                             format_table, progress, study, write_csv, write_study)
-from example_fmus import fmu_path
+from example_fmus import add_fmu_arguments, fmu_dir_of, fmu_path
 
 GRAVITY = 9.81
 TENSION = 13e3  # N, section 5.1.2
@@ -313,11 +314,12 @@ def main(argv=None):
     parser.add_argument("--frequency", type=float, default=6.0, help="end lift, Hz")
     parser.add_argument("--end-time", type=float, default=1.0, help="s")
     parser.add_argument("--step", type=float, default=DEFAULT_STEP, help="host step, s")
-    parser.add_argument("--fmu-dir", type=Path, help="default: fmus/")
+    add_fmu_arguments(parser)
     parser.add_argument("--out", type=Path, default=Path("reports") / "track_span")
     add_arguments(parser, "every scheme at host steps of 4 to 0.25 ms against a fine "
                           "reference, instead of the run")
     args = parser.parse_args(argv)
+    args.fmu_dir = fmu_dir_of(args)
     args.out.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
     if args.coupling_study:

@@ -21,6 +21,14 @@ from coupling_host import MassHost
 MASS = 1000.0  # kg on one tyre: 9.8 kN, about the station's static load (11 kN)
 GRAVITY = 9.81
 GROUND = (1e-3, 8.0)  # m, Hz: the track link rising and falling under the tyre
+VERSIONS = ("2.0", "3.0")  # the FMI versions of the native FMUs
+PREFIX = {"2.0": "fmi2", "3.0": "fmi3"}
+
+
+@pytest.fixture(scope="module")
+def versions(all_fmus):
+    """The native FMUs by FMI version: the coupling drives both alike."""
+    return {"2.0": all_fmus["native"], "3.0": all_fmus["fmi3"]}
 
 
 def ground(t):
@@ -77,8 +85,9 @@ def test_mass_on_the_tyre_converges_to_the_monolithic_solve(built_fmus):
     assert errors[-1] < 0.05, errors
 
 
-def test_rejected_steps_leave_the_fmu_bit_identical(native_fmus):
-    tyre = FmuComponent(native_fmus["RoadWheelTyre"], "tyre", unilateral=True)
+@pytest.mark.parametrize("version", VERSIONS)
+def test_rejected_steps_leave_the_fmu_bit_identical(versions, version):
+    tyre = FmuComponent(versions[version]["RoadWheelTyre"], "tyre", unilateral=True)
     try:
         x = [3e-3, 3.4e-3, 3.1e-3]
         coupling = Coupling("converged")
@@ -112,10 +121,11 @@ def test_a_host_that_gives_steps_up_gets_the_same_run(native_fmus):
     assert np.array_equal(plain["load"], rejecting["load"])
 
 
-def test_a_discarded_step_makes_the_host_retry_shorter(native_fmus):
+@pytest.mark.parametrize("version", VERSIONS)
+def test_a_discarded_step_makes_the_host_retry_shorter(versions, version):
     """The damper driven at 100 rad/s from rest: its integrator cannot finish a 1 ms
-    step (fmi2Discard), so the coupling asks the host for a shorter one, which it can."""
-    damper = FmuComponent(native_fmus["RotaryDamper"], "damper")
+    step (Discard), so the coupling asks the host for a shorter one, which it can."""
+    damper = FmuComponent(versions[version]["RotaryDamper"], "damper")
     coupling = Coupling("corrected")
     clock = [0.0]
     coupling.add(damper, lambda: (100.0 * clock[0], 100.0 if clock[0] > 0.0 else 0.0))
@@ -144,8 +154,9 @@ def test_a_discarded_step_makes_the_host_retry_shorter(native_fmus):
         coupling.free()
 
 
-def test_a_host_that_cannot_retry_gets_the_fmu_step_cut(native_fmus):
-    damper = FmuComponent(native_fmus["RotaryDamper"], "damper")
+@pytest.mark.parametrize("version", VERSIONS)
+def test_a_host_that_cannot_retry_gets_the_fmu_step_cut(versions, version):
+    damper = FmuComponent(versions[version]["RotaryDamper"], "damper")
     coupling = Coupling("explicit", host_can_retry=False)
     deflection = [0.0]
     coupling.add(damper, lambda: (deflection[0], 0.0))
@@ -194,13 +205,14 @@ def test_ten_thousand_corrected_steps_keep_memory_flat(native_fmus):
     assert grown < 512, f"{grown} KiB more after 8,000 further steps"
 
 
-def test_fmu_errors_name_the_component_and_the_time(native_fmus):
-    tyre = FmuComponent(native_fmus["RoadWheelTyre"], "front_tyre", unilateral=True)
+@pytest.mark.parametrize("version", VERSIONS)
+def test_fmu_errors_name_the_component_and_the_time(versions, version):
+    tyre = FmuComponent(versions[version]["RoadWheelTyre"], "front_tyre", unilateral=True)
     try:
         tyre.start(0.0, 3e-3)
         tyre.begin_step()
-        with pytest.raises(CouplingError, match=r"front_tyre at t = 0 s: .*fmi2Error.*"
-                                                r"compression"):
+        with pytest.raises(CouplingError, match=rf"front_tyre at t = 0 s: .*{PREFIX[version]}"
+                                                r"Error.*compression"):
             tyre.trial(1e-3, math.nan)
     finally:
         tyre.free()
@@ -211,13 +223,13 @@ def test_a_non_finite_output_raises(native_fmus):
     try:
         tyre.start(0.0, 3e-3)
         tyre.begin_step()
-        real = tyre._fmu.getReal
-        tyre._fmu.getReal = lambda vrs: [math.inf if i == 0 else v
-                                         for i, v in enumerate(real(vrs))]
+        real = tyre.instance.get
+        tyre.instance.get = lambda reals: [math.inf if i == 0 else v
+                                           for i, v in enumerate(real(reals))]
         with pytest.raises(CouplingError, match=r"rear_tyre at t = 0.001 s: output force = "
                                                 r"inf is not finite"):
             tyre.trial(1e-3, 3.1e-3)
-        tyre._fmu.getReal = real
+        tyre.instance.get = real
     finally:
         tyre.free()
 
@@ -267,7 +279,8 @@ def test_the_library_imports_fmpy_and_numpy_only():
     """Nothing else of fmu_components, nothing else outside the standard library (exudyn
     only in its adapter, and only inside its functions)."""
     package = Path(__file__).resolve().parents[1] / "src" / "fmu_components" / "coupling"
-    allowed = {"fmpy", "numpy", "ctypes", "math", "pathlib", "warnings", "dataclasses"}
+    allowed = {"fmpy", "numpy", "atexit", "ctypes", "math", "pathlib", "shutil", "warnings",
+               "dataclasses", "xml"}
     for path in package.glob("*.py"):
         tree = ast.parse(path.read_text())
         for node in tree.body:  # module level
@@ -279,3 +292,50 @@ def test_the_library_imports_fmpy_and_numpy_only():
         lazy = {a.name for node in ast.walk(tree) if isinstance(node, ast.Import)
                 for a in node.names} - allowed
         assert lazy <= ({"exudyn"} if path.name == "exudyn_host.py" else set()), path.name
+
+
+# --- FMI 3.0: the same numbers as FMI 2.0, and every refusal a CouplingError ---------------
+
+def test_fmi3_fmus_give_the_fmi2_runs_to_the_bit(versions):
+    """The small host on the tyre (contact, corrected coupling with the stiffness's
+    directional derivative, steps given up and solved again) and on the damper (its step
+    linearised through a Model Exchange instance): FMI 3.0 gives FMI 2.0's bits."""
+    runs = {}
+    for version, fmus in versions.items():
+        _, tyre = run_mass(fmus["RoadWheelTyre"], 1e-3, 0.1, reject_every=3)
+        damper = FmuComponent(fmus["RotaryDamper"], "damper")
+        assert damper.step_model == "linearised"
+        rotor = MassHost(damper, 0.5, lambda t: 0.1 * math.sin(20 * t),
+                         lambda t: 2.0 * math.cos(20 * t), gravity=0.0)
+        runs[version] = tyre, rotor.run(0.1, 1e-3)
+    (tyre2, damper2), (tyre3, damper3) = runs["2.0"], runs["3.0"]
+    for key in ("load", "acceleration", "deflection"):
+        assert np.array_equal(tyre2[key], tyre3[key]), key
+        assert np.array_equal(damper2[key], damper3[key]), key
+    assert np.ptp(tyre2["load"]) > 1e3 and np.ptp(damper2["load"]) > 10.0
+
+
+@pytest.mark.parametrize("version", VERSIONS)
+def test_a_refused_state_save_is_a_coupling_error(versions, version):
+    """Saving the state at a step's start (getting the FMU state into the one the
+    instance reuses) goes through the same translation as every other call: refused (here
+    the state to update is one another FMU made), it is a CouplingError naming the
+    component, the time and what the FMU said."""
+    tyre = FmuComponent(versions[version]["RoadWheelTyre"], "tyre", unilateral=True)
+    damper = FmuComponent(versions[version]["RotaryDamper"], "damper")
+    own = None
+    try:
+        for component, deflection in ((tyre, 3e-3), (damper, 0.0)):
+            component.start(0.0, deflection)
+            component.begin_step()
+        own, tyre._state.value = tyre._state.value, damper._state.value
+        function = {"2.0": "fmi2GetFMUstate", "3.0": "fmi3GetFMUState"}[version]
+        with pytest.raises(CouplingError, match=rf"tyre at t = 0 s: {function} returned "
+                                                rf"{PREFIX[version]}Error: .*not one "
+                                                r"RoadWheelTyre made"):
+            tyre.begin_step()
+    finally:
+        if own is not None:
+            tyre._state.value = own
+        tyre.free()
+        damper.free()

@@ -7,6 +7,7 @@ study and --csv write. The exudyn runs need the `examples` extra (pip install -e
 import math
 import re
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -355,3 +356,33 @@ def test_track_span_prints_the_link_heights_it_plots(native_fmus, tmp_path, caps
     rise = (heights - heights[0]) * 1e3
     assert float(printed.group(1)) == pytest.approx(rise.min(), abs=0.051)
     assert float(printed.group(2)) == pytest.approx(rise.max(), abs=0.051)
+
+
+# --- the examples on FMI 3.0 FMUs ------------------------------------------------------------
+
+@needs_exudyn
+def test_the_station_on_fmi3_fmus_gives_the_fmi2_run_to_the_bit(all_fmus):
+    """The station at 8 m/s, 1 ms, the default coupling (the tyre's curvature from its
+    directional derivative, the damper's step linearised through a Model Exchange
+    instance, every step saved and restored): FMI 3.0 FMUs give FMI 2.0's histories."""
+    import road_wheel_station as station
+
+    runs = [station.simulate(8.0, station.RoadProfile(), 1e-3, all_fmus[f]["RoadWheelTyre"].parent,
+                             end_time=0.2) for f in ("native", "fmi3")]
+    for key in ("hull_acceleration", "tyre_force", "damper_torque", "arm_angle"):
+        assert np.array_equal(runs[0][key], runs[1][key]), key
+    assert runs[0]["costs"] == runs[1]["costs"]
+    assert np.ptp(runs[1]["tyre_force"]) > 1e3
+
+
+def test_the_examples_take_fmi3_fmus_with_fmi_3():
+    import argparse
+
+    import example_fmus
+
+    parser = argparse.ArgumentParser()
+    example_fmus.add_fmu_arguments(parser)
+    assert example_fmus.fmu_dir_of(parser.parse_args([])) == ROOT / "fmus"
+    assert example_fmus.fmu_dir_of(parser.parse_args(["--fmi", "3"])) == ROOT / "fmus" / "fmi3"
+    assert example_fmus.fmu_dir_of(parser.parse_args(["--fmi", "3", "--fmu-dir", "x"])) == \
+        Path("x")

@@ -369,3 +369,66 @@ def test_a_host_cannot_step_or_save_the_state_inside_an_intermediate_update(fmi3
     assert statuses and set(statuses) == {"refused"}
     assert any("IntermediateUpdateMode" in m[1] for m in damper.messages)
     damper.free()
+
+
+# --- the project's tools on FMI 3.0 FMUs: FMI 2.0's numbers ---------------------------------
+
+def test_verify_and_validate_take_fmi3_fmus_with_the_fmi2_numbers(all_fmus, tmp_path):
+    """verify and validate (fmpy's own loop) on the FMI 3.0 FMUs: the same identity, the
+    same results to the bit as the FMI 2.0 FMUs, for a case of each component and the bush
+    radial's measured quantities."""
+    from fmu_components.export.identity import read_identity
+    from fmu_components.verification import cases, measurements, validate_command, verify
+
+    for name in FMU_NAMES:
+        identities = [read_identity(all_fmus[f][name]) for f in ("native", "fmi3")]
+        assert [(i.component, i.structure, i.values, i.native) for i in identities] == \
+            [(name, "final", identities[0].values, True)] * 2
+        case = cases.select([name])[0]
+        native, fmi3 = (verify.run_case(case, all_fmus[f][name]) for f in ("native", "fmi3"))
+        assert native.errors and all(math.isfinite(e) for e in native.errors.values())
+        assert np.array_equal(native.result, fmi3.result) and native.errors == fmi3.errors
+    chosen = validate_command.select(measurements.read_measurements(), ["TrackBushRadial"])
+    compared = {}
+    for flavour in ("native", "fmi3"):
+        folder = tmp_path / flavour
+        folder.mkdir()
+        (folder / "TrackBushRadial.fmu").write_bytes(all_fmus[flavour]["TrackBushRadial"].read_bytes())
+        compared[flavour] = [(c.measurement.id, c.model, c.problem)
+                             for c in measurements.compare_all(chosen, measurements.Runs(folder))]
+    assert compared["native"] == compared["fmi3"]
+    assert sum(model is not None for _, model, _ in compared["fmi3"]) >= 5
+
+
+def test_the_monolithic_reference_takes_fmi3_fmus_with_the_fmi2_numbers(all_fmus):
+    """A mass dropped onto the tyre and swung on the damper, each Model Exchange FMU in one
+    Radau solve with the bodies (verification/monolithic.py, the coupled examples'
+    reference): the tyre's contact events and every output are FMI 2.0's to the bit."""
+    from fmu_components.verification.monolithic import ModelExchangeComponent, MonolithicSystem
+
+    def tyre_kinematics(t, q, qdot):
+        return 1e-3 - q[0], -qdot[0]
+
+    def damper_kinematics(t, q, qdot):
+        return q[1], qdot[1]
+
+    def accelerations(t, q, qdot, loads):
+        return [loads[0] / 500.0 - 9.81, (200.0 * math.sin(30 * t) - loads[1]) / 2.0]
+
+    runs = {}
+    for flavour in ("native", "fmi3"):
+        system = MonolithicSystem(2, accelerations, [
+            (ModelExchangeComponent(all_fmus[flavour]["RoadWheelTyre"], "tyre"),
+             tyre_kinematics),
+            (ModelExchangeComponent(all_fmus[flavour]["RotaryDamper"], "damper"),
+             damper_kinematics)])
+        try:
+            times, states, outputs = system.solve(0.3, [0.0, 0.0], [0.5, 0.0],
+                                                  np.linspace(0.0, 0.3, 61), rtol=1e-8)
+        finally:
+            system.free()
+        runs[flavour] = (times, states, [[o["force"], p["torque"]] for o, p in outputs],
+                         system.events)
+    (t2, y2, out2, events2), (t3, y3, out3, events3) = runs["native"], runs["fmi3"]
+    assert events2 == events3 >= 1  # the mass leaves the tyre and lands again
+    assert np.array_equal(t2, t3) and np.array_equal(y2, y3) and out2 == out3

@@ -221,3 +221,20 @@ def test_structure_comparison_shows_what_the_thesis_saw(tmp_path):
     assert loops["four-element"] > loops["final"] > loops["haupt-sedlan"]
     early = {s: row["relaxed_0.1s"] for s, row in table.items()}
     assert early["four-element"] > early["final"] > early["haupt-sedlan"]
+
+
+@pytest.mark.parametrize("name", sorted(COMPONENTS))
+def test_the_fmu_engine_takes_fmi3_fmus_with_the_fmi2_numbers(all_fmus, name):
+    """`rig --engine fmu --fmu fmus/fmi3/X.fmu` (a traceback before): the same rows as the
+    FMI 2.0 FMU to the bit, the sine and the step-and-hold."""
+    preload, amplitude, frequency = thesis_point(name)
+    rows, holds = {}, {}
+    for flavour in ("native", "fmi3"):
+        path = all_fmus[flavour][name]
+        rows[flavour] = rig.run_rig(name, [preload], [amplitude], [frequency], engine="fmu",
+                                    fmu=path, processes=1)[0]
+        setup = rig.make_setup(name, engine="fmu", fmu=path)
+        holds[flavour] = rig.relaxation_record(setup, preload, amplitude, hold=1.0)[2]
+    assert rows["native"] == rows["fmi3"]
+    assert np.array_equal(holds["native"], holds["fmi3"])
+    assert np.isfinite(holds["fmi3"]).all() and rows["fmi3"].dynamic_stiffness > 0.0

@@ -3,38 +3,18 @@ host step, step along the secant to the host's trial motion, restore, accept.
 
 An FMU here is a two-port element: inputs deflection and its rate, outputs its load
 (force or torque, the first output) and its `stiffness`, as the project's FMUs declare
-them (docs/model-spec.md section 4): the inputs set before fmi2DoStep(t, h) are the values
+them (docs/model-spec.md section 4): the inputs set before doStep(t, h) are the values
 at t, the FMU holds the rate over the step and its outputs belong to t + h.
 """
 
 import math
 import warnings
-from ctypes import byref
 from pathlib import Path
 
-from fmpy import calloc, extract, free, read_model_description
-from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2Discard,
-                       fmi2FMUstate, fmi2Warning)
-
 from .errors import CouplingError, StepDiscarded
+from .instance import WARNING, FmuInstance, open_fmu
 from .law import LoadLaw
 from .linearised import Linearisation
-
-
-# One extraction per FMU file and process, shared by all its instances.
-_UNPACKED = {}
-
-
-def unpacked(path):
-    """(model description, unzip directory) of an FMU file, extracted once per process."""
-    path = Path(path).resolve()
-    if path not in _UNPACKED:
-        if not path.exists():
-            raise FileNotFoundError(f"{path} does not exist")
-        _UNPACKED[path] = (read_model_description(str(path)), extract(str(path)))
-    return _UNPACKED[path]
 
 
 # FMUs whose `stiffness` output is the instantaneous tangent while their internal dynamics
@@ -58,7 +38,7 @@ class FmuComponent:
     `trial` steps the FMU from the last accepted point (time, deflection) along the
     secant to (t, x), restoring the state saved by `begin_step` first if it has already
     stepped in this host step. Counters (`do_steps`, `saves`, `restores`) say what it
-    cost; one FMU state is kept per instance and reused (fmi2GetFMUstate given the
+    cost; one FMU state is kept per instance and reused (getting the FMU state given the
     existing state), and freed with the instance.
 
     `step_model` says how the component's answer to a host step is predicted:
@@ -69,59 +49,44 @@ class FmuComponent:
 
     def __init__(self, path, instance_name, parameters=None, tolerance=None,
                  unilateral=False, step_model=None):
-        description, unzip_dir = unpacked(path)
+        fmu = open_fmu(path)
         self.name = instance_name
         self.unilateral = unilateral  # a contact: no load at x <= 0, never a pulling load
         # explicit coupling lags the load of a component whose stiffness is no step tangent
-        self.stiffness_is_step_tangent = description.modelName not in LINEARISED_MODELS
+        self.stiffness_is_step_tangent = fmu.name not in LINEARISED_MODELS
         if step_model is None:
             step_model = "tangent" if self.stiffness_is_step_tangent else "linearised"
         if step_model not in ("tangent", "linearised"):
             raise ValueError(f"step_model {step_model!r}: 'tangent' or 'linearised'")
-        if step_model == "linearised" and not (description.modelExchange is not None
-                                               and description.derivatives):
+        self._linearisable = fmu.model_exchange and bool(fmu.states)
+        if step_model == "linearised" and not self._linearisable:
             warnings.warn(f"{instance_name}: {Path(path).name} offers no Model Exchange to "
                           f"linearise its step with; its `stiffness` output stands in",
                           stacklevel=2)
             step_model = "tangent"
         self.step_model = step_model
         # the curvature of the load laws comes from the stiffness's directional derivative
-        self._curvature = bool(description.coSimulation.providesDirectionalDerivative)
+        self._curvature = fmu.provides_directional_derivatives()
         self.touch_stiffness = 0.0  # the last contact stiffness the FMU reported
         self.peak_load = 0.0  # largest |load| seen: the scale of load mismatches
         self.warnings_logged = 0
-        variables = description.modelVariables
-        self._vr = {v.name: v.valueReference for v in variables}
-        self.input_names = [v.name for v in variables if v.causality == "input"]
-        self.output_names = [v.name for v in variables if v.causality == "output"]
+        self.input_names, self.output_names = fmu.inputs, fmu.outputs
         if len(self.input_names) != 2 or "stiffness" not in self.output_names:
             raise ValueError(f"{path}: a coupled FMU has two inputs (deflection and rate) "
                              f"and a `stiffness` output; this one has inputs "
                              f"{self.input_names} and outputs {self.output_names}")
         self.load_name = self.output_names[0]  # force or torque
-        self._input_vrs = [self._vr[n] for n in self.input_names]
-        self._output_vrs = [self._vr[n] for n in self.output_names]
-        self._stiffness_vr = [self._vr["stiffness"]]
-        self._deflection_vr = [self._input_vrs[0]]
-        self.messages = []  # what the FMU logged, newest last (a few kept)
-        self._callbacks = fmi2CallbackFunctions()
-        self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
-        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        self._fmu = FMU2Slave(guid=description.guid, unzipDirectory=unzip_dir,
-                              modelIdentifier=description.coSimulation.modelIdentifier,
-                              instanceName=instance_name)
-        self._fmu.instantiate(callbacks=self._callbacks)
-        self._fmu.setupExperiment(tolerance=tolerance, startTime=0.0)
-        self._fmu.enterInitializationMode()
-        if parameters:
-            self._call(0.0, self._fmu.setReal, [self._vr[n] for n in parameters],
-                       list(parameters.values()))
-        self._linearisable = (description.modelExchange is not None
-                              and bool(description.derivatives))
-        self._unpacked, self._parameters = (description, unzip_dir), parameters
+        # the state saved at a step's start is set again for each trial: rollback
+        self.instance = instance = FmuInstance(fmu, instance_name, on_message=self._heard,
+                                               rollback=True)
+        self._inputs = instance.reals(self.input_names)
+        self._outputs = instance.reals(self.output_names)
+        self._stiffness_by_deflection = instance.jacobian(["stiffness"], self.input_names[:1])
+        instance.setup(parameters, tolerance, start_time=0.0)
+        self._fmu_file, self._parameters = fmu, parameters
         self._linearisation = None  # made when first needed
-        self._state = fmi2FMUstate()  # NULL until the first save
+        self._states = None  # the Reals of the states it linearises about
+        self._state = instance.new_state()  # NULL until the first save
         self.started = False
         self.time = None  # last accepted point
         self.deflection = 0.0
@@ -134,33 +99,25 @@ class FmuComponent:
         self.law = None
         self.do_steps = self.saves = self.restores = 0
 
-    # --- FMI calls ------------------------------------------------------------------------
+    # --- FMI calls (instance.py makes them, and raises for their refusals) ----------------
 
-    def _log(self, environment, instance, status, category, message):
-        # The project's FMUs pass each message finished, with '%' doubled.
-        text = message.decode("utf-8", "replace").replace("%%", "%")
-        self.messages = self.messages[-4:] + [text]
-        if status == fmi2Warning:
+    def _heard(self, status, text):
+        if status == WARNING:
             self.warnings_logged += 1
             warnings.warn(f"{self.name}: {text}", stacklevel=2)
 
-    def _said(self):
-        return f": {self.messages[-1]}" if self.messages else ""
-
-    def _call(self, time, function, *args):
-        try:
-            return function(*args)
-        except FMICallException as error:
-            raise CouplingError(self.name, time, f"{error.function} returned "
-                                f"{'fmi2Fatal' if error.status == 4 else 'fmi2Error'}"
-                                f"{self._said()}") from None
+    @property
+    def messages(self):
+        """What the FMU logged, newest last (a few kept)."""
+        return self.instance.messages
 
     def _read(self, time):
-        values = self._call(time, self._fmu.getReal, self._output_vrs)
+        self.instance.time = time
+        values = self.instance.get(self._outputs)
         for name, value in zip(self.output_names, values):
             if not math.isfinite(value):
                 raise CouplingError(self.name, time, f"output {name} = {value!r} is not "
-                                    f"finite{self._said()}")
+                                    f"finite{self.instance.said()}")
         return dict(zip(self.output_names, values))
 
     # --- values ---------------------------------------------------------------------------
@@ -178,7 +135,8 @@ class FmuComponent:
         """Outputs of the relaxed component at `deflection` (initialization mode only)."""
         if self.started:
             raise RuntimeError(f"{self.name}: relaxed outputs exist only before start()")
-        self._call(0.0, self._fmu.setReal, self._input_vrs, [deflection, 0.0])
+        self.instance.time = 0.0
+        self.instance.set(self._inputs, [deflection, 0.0])
         return self._read(0.0)
 
     def host_load(self, deflection, rate=0.0):
@@ -221,8 +179,7 @@ class FmuComponent:
         time, deflection, secant = self._trial_point
         outputs = self.trial_outputs
         stiffness = outputs["stiffness"]
-        curvature = (self._call(time, self._fmu.getDirectionalDerivative,
-                                self._stiffness_vr, self._deflection_vr, [1.0])[0]
+        curvature = (self.instance.directional_derivative(self._stiffness_by_deflection, 0)[0]
                      if self._curvature else 0.0)
         tangent = stiffness
         if self.step_model == "linearised":
@@ -243,12 +200,13 @@ class FmuComponent:
         at the FMU's current states and `deflection`: the accepted point's (a
         prediction) or a trial's end (the tangent for the next pass)."""
         if self._linearisation is None:
-            self._linearisation = Linearisation(*self._unpacked, f"{self.name}.linearisation",
+            self._linearisation = Linearisation(self._fmu_file, f"{self.name}.linearisation",
                                                 self._parameters)
-        states = self._call(self.time, self._fmu.getReal, self._linearisation.state_vrs)
+            self._states = self.instance.reals(self._linearisation.state_names)
+        states = self.instance.get(self._states)
         try:
             return self._linearisation.step(states, deflection, rate, step)
-        except FMICallException as error:
+        except CouplingError as error:
             raise CouplingError(self.name, self.time, f"the linearised step at deflection "
                                 f"{deflection!r}, rate {rate!r}: {error}") from None
 
@@ -264,8 +222,9 @@ class FmuComponent:
 
     def start(self, time, deflection, rate=0.0):
         """Leave initialization mode with the component relaxed at `deflection`."""
-        self._call(time, self._fmu.setReal, self._input_vrs, [deflection, rate])
-        self._call(time, self._fmu.exitInitializationMode)
+        self.instance.time = time
+        self.instance.set(self._inputs, [deflection, rate])
+        self.instance.exit_initialization()
         self.started = True
         self.time, self.deflection, self.rate = time, deflection, rate
         self.outputs = self._read(time)
@@ -277,13 +236,15 @@ class FmuComponent:
         it gave up, and save the state for the trials to come."""
         if self._stepped:
             self._restore()
-        self._fmu.fmi2GetFMUstate(self._fmu.component, byref(self._state))
+        self.instance.time = self.time
+        self.instance.get_state(self._state)
         self.saves += 1
         self._saved = True
         self.trial_outputs = self._trial_point = None
 
     def _restore(self):
-        self._call(self.time, self._fmu.setFMUstate, self._state)
+        self.instance.time = self.time
+        self.instance.set_state(self._state)
         self.restores += 1
         self._stepped = False
 
@@ -303,22 +264,18 @@ class FmuComponent:
             self._restore()
         secant = (deflection - self.deflection) / step
         self._stepped = True
+        instance = self.instance
         piece = step / pieces
         for i in range(pieces):
             start = self.time + i * piece
-            self._call(start, self._fmu.setReal, self._input_vrs,
-                       [self.deflection + secant * i * piece, secant])
+            instance.time = start
+            instance.set(self._inputs, [self.deflection + secant * i * piece, secant])
             self.do_steps += 1
             try:
-                self._fmu.doStep(start, piece)
-            except FMICallException as error:
-                if error.status == fmi2Discard:
-                    message = self.messages[-1] if self.messages else "no message"
-                    self._restore()
-                    raise StepDiscarded(self.name, start, piece, message) from None
-                raise CouplingError(self.name, start, f"fmi2DoStep by {piece:.6g} s "
-                                    f"returned {'fmi2Fatal' if error.status == 4 else 'fmi2Error'}"
-                                    f"{self._said()}") from None
+                instance.do_step(start, piece)
+            except StepDiscarded:
+                self._restore()  # back at the step's start, as the host retries from there
+                raise
         self.trial_outputs = self._read(time)
         self._seen(self.trial_outputs)
         self._trial_point = (time, deflection, secant)
@@ -346,18 +303,12 @@ class FmuComponent:
 
     def serialized_state(self):
         """The FMU's current state, serialized (bytes), e.g. to compare two states."""
-        state = self._fmu.getFMUstate()
-        try:
-            return self._fmu.serializeFMUstate(state)
-        finally:
-            self._fmu.freeFMUstate(state)
+        return self.instance.serialized_state()
 
     def free(self):
         if self._linearisation is not None:
             self._linearisation.free()
-        if self._state:
-            self._fmu.freeFMUstate(self._state)
-        # FMI 2.0 allows fmi2Terminate only once initialization is complete.
-        if self.started:
-            self._fmu.terminate()
-        self._fmu.freeInstance()
+        try:
+            self.instance.free_state(self._state)
+        finally:
+            self.instance.close()  # terminated only once initialized, as FMI 2.0 asks

@@ -5,7 +5,7 @@ dynamics act within a host step (the damper: its rotor follows the arm in a frac
 a millisecond, so over a 1-4 ms step the torque answers the arm's motion far more softly
 than the gas spring's stiffness says), the coupling asks the FMU itself. A Model Exchange
 instance of the same FMU, set to the co-simulation instance's states (the `state.*`
-variables both interfaces expose), gives by fmi2GetDirectionalDerivative the Jacobians
+variables both interfaces expose), gives by getDirectionalDerivative the Jacobians
 
     A = df/dX, B = df/d(x, v), C = dF/dX, D = dF/d(x, v)
 
@@ -21,11 +21,8 @@ here steps the FMU: no fmi2DoStep, no state of the co-simulation instance touche
 """
 
 import numpy as np
-from fmpy import calloc, free
-from fmpy.fmi2 import (FMU2Model, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2Real,
-                       fmi2ValueReference)
 
+from .instance import MODEL_EXCHANGE, FmuInstance
 
 
 def expm(matrix):
@@ -50,77 +47,44 @@ def expm(matrix):
 
 
 class Linearisation:
-    """A Model Exchange side instance of a component's FMU, set to the co-simulation
-    instance's states to linearise its response to a step."""
+    """A Model Exchange side instance of a component's FMU (an FmuFile, instance.py), set
+    to the co-simulation instance's states to linearise its response to a step."""
 
-    def __init__(self, description, unzip_dir, instance_name, parameters=None):
-        if description.modelExchange is None or not description.derivatives:
-            raise ValueError(f"{description.modelName} offers no Model Exchange with "
-                             f"states: no linearised step response")
+    def __init__(self, fmu, instance_name, parameters=None):
+        if not fmu.model_exchange or not fmu.states:
+            raise ValueError(f"{fmu.name} offers no Model Exchange with states: no "
+                             f"linearised step response")
         self.name = instance_name
-        variables = description.modelVariables
-        vr = {v.name: v.valueReference for v in variables}
-        self.state_names = [d.variable.derivative.name for d in description.derivatives]
-        self.state_vrs = [vr[n] for n in self.state_names]
-        self.n = n = len(self.state_vrs)
-        self._inputs = [v.valueReference for v in variables if v.causality == "input"]
-        load = [v.valueReference for v in variables if v.causality == "output"][0]
-        stiffness = vr["stiffness"]
-        self._contact_events = description.numberOfEventIndicators > 0
-        self._fmu = fmu = FMU2Model(guid=description.guid, unzipDirectory=unzip_dir,
-                                    modelIdentifier=description.modelExchange.modelIdentifier,
-                                    instanceName=instance_name)
+        self.state_names = fmu.states
+        self.n = n = len(self.state_names)
+        self._contact_events = fmu.event_indicators > 0
         # Its messages repeat what the co-simulation instance says of the same inputs.
-        self._callbacks = fmi2CallbackFunctions()
-        self._callbacks.logger = fmi2CallbackLoggerTYPE(lambda *message: None)
-        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        fmu.instantiate(callbacks=self._callbacks)
-        fmu.setupExperiment(startTime=0.0)
-        fmu.enterInitializationMode()
-        if parameters:
-            fmu.setReal([vr[k] for k in parameters], list(parameters.values()))
-        fmu.exitInitializationMode()
-        self._update_discrete_states()
-        fmu.enterContinuousTimeMode()
+        self._instance = instance = FmuInstance(fmu, instance_name, MODEL_EXCHANGE)
+        instance.setup(parameters)
+        instance.exit_initialization()
         self._contact = None
+        self._inputs = instance.reals(fmu.inputs)
+        self._load = instance.reals(fmu.outputs[:1])
         # One directional derivative per known (each state, then deflection and rate), of
         # every unknown (the derivatives, then the load and the stiffness).
-        self._unknowns = (fmi2ValueReference * (n + 2))(
-            *[d.variable.valueReference for d in description.derivatives], load, stiffness)
-        self._knowns = [(fmi2ValueReference * 1)(k) for k in self.state_vrs + self._inputs]
-        self._seed = (fmi2Real * 1)(1.0)
-        self._column = (fmi2Real * (n + 2))()
-        self._states = (fmi2Real * n)()
-        self._derivatives = (fmi2Real * n)()
-        self._load = (fmi2ValueReference * 1)(load)
-        self._value = (fmi2Real * 1)()
-
-    def _update_discrete_states(self):
-        while self._fmu.newDiscreteStates()[0]:
-            pass
+        self._jacobian = instance.jacobian(fmu.derivatives + [fmu.outputs[0], "stiffness"],
+                                           self.state_names + fmu.inputs)
+        self._knowns = range(n + 2)
 
     def _at(self, states, deflection, rate):
         """Set the side instance to (states, deflection, rate); the Jacobians there."""
-        fmu, n = self._fmu, self.n
-        fmu.setReal(self._inputs, [deflection, rate])
+        fmu, n = self._instance, self.n
+        fmu.set(self._inputs, [deflection, rate])
         contact = deflection > 0.0
         if self._contact_events and contact != self._contact:
             # the contact's mode switches in event mode only (docs/model-exchange.md)
-            fmu.enterEventMode()
-            self._update_discrete_states()
-            fmu.enterContinuousTimeMode()
+            fmu.event()
             self._contact = contact
-        self._states[:] = states
-        fmu.fmi2SetContinuousStates(fmu.component, self._states, n)
+        fmu.set_states(states)
         jacobian = np.empty((n + 2, n + 2))
-        for j, known in enumerate(self._knowns):
-            fmu.fmi2GetDirectionalDerivative(fmu.component, self._unknowns, n + 2, known, 1,
-                                             self._seed, self._column)
-            jacobian[:, j] = self._column
-        fmu.fmi2GetDerivatives(fmu.component, self._derivatives, n)
-        fmu.fmi2GetReal(fmu.component, self._load, 1, self._value)
-        return jacobian, np.array(self._derivatives), self._value[0]
+        for j in self._knowns:
+            jacobian[:, j] = fmu.directional_derivative(self._jacobian, j)
+        return jacobian, np.array(fmu.derivatives()), fmu.get(self._load)[0]
 
     def step(self, states, deflection, rate, step):
         """(load after the step at the held `rate`, d load / d end deflection,
@@ -149,5 +113,4 @@ class Linearisation:
         return predicted, by_rate / step, stiffness_by_rate / step
 
     def free(self):
-        self._fmu.terminate()
-        self._fmu.freeInstance()
+        self._instance.close()

@@ -28,6 +28,8 @@ class Verdict:
 
 
 ACCEPT = Verdict()
+# A host that cannot retry a step gets a discarded FMU step cut into up to this many pieces.
+MAX_PIECES = 64
 
 
 class Coupling:
@@ -85,7 +87,7 @@ class Coupling:
                 component.reject()
             if not self.host_can_retry:
                 raise CouplingError(discarded.component, discarded.time,
-                                    f"{discarded} (cut into 64 steps too)") from None
+                                    f"{discarded} (cut into {MAX_PIECES} steps too)") from None
             self.retries += 1
             return Verdict(retry_step=0.5 * (time - self.time))
         mismatch = max((self.scheme.mismatch(c, x, v, out) for c, x, v, out in results),
@@ -106,13 +108,13 @@ class Coupling:
 
     def _trial(self, component, time, deflection, rate):
         """The component's trial; a host that cannot retry a step gets the FMU's step
-        cut into pieces along the same secant instead (up to 64)."""
+        cut into pieces along the same secant instead (up to MAX_PIECES)."""
         pieces = 1
         while True:
             try:
                 return component.trial(time, deflection, rate, pieces=pieces)
             except StepDiscarded:
-                if self.host_can_retry or pieces >= 64:
+                if self.host_can_retry or pieces >= MAX_PIECES:
                     raise
                 pieces *= 2
                 self.retries += 1

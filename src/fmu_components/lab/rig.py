@@ -29,7 +29,7 @@ by --relaxation STEP (default: the largest amplitude) in --rise seconds, then ho
 
 Engines: ``model`` (the Python model of catalog.component_definition, stepped through
 runtime.cosim.CoSimulation, as the Python flavour's adapter does) or ``fmu`` (a built FMU
-of either flavour through fmpy's FMU2Slave). Points run in parallel over --processes.
+of either flavour, FMI 2.0 or 3.0, through coupling/instance.py). Points run in parallel over --processes.
 """
 
 import csv
@@ -132,52 +132,49 @@ class ModelDriver:
 
 
 class FmuDriver:
-    """A built FMU (either flavour) through fmpy's FMU2Slave."""
+    """A built FMU (either flavour, FMI 2.0 or 3.0) through the coupling library's FMU
+    instance (coupling/instance.py); its messages are printed as fmpy prints them."""
 
     def __init__(self, setup, deflection, rate):
-        from fmpy import read_model_description
-        from fmpy.fmi2 import FMU2Slave
+        from ..coupling.instance import FmuInstance
 
-        description = read_model_description(setup.fmu)
-        references = {v.name: v.valueReference for v in description.modelVariables}
         definition = component_definition(setup.component, setup.structure)
-        inputs = [references[v.name] for v in definition.inputs]
-        self.inputs, self.load = inputs, [references[definition.outputs[0].name]]
-        self.fmu = FMU2Slave(guid=description.guid, unzipDirectory=setup.fmu,
-                             modelIdentifier=description.coSimulation.modelIdentifier,
-                             instanceName="rig")
-        self.fmu.instantiate()
-        self.fmu.setupExperiment(tolerance=setup.rtol, startTime=0.0)
-        self.fmu.enterInitializationMode()
-        names = list(setup.parameters)
-        self.fmu.setReal([references[n] for n in names], [setup.parameters[n] for n in names])
-        self.fmu.setReal(inputs, [deflection, rate])
-        self.fmu.exitInitializationMode()
+        self.fmu = FmuInstance(setup.fmu, "rig", on_message=_print_message)
+        self.inputs = self.fmu.reals([v.name for v in definition.inputs])
+        self.load = self.fmu.reals([definition.outputs[0].name])
+        with _refusals("its initialization"):
+            self.fmu.setup(setup.parameters, setup.rtol, start_time=0.0)
+            self.fmu.set(self.inputs, [deflection, rate])
+            self.fmu.exit_initialization()
 
     def force(self, deflection, rate):
         with _refusals(f"setting deflection {deflection!r}, rate {rate!r}"):
-            self.fmu.setReal(self.inputs, [deflection, rate])
-            return self.fmu.getReal(self.load)[0]
+            self.fmu.set(self.inputs, [deflection, rate])
+            return self.fmu.get(self.load)[0]
 
     def step(self, current_time, step_size):
         with _refusals(f"the step from t = {current_time:.9g} s"):
-            self.fmu.doStep(currentCommunicationPoint=current_time,
-                            communicationStepSize=step_size)
+            self.fmu.do_step(current_time, step_size)
 
     def close(self):
-        self.fmu.terminate()
-        self.fmu.freeInstance()
+        self.fmu.close()
+
+
+def _print_message(status, text):
+    from ..coupling.instance import STATUS_NAMES
+
+    print(f"[{STATUS_NAMES[status].upper()}] {text}")
 
 
 @contextmanager
 def _refusals(what):
-    """An FMU call that fails becomes a RigError (its log went to the host's logger)."""
-    from fmpy.fmi1 import FMICallException
+    """An FMU call that fails becomes a RigError, with what the FMU said."""
+    from ..coupling import CouplingError, StepDiscarded
 
     try:
         yield
-    except FMICallException as error:
-        raise RigError(f"the FMU refused {what} ({error}); see its log above") from None
+    except (CouplingError, StepDiscarded) as error:
+        raise RigError(f"the FMU refused {what} ({error})") from None
 
 
 DRIVERS = {"model": ModelDriver, "fmu": FmuDriver}

@@ -13,7 +13,6 @@ import csv
 import io
 import math
 import os
-import shutil
 import sys
 
 import numpy as np
@@ -141,10 +140,9 @@ def simulate(component, times, columns, stop_time, step, tolerance=None, derive_
              warnings=None, errors=None, parameters=None):
     """fmpy's result (a structured array: time and the outputs); the FMU's warnings and
     errors are appended to those lists."""
-    from fmpy import calloc, extract, free, simulate_fmu
-    from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE,
-                           fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
-                           fmi2CallbackLoggerTYPE, fmi2Warning)
+    from fmpy import simulate_fmu
+
+    from ..coupling.instance import WARNING, FmuInstance
     inputs = np.zeros(len(times), dtype=[("time", float)] + [(n, float) for n in columns])
     inputs["time"] = times
     for name, values in columns.items():
@@ -152,35 +150,25 @@ def simulate(component, times, columns, stop_time, step, tolerance=None, derive_
     warnings = [] if warnings is None else warnings
     errors = [] if errors is None else errors
 
-    def log(environment, instance, status, category, message):
-        # The project's FMUs pass each message finished, with '%' doubled.
-        text = message.decode("utf-8", "replace").replace("%%", "%")
-        (warnings if status == fmi2Warning else errors if status > fmi2Warning else []).append(text)
+    def log(status, text):
+        (warnings if status == WARNING else errors if status > WARNING else []).append(text)
 
-    # The instance is made here, with a logger of its own: fmpy's `logger=` would install it
-    # as the logger of the whole process (its logger proxy), and leave that pointing at a
-    # freed callback once this simulation is over.
-    callbacks = fmi2CallbackFunctions()
-    callbacks.logger = fmi2CallbackLoggerTYPE(log)
-    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-    directory = extract(component.path)
+    # The instance is made here (FMI 2.0 or 3.0), with a logger of its own: fmpy's `logger=`
+    # would install it as the logger of the whole process (its logger proxy), and leave that
+    # pointing at a freed callback once this simulation is over. fmpy's loop drives it.
+    instance = FmuInstance(component.path, component.name, on_message=log)
     try:
-        fmu = FMU2Slave(guid=component.description.guid, unzipDirectory=directory,
-                        modelIdentifier=component.description.coSimulation.modelIdentifier,
-                        instanceName=component.name)
-        fmu.instantiate(callbacks=callbacks)
         said = io.StringIO()  # fmpy prints; a rate left out on purpose is no news
         with contextlib.redirect_stdout(said):
             result = simulate_fmu(
-                directory, start_time=float(times[0]), stop_time=stop_time,
+                instance.fmu.directory, start_time=float(times[0]), stop_time=stop_time,
                 output_interval=step, relative_tolerance=tolerance, input=inputs,
-                output=component.outputs, model_description=component.description,
-                fmu_instance=fmu,
+                output=component.outputs, model_description=instance.fmu.description,
+                fmu_instance=instance.fmpy,
                 start_values={**(parameters or {}),
                               **({"rate_from_deflection": True} if derive_rate else {})})
     finally:
-        shutil.rmtree(directory, ignore_errors=True)
+        instance.close()  # fmpy's loop has terminated it
     expected = f'missing input for variable "{component.inputs[1]}"'
     warnings += [line for line in said.getvalue().splitlines()
                  if line.strip() and not (derive_rate and expected in line)]

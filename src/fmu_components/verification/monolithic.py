@@ -5,16 +5,14 @@ tolerance, the independent reference for a co-simulation of the same system.
 The FMUs' inputs are set at every evaluation of the right-hand side (continuous inputs,
 as Model Exchange means them; docs/model-exchange.md). A contact's event indicator stops
 the integration where it crosses zero; the FMU's mode is switched in event mode
-(fmi2NewDiscreteStates) and the integration restarts from there.
+(its discrete states updated) and the integration restarts from there. The FMUs may be
+FMI 2.0 or 3.0 (coupling/instance.py drives both).
 """
 
-import ctypes
-
 import numpy as np
-from fmpy import calloc, extract, free, read_model_description
-from fmpy.fmi2 import (FMU2Model, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 from scipy.integrate import solve_ivp
+
+from ..coupling.instance import MODEL_EXCHANGE, FmuInstance
 
 
 class ModelExchangeComponent:
@@ -22,83 +20,52 @@ class ModelExchangeComponent:
     deflection, rate)."""
 
     def __init__(self, path, instance_name, parameters=None):
-        description = read_model_description(str(path))
         self.name = instance_name
-        vr = {v.name: v.valueReference for v in description.modelVariables}
-        self._inputs = [v.valueReference for v in description.modelVariables
-                        if v.causality == "input"]
-        self.output_names = [v.name for v in description.modelVariables
-                             if v.causality == "output"]
-        self._outputs = [vr[n] for n in self.output_names]
-        self.n = description.numberOfContinuousStates
-        self.events = description.numberOfEventIndicators
-        self._directory = extract(str(path))
-        self._fmu = FMU2Model(guid=description.guid, unzipDirectory=self._directory,
-                              modelIdentifier=description.modelExchange.modelIdentifier,
-                              instanceName=instance_name)
         # The solver's trial states are no one's business but its own: the FMU's messages
         # about them (an input out of the measured range) are kept, not printed.
-        self.messages = []
-        self._callbacks = fmi2CallbackFunctions()
-        self._callbacks.logger = fmi2CallbackLoggerTYPE(
-            lambda env, instance, status, category, message:
-            self.messages.append(message.decode("utf-8", "replace")))
-        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        self._fmu.instantiate(callbacks=self._callbacks)
-        self._fmu.setupExperiment(startTime=0.0)
-        self._fmu.enterInitializationMode()
-        if parameters:
-            self._fmu.setReal([vr[k] for k in parameters], list(parameters.values()))
-        self._x = (ctypes.c_double * max(self.n, 1))()
-        self._dx = (ctypes.c_double * max(self.n, 1))()
-        self._z = (ctypes.c_double * max(self.events, 1))()
+        self._fmu = fmu = FmuInstance(path, instance_name, MODEL_EXCHANGE)
+        self.output_names = fmu.fmu.outputs
+        self._inputs = fmu.reals(fmu.fmu.inputs)
+        self._outputs = fmu.reals(self.output_names)
+        self.n = len(fmu.fmu.states)
+        self.events = fmu.fmu.event_indicators
+        fmu.setup(parameters)
         self.nominals = None
+
+    @property
+    def messages(self):
+        """The newest messages the FMU logged."""
+        return self._fmu.messages
 
     def start(self, deflection, rate):
         """Leave initialization relaxed at the initial input; the initial states."""
-        self._fmu.setReal(self._inputs, [deflection, rate])
-        self._fmu.exitInitializationMode()
-        self.update_mode()
-        fmu = self._fmu
-        fmu.fmi2GetContinuousStates(fmu.component, self._x, self.n)
-        nominals = (ctypes.c_double * self.n)()
-        fmu.fmi2GetNominalsOfContinuousStates(fmu.component, nominals, self.n)
-        self.nominals = np.array(nominals[:])
-        return np.array(self._x[:self.n])
+        self._fmu.set(self._inputs, [deflection, rate])
+        self._fmu.exit_initialization()  # through event mode: the contact's mode
+        self.nominals = np.array(self._fmu.nominals())
+        return np.array(self._fmu.states())
 
     def update_mode(self):
         """Event mode: let the FMU switch its discrete mode (the contact) at the current
         inputs, then back to continuous time."""
-        fmu = self._fmu
-        fmu.enterEventMode()
-        while fmu.newDiscreteStates()[0]:
-            pass
-        fmu.enterContinuousTimeMode()
+        self._fmu.event()
 
     def set(self, time, states, deflection, rate):
         fmu = self._fmu
-        fmu.setTime(time)
-        self._x[:self.n] = states
-        fmu.fmi2SetContinuousStates(fmu.component, self._x, self.n)
-        fmu.setReal(self._inputs, [deflection, rate])
+        fmu.set_time(time)
+        fmu.set_states(states)
+        fmu.set(self._inputs, [deflection, rate])
 
     def derivatives(self):
-        fmu = self._fmu
-        fmu.fmi2GetDerivatives(fmu.component, self._dx, self.n)
-        return self._dx[:self.n]
+        return self._fmu.derivatives()
 
     def outputs(self):
-        return dict(zip(self.output_names, self._fmu.getReal(self._outputs)))
+        return dict(zip(self.output_names, self._fmu.get(self._outputs)))
 
     def event_indicator(self):
-        fmu = self._fmu
-        fmu.fmi2GetEventIndicators(fmu.component, self._z, self.events)
-        return self._z[0]
+        return self._fmu.event_indicators()[0]
 
     def free(self):
-        self._fmu.terminate()
-        self._fmu.freeInstance()
+        self._fmu.close()
 
 
 class MonolithicSystem:
