@@ -1,0 +1,131 @@
+"""A bank (bank.py) in exudyn (1.13): the load laws in exudyn's compiled symbolic user
+functions, the bank's per-step work in the step hooks.
+
+exudyn evaluates a connector's force at every Newton iterate and for its numerical
+Jacobian. On the Python path (exudyn_host.py) that is a Python call each time; here each
+connector's force is a symbolic expression (exudyn.symbolic, an expression tree that
+exudyn's C++ evaluates) of the law of law.py, its numbers x*, F*, K, Q, K_touch read from
+one named symbolic matrix that the hooks set once per pass from the bank's `laws`
+(exudyn's named symbolic vectors cannot be set beyond a few entries in 1.13; its
+matrices can). The hooks:
+
+    pre-step user function      Bank.begin_step, then the laws into the matrix
+    post-Newton user function   the host's deflections (one call of the example's, from
+                                the system's coordinates), Bank.end_pass; on REPEAT the
+                                next laws into the matrix
+    post-step user function     Bank.accept
+
+exudyn is imported only when these functions run.
+"""
+
+import math
+
+from .exudyn_host import ExudynCoupling
+
+
+class SymbolicLaws:
+    """The bank's laws as one named symbolic matrix, and each component's law as a
+    symbolic expression of a deflection (the same operations, in the same order, as
+    LoadLaw.__call__)."""
+
+    def __init__(self, bank, name="fmu_bank_laws"):
+        import exudyn as exu
+
+        self.esym = exu.symbolic
+        self.bank = bank
+        self.matrix = self.esym.Matrix(name, bank.laws.tolist())
+
+    def update(self):
+        self.matrix.SetMatrix(self.bank.laws)
+
+    def when(self, condition, if_true, if_false):
+        real = self.esym.Real
+        return self.esym.IfThenElse(*(v if isinstance(v, real) else real(float(v))
+                                      for v in (condition, if_true, if_false)))
+
+    def load(self, i, deflection):
+        """The symbolic load of instance i's law at a symbolic `deflection`."""
+        when, m = self.when, self.matrix
+        x_star, load, k, q, touch = (m[i, j] for j in range(5))
+        dx = deflection - x_star
+        # LoadLaw.secant: min(max(secant, low), high); with Q = 0, K as it is
+        secant = k + 0.5 * q * dx
+        low = when(k >= 0.0, 0.5 * k, 2.0 * k)
+        high = when(k >= 0.0, 2.0 * k, 0.5 * k)
+        raised = when(low > secant, low, secant)
+        secant = when(q == 0.0, k, when(high < raised, high, raised))
+        about = load + secant * dx
+        if not self.bank.unilateral[i]:
+            return about
+        touching = touch * (deflection - when(x_star > 0.0, x_star, 0.0))
+        return when(deflection <= 0.0, 0.0,
+                    when(load <= 0.0, when(touching > 0.0, touching, 0.0),
+                         when(about > 0.0, about, 0.0)))
+
+
+def symbolic_function(mbs, item, function, name="springForceUserFunction"):
+    """Record `function` (Python, with symbolic arguments) as item's compiled user function;
+    keep the returned object alive as long as the system."""
+    from exudyn.advancedUtilities import CreateSymbolicUserFunction
+
+    compiled = CreateSymbolicUserFunction(mbs, function, name, item)
+    mbs.SetObjectParameter(item, name, compiled)
+    return compiled
+
+
+class ExudynBank(ExudynCoupling):
+    """Wires a Bank into an exudyn MainSystem's step hooks; `deflections()` returns the
+    host's deflection of every instance now, as one array."""
+
+    def __init__(self, mbs, bank, laws, deflections):
+        super().__init__(mbs, bank)
+        self.laws, self.deflections = laws, deflections
+
+    def _pre_step(self, t):
+        self.attempts += 1
+        self.coupling.begin_step(t)
+        self.laws.update()
+        return True
+
+    def _post_newton(self, t):
+        verdict = self.coupling.end_pass(t, self.deflections())
+        if verdict.retry_step is not None:
+            return [1.0, verdict.retry_step]
+        if verdict.repeat:
+            self.laws.update()
+        return [1.0 if verdict.repeat else 0.0, -1.0]
+
+
+def solve(mbs, bank, laws, deflections, end_time, step, start_time=0.0, settings=None):
+    """exudyn_host.solve for a bank: start its components at the host's initial state,
+    integrate with generalized-alpha at `step` to the first multiple of it at or after
+    end_time. Frees the bank. Returns the ExudynBank."""
+    import exudyn as exu
+
+    host = ExudynBank(mbs, bank, laws, deflections)
+    if settings is None:
+        settings = exu.SimulationSettings()
+        settings.timeIntegration.verboseMode = 0
+        settings.solution.file.write = False
+        settings.solution.sensors.active = False
+    steps = math.ceil((end_time - start_time) / step - 1e-9)
+    settings.timeIntegration.startTime = start_time
+    settings.timeIntegration.endTime = start_time + steps * step
+    settings.timeIntegration.numberOfSteps = steps
+    host.install(settings)
+    try:
+        bank.start(start_time, deflections())
+        laws.update()
+        ok = mbs.SolveDynamic(settings, solverType=exu.DynamicSolverType.GeneralizedAlpha)
+    except Exception:
+        if host.failure is not None:
+            raise host.failure from None
+        raise
+    finally:
+        host.uninstall()
+        bank.free()
+    if host.failure is not None:
+        raise host.failure
+    if not ok:
+        raise RuntimeError("exudyn's dynamic solver failed")
+    return host
