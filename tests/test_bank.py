@@ -78,14 +78,17 @@ def bank_run(fmus, scheme, steps, step=1e-3):
 
 
 @pytest.mark.parametrize("scheme", ["corrected", "explicit", "converged"])
-def test_the_bank_gives_the_python_paths_numbers_to_the_bit(native_fmus, scheme):
-    """A tyre, both bushes and the damper (its law linearised), every pass's law and every
-    accepted load."""
+def test_the_bank_gives_the_python_paths_numbers(native_fmus, scheme):
+    """A tyre, both bushes and the damper, every pass's law and every accepted load: to
+    the bit, except the damper's linearised law (its matrix exponential in C, not numpy's
+    LAPACK: to round-off, 1e-12 of its load)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # converged's pass limit, on both paths
         expected, coupling = python_run(native_fmus, scheme, 200)
         got, bank = bank_run(native_fmus, scheme, 200)
-    assert np.array_equal(got, expected)
+    assert np.array_equal(got[:, :7], expected[:, :7])
+    damper = expected[:, 7]
+    assert np.max(np.abs(got[:, 7] - damper)) <= 1e-12 * np.max(np.abs(damper))
     assert bank.costs() == pytest.approx(coupling.costs())
 
 

@@ -50,6 +50,9 @@ FUNCTIONS = {2: ("fmi2SetReal", "fmi2GetReal", "fmi2DoStep", "fmi2GetFMUstate",
 FAILED_CALLS = {1: "{set}", 2: "{get}", 3: "{step}", 4: "{get_state}", 5: "{set_state}",
                 6: "{directional}"}
 STATUS = {2: "Discard", 3: "Error", 4: "Fatal"}
+MODEL_FUNCTIONS = ("fmi2SetReal", "fmi2GetReal", "fmi2SetContinuousStates",
+                   "fmi2GetDirectionalDerivative", "fmi2GetDerivatives", "fmi2EnterEventMode",
+                   "fmi2NewDiscreteStates", "fmi2EnterContinuousTimeMode")
 
 _library = None
 
@@ -66,6 +69,8 @@ def library():
         lib.bank_set_scheme.argtypes = [pointer, integer, integer, double]
         lib.bank_set_instance.argtypes = [pointer, integer, integer, pointer, pointer, pointer,
                                           integer, integer, integer, integer]
+        lib.bank_set_model.argtypes = [pointer, integer, pointer, pointer, integer, pointer,
+                                       integer]
         lib.bank_state.restype = pointer
         lib.bank_state.argtypes = [pointer, integer]
         lib.bank_free.argtypes = [pointer]
@@ -150,6 +155,28 @@ class Bank:
                                        len(component.output_names), load,
                                        component.output_names.index("stiffness"), flags):
             raise ValueError(f"{component.name}: the bank cannot take this instance")
+        if version == 2 and component._linearisable and (
+                component.step_model == "linearised" or component._curvature):
+            self._hand_over_model(i, component)
+
+    def _hand_over_model(self, i, component):
+        """The Model Exchange side instance that linearises the component's step
+        (linearised.py makes it; the bank calls it)."""
+        from .linearised import Linearisation
+
+        if component._linearisation is None:
+            component._linearisation = Linearisation(
+                *component._unpacked, f"{component.name}.linearisation", component._parameters)
+        model = component._linearisation
+        fmu = model._fmu
+        functions = (ctypes.c_void_p * len(MODEL_FUNCTIONS))(
+            *[ctypes.cast(getattr(fmu.dll, name), ctypes.c_void_p) for name in MODEL_FUNCTIONS])
+        vrs = (ctypes.c_uint * (2 * model.n + 4))(*model.state_vrs, *model._unknowns,
+                                                   *model._inputs)
+        if self._lib.bank_set_model(self._handle, i, fmu.component, functions, model.n, vrs,
+                                    int(model._contact_events)):
+            raise ValueError(f"{component.name}: the bank cannot linearise this instance "
+                             f"({model.n} states)")
 
     # --- the protocol (master.py's) ---------------------------------------------------------
 
@@ -317,6 +344,10 @@ class Bank:
             value = self.trial_outputs[instance.value, output.value]
             raise CouplingError(component.name, time.value, f"output {name} = {value!r} is "
                                 f"not finite{said}")
+        if call.value == 9:
+            raise CouplingError(component.name, self.accepted[instance.value, 0],
+                                f"the linearised step over {step.value:.6g} s: its Model "
+                                f"Exchange instance returned {status_name}")
         if call.value == 8:
             raise ValueError(f"{component.name}: a trial or acceptance at t = "
                              f"{time.value!r} s, not after the last accepted step")
