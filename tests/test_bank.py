@@ -225,7 +225,7 @@ def test_the_symbolic_laws_are_the_load_laws_to_the_bit():
     from fmu_components.coupling.bank_exudyn import SymbolicLaws
 
     class Laws:
-        laws = np.zeros((4, 5))
+        laws = np.zeros((4, 8))
         unilateral = np.array([False, True, False, True])
 
     laws = SymbolicLaws(Laws, name="test_laws")
@@ -233,8 +233,11 @@ def test_the_symbolic_laws_are_the_load_laws_to_the_bit():
     expressions = [laws.load(i, x) for i in range(4)]
     rng = np.random.default_rng(1)
     for _ in range(2000):
-        Laws.laws[:] = rng.normal(size=(4, 5)) * [1e-3, 1e4, 1e7, 1e10, 1e7]
+        Laws.laws[:, :5] = rng.normal(size=(4, 5)) * [1e-3, 1e4, 1e7, 1e10, 1e7]
         Laws.laws[rng.random(4) < 0.3, 3] = 0.0
+        k = Laws.laws[:, 2]
+        Laws.laws[:, 5:] = np.c_[0.5 * Laws.laws[:, 3], np.where(k >= 0, 0.5 * k, 2 * k),
+                                 np.where(k >= 0, 2 * k, 0.5 * k)]  # as the bank writes them
         laws.update()
         value = rng.normal() * 2e-3
         x.SetValue(value)

@@ -27,7 +27,9 @@
 
 #define BANK_VERSION 1
 #define MAX_OUTPUTS 8
-#define LAW_COLUMNS 5 /* x*, F*, K, Q, K_touch (law.py's LoadLaw) */
+/* x*, F*, K, Q, K_touch (law.py's LoadLaw), then what a host's expression of the law
+   needs no more than once per pass: Q/2 and the secant's bounds K/2 and 2K, low first */
+#define LAW_COLUMNS 8
 #define CURVED 0.01   /* fmu.py's CURVED */
 #define STATUS_OK 1   /* fmi2Warning and below */
 
@@ -303,6 +305,9 @@ static void set_law(Bank *bank, int i, double x, double load, double k, double q
     law[2] = k;
     law[3] = q;
     law[4] = bank->seen[2 * i + 1];
+    law[5] = 0.5 * q;
+    law[6] = k >= 0.0 ? 0.5 * k : 2.0 * k;
+    law[7] = k >= 0.0 ? 2.0 * k : 0.5 * k;
 }
 
 /* fmu.py's lagged_law: about the last accepted step */
@@ -587,10 +592,10 @@ static int corrected_law(Bank *bank, int i, double time) {
     if (linearised) {
         /* the same shape of the elastic force, reached through the step's tangent */
         double ratio = stiffness != 0.0 ? result[1] / stiffness : 0.0;
-        law[2] = result[1];
-        law[3] = stiffness != 0.0 ? curvature * (ratio * ratio) : 0.0;
+        set_law(bank, i, x, law[1], result[1],
+                stiffness != 0.0 ? curvature * (ratio * ratio) : 0.0);
     } else {
-        law[3] = result[2];
+        set_law(bank, i, x, law[1], law[2], result[2]);
     }
     return 0;
 }

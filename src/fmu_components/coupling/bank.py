@@ -39,7 +39,7 @@ from .master import Verdict
 from .schemes import scheme_named
 
 MAX_OUTPUTS = 8
-LAW_COLUMNS = 5
+LAW_COLUMNS = 8  # x*, F*, K, Q, K_touch; then Q/2, and the secant's bounds (law.py)
 SCHEME_CODES = {"explicit": 0, "corrected": 1, "converged": 2}
 UNILATERAL, STEP_TANGENT, CURVATURE, LINEARISABLE, LINEARISED = 1, 2, 4, 8, 16
 ACCEPT, REPEAT, RETRY, FAILED, BUSY = 0, 1, 2, -1, -2
@@ -94,7 +94,7 @@ class Bank:
     """FmuComponents (fmu.py: instantiated, in initialization mode, not started) coupled
     to one host by one scheme, their per-step work done in C. The arrays a host reads:
     `laws` (rows x*, F*, K, Q, K_touch: the law of law.py, with each component's
-    `unilateral`), `outputs` and `trial_outputs` (columns as each component's
+    `unilateral`; then Q/2, K/2 and 2K, the lower bound first), `outputs` and `trial_outputs` (columns as each component's
     output_names), `accepted` (time, deflection, secant rate of the last accepted step)."""
 
     def __init__(self, components, scheme="corrected", host_can_retry=True, record=None):
@@ -287,7 +287,14 @@ class Bank:
         accepted_time, deflection, rate = self.accepted[i]
         step = time - accepted_time
         predicted, tangent, _ = self._linearised(i, deflection, rate, step)
-        self.laws[i, :4] = deflection + rate * step, predicted, tangent, 0.0
+        self._set_law(i, deflection + rate * step, predicted, tangent, 0.0)
+
+    def _set_law(self, i, deflection, load, stiffness, curvature):
+        """A row of `laws` (bank.c's set_law)."""
+        low, high = ((0.5 * stiffness, 2.0 * stiffness) if stiffness >= 0.0
+                     else (2.0 * stiffness, 0.5 * stiffness))
+        self.laws[i] = (deflection, load, stiffness, curvature, self._seen[i, 1],
+                        0.5 * curvature, low, high)
 
     def _corrected_law(self, i, time):
         """fmu.py's corrected_law where it linearises (the bank wrote the rest)."""
@@ -296,13 +303,13 @@ class Bank:
         deflection = self.laws[i, 0]
         stiffness = self.trial_outputs[i, component.output_names.index("stiffness")]
         secant = (deflection - accepted_deflection) / (time - accepted_time)
-        curvature = self.laws[i, 3]
+        load, tangent, curvature = self.laws[i, 1:4]
         if component.step_model == "linearised":
             _, tangent, _ = self._linearised(i, deflection, secant, time - accepted_time)
             curvature = curvature * (tangent / stiffness) ** 2 if stiffness else 0.0
-            self.laws[i, 2:4] = tangent, curvature
         else:
-            self.laws[i, 3] = self._linearised(i, deflection, secant, time - accepted_time)[2]
+            curvature = self._linearised(i, deflection, secant, time - accepted_time)[2]
+        self._set_law(i, deflection, load, tangent, curvature)
 
     # --- values ------------------------------------------------------------------------------
 

@@ -6,6 +6,7 @@ Jacobian. On the Python path (exudyn_host.py) that is a Python call each time; h
 connector's force is a symbolic expression (exudyn.symbolic, an expression tree that
 exudyn's C++ evaluates) of the law of law.py, its numbers x*, F*, K, Q, K_touch read from
 one named symbolic matrix that the hooks set once per pass from the bank's `laws`
+(with Q/2 and the secant's bounds, so that each iterate evaluates no more than it must)
 (exudyn's named symbolic vectors cannot be set beyond a few entries in 1.13; its
 matrices can). The hooks:
 
@@ -46,14 +47,13 @@ class SymbolicLaws:
     def load(self, i, deflection):
         """The symbolic load of instance i's law at a symbolic `deflection`."""
         when, m = self.when, self.matrix
-        x_star, load, k, q, touch = (m[i, j] for j in range(5))
+        x_star, load, k, half_q, touch, low, high = (m[i, j] for j in (0, 1, 2, 5, 4, 6, 7))
         dx = deflection - x_star
-        # LoadLaw.secant: min(max(secant, low), high); with Q = 0, K as it is
-        secant = k + 0.5 * q * dx
-        low = when(k >= 0.0, 0.5 * k, 2.0 * k)
-        high = when(k >= 0.0, 2.0 * k, 0.5 * k)
+        # LoadLaw.secant, min(max(K + Q/2 dx, low), high), its bounds from the bank; with
+        # Q = 0 it is K
+        secant = k + half_q * dx
         raised = when(low > secant, low, secant)
-        secant = when(q == 0.0, k, when(high < raised, high, raised))
+        secant = when(high < raised, high, raised)
         about = load + secant * dx
         if not self.bank.unilateral[i]:
             return about
