@@ -19,8 +19,7 @@ matrices can). The hooks:
 exudyn is imported only when these functions run.
 """
 
-import math
-
+from . import exudyn_host
 from .exudyn_host import ExudynCoupling
 
 
@@ -96,36 +95,25 @@ class ExudynBank(ExudynCoupling):
         return [1.0 if verdict.repeat else 0.0, -1.0]
 
 
+class _Starting:
+    """What exudyn_host.solve starts and frees: the bank at the host's deflections, its
+    laws in the symbolic matrix."""
+
+    def __init__(self, bank, laws, deflections):
+        self.bank, self.laws, self.deflections = bank, laws, deflections
+
+    def start(self, time):
+        self.bank.start(time, self.deflections())
+        self.laws.update()
+
+    def free(self):
+        self.bank.free()
+
+
 def solve(mbs, bank, laws, deflections, end_time, step, start_time=0.0, settings=None):
     """exudyn_host.solve for a bank: start its components at the host's initial state,
     integrate with generalized-alpha at `step` to the first multiple of it at or after
     end_time. Frees the bank. Returns the ExudynBank."""
-    import exudyn as exu
-
-    host = ExudynBank(mbs, bank, laws, deflections)
-    if settings is None:
-        settings = exu.SimulationSettings()
-        settings.timeIntegration.verboseMode = 0
-        settings.solution.file.write = False
-        settings.solution.sensors.active = False
-    steps = math.ceil((end_time - start_time) / step - 1e-9)
-    settings.timeIntegration.startTime = start_time
-    settings.timeIntegration.endTime = start_time + steps * step
-    settings.timeIntegration.numberOfSteps = steps
-    host.install(settings)
-    try:
-        bank.start(start_time, deflections())
-        laws.update()
-        ok = mbs.SolveDynamic(settings, solverType=exu.DynamicSolverType.GeneralizedAlpha)
-    except Exception:
-        if host.failure is not None:
-            raise host.failure from None
-        raise
-    finally:
-        host.uninstall()
-        bank.free()
-    if host.failure is not None:
-        raise host.failure
-    if not ok:
-        raise RuntimeError("exudyn's dynamic solver failed")
-    return host
+    return exudyn_host.solve(mbs, _Starting(bank, laws, deflections), end_time, step,
+                             start_time, settings,
+                             host=ExudynBank(mbs, bank, laws, deflections))
