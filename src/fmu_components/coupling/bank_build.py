@@ -2,7 +2,7 @@
 library per platform, libc and libm only.
 
 `fmu-components build` (build_fmus.py) calls `build_bank()`, which puts the libraries
-next to bank.c (linux64, and win64 where mingw-w64 is installed). A bank that finds no
+beside the sources (bank.c, bank_linearised.c, bank.h) (linux64, and win64 where mingw-w64 is installed). A bank that finds no
 library there compiles one on first use into a cache (~/.cache/fmu_components, or
 $FMU_COMPONENTS_CACHE); where no compiler is found it says so and names the Python path.
 """
@@ -14,7 +14,9 @@ import subprocess
 import sys
 from pathlib import Path
 
-SOURCE = Path(__file__).with_name("bank.c")
+HERE = Path(__file__).resolve().parent
+SOURCES = [HERE / "bank.c", HERE / "bank_linearised.c"]
+HEADERS = [HERE / "bank.h"]
 # Same bits as Python's arithmetic: no fused multiply-add, no fast math.
 FLAGS = ["-O2", "-std=c99", "-ffp-contract=off", "-fno-fast-math", "-Wall", "-Wextra"]
 COMPILERS = {"linux64": ("gcc", ".so", ["-shared", "-fPIC", "-fvisibility=hidden"]),
@@ -34,8 +36,11 @@ def platform_name():
 
 
 def source_tag():
-    """A hash of bank.c: a library built from other code is never loaded."""
-    return hashlib.sha256(SOURCE.read_bytes()).hexdigest()[:12]
+    """A hash of the bank's sources: a library built from other code is never loaded."""
+    digest = hashlib.sha256()
+    for path in SOURCES + HEADERS:
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:12]
 
 
 def library_name(platform):
@@ -43,7 +48,8 @@ def library_name(platform):
 
 
 def compile_bank(platform, directory):
-    """Compile bank.c for `platform` into `directory`; the library's path."""
+    """Compile the bank for `platform` into `directory` (older builds of it there
+    removed); the library's path."""
     compiler, _, flags = COMPILERS[platform]
     if shutil.which(compiler) is None:
         raise NoCompiler(f"{compiler} not found: the coupling bank (compiled per-step work) "
@@ -53,18 +59,21 @@ def compile_bank(platform, directory):
     directory.mkdir(parents=True, exist_ok=True)
     target = directory / library_name(platform)
     partial = target.with_suffix(f".{os.getpid()}.tmp")
-    run = subprocess.run([compiler, *FLAGS, *flags, str(SOURCE), "-o", str(partial), "-lm"],
-                         capture_output=True, text=True)
+    run = subprocess.run([compiler, *FLAGS, *flags, *map(str, SOURCES), "-o", str(partial),
+                          "-lm"], capture_output=True, text=True)
     if run.returncode != 0:
-        raise RuntimeError(f"compiling {SOURCE.name} with {compiler} failed:\n{run.stderr}")
+        raise RuntimeError(f"compiling the bank with {compiler} failed:\n{run.stderr}")
     partial.replace(target)  # atomic: a process loading it never sees half a file
+    for older in directory.glob(f"bank_{platform}_*{COMPILERS[platform][1]}"):
+        if older != target:
+            older.unlink(missing_ok=True)
     return target
 
 
 def build_bank(directory=None):
-    """Build the bank's libraries next to bank.c (or into `directory`): linux64, and
+    """Build the bank's libraries beside its sources (or into `directory`): linux64, and
     win64 where mingw-w64 is installed. {platform: path}, and the platforms skipped."""
-    directory = Path(directory or SOURCE.parent)
+    directory = Path(directory or HERE)
     built, skipped = {}, []
     for platform in COMPILERS:
         if shutil.which(COMPILERS[platform][0]) is None:
@@ -80,14 +89,14 @@ def cache_directory():
 
 
 def library_path():
-    """The bank's library for this platform: built beside bank.c, in the cache, or
+    """The bank's library for this platform: built beside its sources, in the cache, or
     compiled into the cache now."""
     platform = platform_name()
     if platform not in COMPILERS:
         raise NoCompiler(f"no bank for platform {platform}: use the Python path "
                          f"(path='python')")
     name = library_name(platform)
-    for directory in (SOURCE.parent, cache_directory()):
+    for directory in (HERE, cache_directory()):
         if (directory / name).exists():
             return directory / name
     return compile_bank(platform, cache_directory())
