@@ -335,3 +335,29 @@ def test_fmi3_instances_in_a_bank_give_the_fmi2_numbers(native_fmus):
     parts = [Fmi3Part(fmi3 / "TrackBushRadial.fmu", "radial"),
              Fmi3Part(fmi3 / "TrackBushTorsion.fmu", "torsion")]
     assert np.array_equal(run(parts), fmi2)
+
+
+def test_the_station_compiled_path_gives_the_python_paths_numbers(native_fmus, monkeypatch):
+    """The road-wheel station at 8 m/s: with the damper linearised by linearised.py the
+    compiled path gives the Python path's histories to the bit; with its linearisation in
+    C (the default), to the round-off of the matrix exponential as the run carries it."""
+    sys.path.insert(0, str(EXAMPLES))
+    try:
+        import bank_path
+        import road_wheel_station as station
+    finally:
+        sys.path.remove(str(EXAMPLES))
+    fmu_dir = Path(native_fmus["RoadWheelTyre"]).parent
+    profile = station.RoadProfile(bump_start=0.2)
+
+    def run(path):
+        return station.simulate(8.0, profile, 1e-3, fmu_dir, end_time=0.15, path=path)
+
+    python = run("python")
+    compiled = run("compiled")
+    real_bank = bank_path.Bank
+    monkeypatch.setattr(bank_path, "Bank", lambda *a, **k: real_bank(*a, linearise="python", **k))
+    exact = run("compiled")
+    for key in ("hull_acceleration", "tyre_force", "damper_torque"):
+        assert np.array_equal(exact[key], python[key]), key
+        assert np.max(np.abs(compiled[key] - python[key])) <= 1e-9 * np.ptp(python[key]), key

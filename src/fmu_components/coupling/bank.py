@@ -97,7 +97,14 @@ class Bank:
     `unilateral`; then Q/2, K/2 and 2K, the lower bound first), `outputs` and `trial_outputs` (columns as each component's
     output_names), `accepted` (time, deflection, secant rate of the last accepted step)."""
 
-    def __init__(self, components, scheme="corrected", host_can_retry=True, record=None):
+    def __init__(self, components, scheme="corrected", host_can_retry=True, record=None,
+                 linearise="c"):
+        """linearise: "c", the linearised steps in C (equal to the Python path's to
+        round-off: C's matrix exponential is not numpy's), or "python", by linearised.py
+        (the Python path's numbers to the bit, at its cost)."""
+        if linearise not in ("c", "python"):
+            raise ValueError(f"linearise {linearise!r}: 'c' or 'python'")
+        self.linearise = linearise
         self.scheme = scheme_named(scheme) if isinstance(scheme, str) else scheme
         if self.scheme.name not in SCHEME_CODES:
             raise ValueError(f"the bank runs the schemes {', '.join(SCHEME_CODES)}; "
@@ -155,7 +162,7 @@ class Bank:
                                        len(component.output_names), load,
                                        component.output_names.index("stiffness"), flags):
             raise ValueError(f"{component.name}: the bank cannot take this instance")
-        if version == 2 and component._linearisable and (
+        if self.linearise == "c" and version == 2 and component._linearisable and (
                 component.step_model == "linearised" or component._curvature):
             self._hand_over_model(i, component)
 
