@@ -6,6 +6,7 @@ at the arm pivot, coupled to the host by fmu_components.coupling (docs/coupling.
     python examples/road_wheel_station.py --speeds 8 --step 1e-3 --coupling explicit --csv
     python examples/road_wheel_station.py --speeds 8 --coupling-study  # accuracy and cost
     python examples/road_wheel_station.py --speeds 8 --fmi 3           # the FMI 3.0 FMUs (fmus/fmi3/)
+    python examples/road_wheel_station.py --path python   # the coupling's Python path
 
 Every speed is run twice: with the FMUs, and with both components replaced by their linear
 Kelvin equivalents at the static point (Eqs. 10.1-2 and 10.1-3, thesis section 10.1). The
@@ -46,6 +47,7 @@ from fmu_components.coupling import DEFAULT_SCHEME, Coupling, FmuComponent
 from fmu_components.coupling.exudyn_host import connector_state, solve
 from fmu_components.coupling.kelvin import KelvinElement, harmonic_kelvin_equivalent
 
+import bank_path
 from coupling_study import (STUDY_GRID, STUDY_SCHEMES, STUDY_STEPS, add_arguments,
                             format_table, history_error, progress, study, time_progress,
                             write_csv, write_study)
@@ -165,10 +167,12 @@ class Station:
     """The station in exudyn with its two components; `run` drives it at one speed."""
 
     def __init__(self, speed, profile, fmu_dir=None, linear=None, coupling=DEFAULT_SCHEME,
-                 reached=None):
+                 path=bank_path.DEFAULT_PATH, reached=None):
         """linear: a Linearisation, whose Kelvin elements replace both components; without
-        it both components are the FMUs. reached(t), if given, hears every accepted host
-        step's time (a progress bar)."""
+        it both components are the FMUs. path: "compiled", the coupling's bank (the FMUs'
+        per-step work in C, the load laws in exudyn's compiled symbolic functions), or
+        "python", its Python path (the Kelvin elements always take it). reached(t), if
+        given, hears every accepted host step's time (a progress bar)."""
         self.reached = reached
         self.speed = speed
         self.profile = profile
@@ -260,6 +264,38 @@ class Station:
         self.coupling.add(damper, self._damper_state)
         mbs.Assemble()
         self.records = []
+        self.compiled = not linear and bank_path.compiled(path, coupling)
+        if self.compiled:
+            self._compile_forces(coupling)
+
+    def _compile_forces(self, scheme):
+        """The compiled path: the tyre's and the damper's forces the symbolic laws of their
+        instances in one bank, the tyre's compression the same expression as
+        _compression's (the road profile's too)."""
+        self.bank = bank_path.Bank([self.tyre, self.damper], scheme, record=self._record)
+        laws = self.laws = bank_path.SymbolicLaws(self.bank, name="station_laws")
+        esym, profile, speed = laws.esym, self.profile, self.speed
+        ripple_k = 2 * math.pi / profile.pitch
+
+        def tyre_force(mbs, t, itemNumber, displacement, velocity, stiffness, damping, offset):
+            s = speed * t + displacement[0]
+            height = -0.5 * profile.ripple_depth * (1 - esym.cos(ripple_k * s))
+            u = (s - profile.bump_start) / profile.bump_length
+            bump = height + 0.5 * profile.bump_height * (1 - esym.cos(2 * math.pi * u))
+            height = laws.when(u > 0.0, laws.when(u < 1.0, bump, height), height)
+            compression = self.static_compression - displacement[1] + height
+            return [0.0 * height, -TYRES_PER_WHEEL * laws.load(0, compression), 0.0 * height]
+
+        def damper_torque(mbs, t, itemNumber, displacement, velocity, stiffness, damping,
+                          offset):
+            return laws.load(1, displacement)
+
+        self._symbolic = [
+            bank_path.symbolic_function(self.mbs, self.tyre_connector, tyre_force),
+            bank_path.symbolic_function(self.mbs, self.damper_connector, damper_torque)]
+
+    def _deflections(self):
+        return np.array([self._tyre_state()[0], self._damper_state()[0]])
 
     # --- kinematics shared by the force functions and the post-step hook ------------------
 
@@ -287,17 +323,30 @@ class Station:
         mbs = self.mbs
         hull_acceleration = mbs.GetNodeOutput(self.hull_node, exu.OutputVariableType.Acceleration)[1]
         pivot_force = mbs.GetObjectOutput(self.pivot, exu.OutputVariableType.Force)[1]
-        damper = self.damper.outputs
+        if self.compiled:  # the bank's arrays: row 0 the tyre, row 1 the damper
+            bank = self.bank
+            damper = dict(zip(self.damper.output_names, bank.outputs[1]))
+            tyre_deflection, damper_deflection = bank.accepted[:, 1]
+            tyre_load = bank.loads[0]
+        else:
+            damper = self.damper.outputs
+            tyre_deflection, damper_deflection = self.tyre.deflection, self.damper.deflection
+            tyre_load = self.tyre.load
         if self.reached is not None:
             self.reached(t)
         self.records.append((
-            t, hull_acceleration, pivot_force, self.damper.deflection, damper["torque"],
+            t, hull_acceleration, pivot_force, damper_deflection, damper["torque"],
             damper.get("dashpot_torque", math.nan), damper.get("rotor_rate", math.nan),
-            self.tyre.deflection, TYRES_PER_WHEEL * self.tyre.load))
+            tyre_deflection, TYRES_PER_WHEEL * tyre_load))
 
     def run(self, end_time, step):
         """Integrate to end_time with a fixed host step; returns the recorded histories."""
-        self.host = solve(self.mbs, self.coupling, end_time, step)
+        if self.compiled:
+            self.host = bank_path.solve(self.mbs, self.bank, self.laws, self._deflections,
+                                        end_time, step)
+            self.coupling = self.bank
+        else:
+            self.host = solve(self.mbs, self.coupling, end_time, step)
         names = ("time", "hull_acceleration", "hull_force", "arm_angle", "damper_torque",
                  "dashpot_torque", "rotor_rate", "tyre_compression", "tyre_force")
         data = np.array(self.records)
@@ -308,11 +357,11 @@ SETTLE_TIME = 1.0  # s after the bump: the body's bounce dies out
 
 
 def simulate(speed, profile, step, fmu_dir=None, linear=None, end_time=None,
-             coupling=DEFAULT_SCHEME, reached=None):
+             coupling=DEFAULT_SCHEME, path=bank_path.DEFAULT_PATH, reached=None):
     """One drive at `speed` (m/s); histories plus the damper's energy balance."""
     if end_time is None:
         end_time = profile.end / speed + SETTLE_TIME
-    station = Station(speed, profile, fmu_dir, linear, coupling, reached)
+    station = Station(speed, profile, fmu_dir, linear, coupling, path, reached)
     result = station.run(end_time, step)
     result["costs"] = station.coupling.costs()
     # Work done on the damper, and what its dashpot dissipated (FMU only): J.
@@ -497,6 +546,7 @@ def main(argv=None):
     parser.add_argument("--out", type=Path, default=Path("reports") / "road_wheel_station")
     add_arguments(parser, "every scheme at host steps of 4 to 0.25 ms against the "
                           "independent reference, at the first speed, instead of the runs")
+    bank_path.add_argument(parser)
     args = parser.parse_args(argv)
     args.fmu_dir = fmu_dir_of(args)
     profile = RoadProfile(args.bump_height, args.bump_length, ripple_depth=args.ripple_depth)
@@ -523,14 +573,14 @@ def main(argv=None):
     linear = Linearisation(args.fmu_dir, static_tyre_point(args.fmu_dir)[0], args.tyre_sine,
                            args.damper_sine)
     print(f"Linear Kelvin equivalents (Eqs. 10.1-2, 10.1-3): {linear.describe()}")
-    print(f"Coupling: {args.coupling}, host step {args.step * 1e3:g} ms")
+    print(f"Coupling: {args.coupling} ({args.path} path), host step {args.step * 1e3:g} ms")
     runs = {}
     print(f"\n{'speed':>6s} {'model':>7s} {'peak |a| hull':>14s} {'hull force max':>15s} "
           f"{'min':>8s} {'tyre max':>9s} {'damper |T|':>10s} {'damper work':>11s} "
           f"{'ripple: rms a':>14s} {'rms T':>11s}")
     for speed in args.speeds:
         nonlinear = simulate(speed, profile, args.step, args.fmu_dir, end_time=args.end_time,
-                             coupling=args.coupling)
+                             coupling=args.coupling, path=args.path)
         linearised = simulate(speed, profile, args.step, args.fmu_dir, linear,
                               end_time=args.end_time, coupling=args.coupling)
         runs[speed] = nonlinear, linearised

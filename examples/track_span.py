@@ -8,6 +8,7 @@ fmu_components.coupling (docs/coupling.md). One end of the span is lifted sinuso
     python examples/track_span.py --step 1e-3 --coupling explicit --csv
     python examples/track_span.py --coupling-study       # accuracy and cost
     python examples/track_span.py --fmi 3                # the FMI 3.0 FMUs (fmus/fmi3/)
+    python examples/track_span.py --path python          # the coupling's Python path
 
 The plots go to reports/track_span/ (or --out).
 
@@ -44,6 +45,8 @@ from exudyn.itemInterface import (CoordinateConstraint, LoadForceVector, MarkerB
 from fmu_components.coupling import DEFAULT_SCHEME, Coupling, FmuComponent
 from fmu_components.coupling.exudyn_host import connector_state, solve
 
+import bank_path
+
 from coupling_study import (STUDY_GRID, STUDY_SCHEMES, STUDY_STEPS, add_arguments,
                             format_table, progress, study, write_csv, write_study)
 from example_fmus import add_fmu_arguments, fmu_dir_of, fmu_path
@@ -60,8 +63,12 @@ DEFAULT_STEP = 5e-4  # s
 
 class TrackSpan:
     def __init__(self, links=10, lift=0.01, frequency=6.0, fmu_dir=None,
-                 coupling=DEFAULT_SCHEME):
+                 coupling=DEFAULT_SCHEME, path=bank_path.DEFAULT_PATH):
+        """path: "compiled", the coupling's bank (its per-step work in C, the load laws
+        in exudyn's compiled symbolic functions), where the scheme has one; "python", the
+        coupling's Python path (Coupling, a Python force function per connector)."""
         self.links, self.lift, self.frequency = links, lift, frequency
+        self.compiled = bank_path.compiled(path, coupling)
         SC = exu.SystemContainer()
         mbs = SC.AddSystem()
         self.SC, self.mbs = SC, mbs
@@ -71,6 +78,11 @@ class TrackSpan:
                        for j in range(joints)]
         self.torsion = [FmuComponent(fmu_path("TrackBushTorsion", fmu_dir), f"torsion_{j}")
                         for j in range(joints)]
+        if self.compiled:
+            self.bank = bank_path.Bank([c for pair in zip(self.radial, self.torsion)
+                                        for c in pair], coupling, record=self._record_bank)
+            self.laws = bank_path.SymbolicLaws(self.bank)
+            self._symbolic = []  # the compiled user functions live as long as the system
         # The straight span under tension, before gravity: each bush deflected to carry it.
         seat_gap = self._deflection_for(self.radial[0], TENSION)
 
@@ -101,6 +113,7 @@ class TrackSpan:
             else:
                 right = self._lifting_wheel(ground, coordinate, seat,
                                             links * PITCH + joints * seat_gap)
+                self.wheel_node = mbs.GetObject(mbs.GetMarker(right[0])["bodyNumber"])["nodeNumber"]
             self._add_joint(j, left, right)
             if j < links:
                 left = next_left
@@ -163,6 +176,60 @@ class TrackSpan:
 
         self.coupling.add(radial, radial_state)
         self.coupling.add(torsion, torsion_state)
+        self.connectors = getattr(self, "connectors", []) + [(j, radial_connector,
+                                                              torsion_connector)]
+
+    def _compile_forces(self):
+        """The compiled path: each connector's force the symbolic law of its instance
+        (after the static solve, which the relaxed bushes' Python functions make)."""
+        laws, esym = self.laws, self.laws.esym
+        def radial(i):
+            def radial_force(mbs, t, itemNumber, displacement, velocity, stiffness, damping,
+                             offset):
+                distance = esym.sqrt(displacement[0] * displacement[0]
+                                     + displacement[1] * displacement[1])
+                scale = laws.when(distance == 0.0, 0.0, laws.load(i, distance) / distance)
+                return [scale * displacement[0], scale * displacement[1], 0.0 * scale]
+            return radial_force
+
+        def torsion(i):
+            def torsion_torque(mbs, t, itemNumber, displacement, velocity, stiffness, damping,
+                               offset):
+                return -laws.load(i, -displacement)
+            return torsion_torque
+
+        for j, radial_connector, torsion_connector in self.connectors:
+            self._symbolic += [
+                bank_path.symbolic_function(self.mbs, radial_connector, radial(2 * j)),
+                bank_path.symbolic_function(self.mbs, torsion_connector, torsion(2 * j + 1))]
+        nodes = self.link_nodes + [self.wheel_node]
+        self._index = np.array([self.mbs.GetNodeODE2Index(n) for n in nodes])[:, None] + [0, 1, 2]
+        self._reference = np.array([self.mbs.GetNodeParameter(n, "referenceCoordinates")
+                                    for n in nodes])
+
+    def _node_coordinates(self, derivative=0):
+        data = self.mbs.systemData
+        if derivative == 2:
+            return data.GetODE2Coordinates_tt()[self._index]
+        return self._reference + data.GetODE2Coordinates()[self._index]
+
+    def _deflections(self):
+        """Every instance's deflection from the system's coordinates, in one pass: radial,
+        the distance between the pin seats of a joint; torsion, the left link's rotation
+        minus the right one's (the Python path's connector_state, vectorised)."""
+        x, y, angle = self._node_coordinates().T
+        half = 0.5 * PITCH
+        # left seats: the sprocket's, then each link's right end; right seats: each
+        # link's left end, then the wheel's centre
+        left_x = np.concatenate(([0.0], x[:-1] + np.cos(angle[:-1]) * half))
+        left_y = np.concatenate(([0.0], y[:-1] + np.sin(angle[:-1]) * half))
+        right_x = np.concatenate((x[:-1] - np.cos(angle[:-1]) * half, x[-1:]))
+        right_y = np.concatenate((y[:-1] - np.sin(angle[:-1]) * half, y[-1:]))
+        deflections = np.empty(2 * (self.links + 1))
+        dx, dy = right_x - left_x, right_y - left_y
+        deflections[0::2] = np.sqrt(dx * dx + dy * dy)
+        deflections[1::2] = np.concatenate(([0.0], angle[:-1])) - angle
+        return deflections
 
     # --- static state and run -----------------------------------------------------------
 
@@ -185,9 +252,22 @@ class TrackSpan:
                              [c.deflection for c in self.torsion],
                              [c.load for c in self.radial], heights, accelerations))
 
+    def _record_bank(self, t):
+        bank = self.bank
+        coordinates = self._node_coordinates()[:-1]
+        self.records.append((t, bank.loads[1::2].copy(), bank.accepted[1::2, 1].copy(),
+                             bank.loads[0::2].copy(), coordinates[:, 1],
+                             self._node_coordinates(2)[:-1, 1]))
+
     def run(self, end_time, step):
         self.solve_static()
-        self.host = solve(self.mbs, self.coupling, end_time, step)
+        if self.compiled:
+            self._compile_forces()
+            self.host = bank_path.solve(self.mbs, self.bank, self.laws, self._deflections,
+                                        end_time, step)
+            self.coupling = self.bank
+        else:
+            self.host = solve(self.mbs, self.coupling, end_time, step)
         t, torques, angles, forces, heights, accelerations = zip(*self.records)
         return {"time": np.array(t), "joint_torque": np.array(torques),
                 "joint_angle": np.array(angles), "radial_force": np.array(forces),
@@ -197,7 +277,8 @@ class TrackSpan:
 
 def seat_deflection(displacement, velocity):
     """Radial deflection of a round bush (distance between the pin seats) and its rate."""
-    distance = math.hypot(displacement[0], displacement[1])
+    # the distance as the compiled path's symbolic function and _deflections have it
+    distance = math.sqrt(displacement[0] * displacement[0] + displacement[1] * displacement[1])
     if distance == 0.0:
         return 0.0, 0.0
     return distance, (displacement[0] * velocity[0] + displacement[1] * velocity[1]) / distance
@@ -267,8 +348,8 @@ FINE_STEP = 3.125e-5  # s: the reference run, `converged` at this host step
 
 
 def simulate(step, links=10, lift=0.01, frequency=6.0, fmu_dir=None, end_time=1.0,
-             coupling=DEFAULT_SCHEME):
-    span = TrackSpan(links, lift, frequency, fmu_dir, coupling)
+             coupling=DEFAULT_SCHEME, path=bank_path.DEFAULT_PATH):
+    span = TrackSpan(links, lift, frequency, fmu_dir, coupling, path)
     result = span.run(end_time, step)
     result["costs"] = span.coupling.costs()
     return result
@@ -318,6 +399,7 @@ def main(argv=None):
     parser.add_argument("--out", type=Path, default=Path("reports") / "track_span")
     add_arguments(parser, "every scheme at host steps of 4 to 0.25 ms against a fine "
                           "reference, instead of the run")
+    bank_path.add_argument(parser)
     args = parser.parse_args(argv)
     args.fmu_dir = fmu_dir_of(args)
     args.out.mkdir(parents=True, exist_ok=True)
@@ -336,13 +418,14 @@ def main(argv=None):
         print(f"wrote {args.out / 'coupling_study.md'}; wall time "
               f"{time.perf_counter() - started:.1f} s")
         return
-    span = TrackSpan(args.links, args.lift, args.frequency, args.fmu_dir, args.coupling)
+    span = TrackSpan(args.links, args.lift, args.frequency, args.fmu_dir, args.coupling,
+                     args.path)
     result = span.run(args.end_time, args.step)
     wall = time.perf_counter() - started
     torque, force = result["joint_torque"], result["radial_force"]
     print(f"{args.links} links, {2 * (args.links + 1)} FMU instances, "
           f"{len(result['time']) - 1} host steps of {args.step * 1e3:g} ms, "
-          f"coupling {args.coupling}")
+          f"coupling {args.coupling}, {'compiled' if span.compiled else 'Python'} path")
     print(f"static: pin forces {force[0].min() / 1e3:.2f} to {force[0].max() / 1e3:.2f} kN, "
           f"joint torques {torque[0].min():.1f} to {torque[0].max():.1f} N.m, mid-span sag "
           f"{-result['link_height'][0][args.links // 2] * 1e3:.2f} mm")

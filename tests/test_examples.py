@@ -289,7 +289,8 @@ def test_an_fmu_error_in_exudyn_reaches_the_caller_with_its_own_message(native_f
     itself, naming the component and the time."""
     import road_wheel_station as station
 
-    model = station.Station(8.0, station.RoadProfile(), native_fmus["RoadWheelTyre"].parent)
+    model = station.Station(8.0, station.RoadProfile(), native_fmus["RoadWheelTyre"].parent,
+                            path="python")  # the compiled path's errors: tests/test_bank.py
     trial = model.tyre.trial
 
     def failing(time, deflection, rate=None, pieces=1):

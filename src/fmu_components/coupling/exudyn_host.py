@@ -89,15 +89,16 @@ class ExudynCoupling:
             setter(0)
 
 
-def solve(mbs, coupling, end_time, step, start_time=0.0, settings=None):
+def solve(mbs, coupling, end_time, step, start_time=0.0, settings=None, host=None):
     """Start the components at the host's initial state, then integrate with exudyn's
     implicit generalized-alpha at `step` (shortened only where a component asks for a
     retry) to the first multiple of it at or after end_time, coupling the components by
     the coupling's scheme. Frees the components. Returns the ExudynCoupling (its
-    `attempts` against coupling.steps count retries)."""
+    `attempts` against coupling.steps count retries); `host`, one made already (a bank's,
+    bank_exudyn.py)."""
     import exudyn as exu
 
-    host = ExudynCoupling(mbs, coupling)
+    host = host or ExudynCoupling(mbs, coupling)
     if settings is None:
         settings = exu.SimulationSettings()
         settings.timeIntegration.verboseMode = 0

@@ -125,7 +125,21 @@ def run_command(args):
     destination = args.dest
     if structure != "final" and args.dest == Path("fmus"):
         destination = args.dest / structure
-    return report_built(build(names, destination, args.flavour, structure), args.no_run)
+    built = build(names, destination, args.flavour, structure)
+    build_coupling_bank()
+    return report_built(built, args.no_run)
+
+
+def build_coupling_bank():
+    """The coupling's bank (its per-step work in C) for this platform and win64, beside
+    its source: a Python host's first bank then needs no compiler."""
+    from fmu_components.coupling.bank_build import build_bank
+
+    libraries, skipped = build_bank()
+    for path in libraries.values():
+        print(f"built {path}")
+    for platform in skipped:
+        warn(f"no compiler for the coupling bank's {platform} library: skipped")
 
 
 def report_built(built, no_run):

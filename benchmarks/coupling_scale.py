@@ -1,0 +1,185 @@
+"""Benchmark: the coupling at vehicle scale, its Python path (Coupling) against its
+compiled path (Bank), and both against the C host's corrected cycle.
+
+    python benchmarks/coupling_scale.py               # 10, 100, 362, 1000 instances (minutes)
+    python benchmarks/coupling_scale.py --quick       # seconds: checks that it runs
+    python benchmarks/coupling_scale.py --long        # also 10^6 bank steps: memory
+
+The vehicle mix: 2 x (14 tyre halves + 7 dampers + 80 links x 2 bush elements) = 362
+instances, scaled to each count. The host is synthetic (no multibody engine): each
+instance follows its thesis sine at 1 ms steps (four phases), and the `corrected` scheme
+makes two passes per step, the second at a deflection a little off the first (as a host's
+second solve is), so every step saves, steps, restores and steps each FMU again, and
+makes every law. Per count and path: microseconds per host step and per instance step,
+the real-time factor (simulated time over wall time), and the ratio of the per-instance
+cost to the C host's corrected cycle (c_host/bench_host.c `rollback`, as
+rollback_cost.py measures it), mix-weighted, measured in this run. Wall times on a
+machine that may be loaded: the load average is printed with them.
+"""
+
+import argparse
+import math
+import os
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+from rollback_cost import measure  # noqa: E402
+from run import ROOT, native_fmus  # noqa: E402
+
+from fmu_components.coupling import Coupling, FmuComponent  # noqa: E402
+from fmu_components.coupling.bank import Bank  # noqa: E402
+from fmu_components.lab.signals import thesis_sine  # noqa: E402
+
+STEP = 1e-3
+VEHICLE = {"RoadWheelTyre": 28, "RotaryDamper": 14, "TrackBushRadial": 160,
+           "TrackBushTorsion": 160}
+PHASES = 4
+SECOND_PASS = 1e-3  # the second solve's deflection: off the first by this share of the sine
+
+
+def mix(count):
+    """The vehicle mix scaled to `count` instances, at least one of each FMU."""
+    total = sum(VEHICLE.values())
+    counts = {name: max(1, round(n * count / total)) for name, n in VEHICLE.items()}
+    counts["TrackBushRadial"] += count - sum(counts.values())
+    return counts
+
+
+def inputs(counts, steps):
+    """Per instance, its deflection at each step and the second pass's."""
+    rows, names = [], []
+    for name, n in counts.items():
+        for i in range(n):
+            _, x, _ = thesis_sine(name, (steps + 1) * STEP, STEP,
+                                  phase=2 * math.pi * (i % PHASES) / PHASES)
+            rows.append(x[:steps + 1])
+            names.append(name)
+    x = np.array(rows)
+    second = x + SECOND_PASS * (x.max(axis=1, keepdims=True) - x.min(axis=1, keepdims=True))
+    return names, x, second
+
+
+def components(fmus, names):
+    return [FmuComponent(fmus[name], f"{name}_{i}", unilateral=name == "RoadWheelTyre")
+            for i, name in enumerate(names)]
+
+
+def run_python(fmus, names, x, second, steps):
+    """Seconds (wall, CPU) per host step on the Python path."""
+    made = components(fmus, names)
+    coupling = Coupling("corrected")
+    now = [0, x]
+    for i, component in enumerate(made):
+        coupling.add(component, lambda i=i: (now[1][i, now[0]], 0.0))
+    coupling.start(0.0)
+    wall, cpu = time.perf_counter(), time.process_time()
+    for k in range(1, steps + 1):
+        now[:] = k, x
+        coupling.begin_step(k * STEP)
+        coupling.end_pass(k * STEP)
+        now[1] = second
+        coupling.end_pass(k * STEP)
+        coupling.accept(k * STEP)
+    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+    coupling.free()
+    return wall / steps, cpu / steps
+
+
+def run_bank(fmus, names, x, second, steps):
+    """Seconds (wall, CPU) per host step on the compiled path."""
+    bank = Bank(components(fmus, names), "corrected")
+    bank.start(0.0, x[:, 0])
+    columns, seconds = np.ascontiguousarray(x.T), np.ascontiguousarray(second.T)
+    wall, cpu = time.perf_counter(), time.process_time()
+    for k in range(1, steps + 1):
+        t = k * STEP
+        bank.begin_step(t)
+        bank.end_pass(t, columns[k])
+        bank.end_pass(t, seconds[k])
+        bank.accept(t)
+    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+    bank.free()
+    return wall / steps, cpu / steps
+
+
+def c_host_cycles(fmus, repeats, steps):
+    """{FMU: median microseconds of the C host's corrected cycle} (rollback_cost.py's)."""
+    return {name: statistics.median(r["corrected"])
+            for name, r in measure(fmus, repeats, steps).items()}
+
+
+def long_run(fmus, steps):
+    """RSS before and after `steps` corrected bank steps of one instance of each rubber FMU."""
+    def rss_mib():
+        return int(Path("/proc/self/statm").read_text().split()[1]) * 4 / 1024
+
+    names = ["RoadWheelTyre", "TrackBushRadial", "TrackBushTorsion"]
+    _, x, second = inputs({n: 1 for n in names}, 4000)
+    bank = Bank(components(fmus, names), "corrected")
+    bank.start(0.0, x[:, 0])
+    columns, seconds = np.ascontiguousarray(x.T), np.ascontiguousarray(second.T)
+    started = time.perf_counter()
+    for k in range(1, steps + 1):
+        j = (k - 1) % 4000 + 1  # the sine's first 4 s again and again (its period divides 4 s)
+        t = k * STEP
+        bank.begin_step(t)
+        bank.end_pass(t, columns[j])
+        bank.end_pass(t, seconds[j])
+        bank.accept(t)
+        if k == 10_000:
+            early = rss_mib()
+    wall = time.perf_counter() - started
+    bank.free()
+    return early, rss_mib(), wall
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--fmus", type=Path, default=ROOT / "fmus")
+    parser.add_argument("--counts", type=int, nargs="+", default=[10, 100, 362, 1000])
+    parser.add_argument("--steps", type=int, default=400, help="host steps, compiled path")
+    parser.add_argument("--python-steps", type=int, default=20, help="host steps, Python path")
+    parser.add_argument("--quick", action="store_true", help="seconds: small sizes")
+    parser.add_argument("--long", action="store_true", help="also 10^6 bank steps: memory")
+    args = parser.parse_args(argv)
+    if args.quick:
+        args.counts, args.steps, args.python_steps = [10, 40], 50, 5
+    fmus = native_fmus(args.fmus)
+    load_before = os.getloadavg()[0]
+    cycles = c_host_cycles(fmus, 3 if args.quick else 5, 2000 if args.quick else 10000)
+    print("# The coupling at vehicle scale: Python path, compiled path (bank), C host\n")
+    print("C host's corrected cycle (us, median): "
+          + ", ".join(f"{n} {c:.3f}" for n, c in cycles.items()) + "\n")
+    print("| instances | path | us per host step (wall) | us per instance step (wall) | "
+          "CPU us per host step | real-time factor (wall) | per instance / C host |")
+    print("|---|---|---|---|---|---|---|")
+    for count in args.counts:
+        counts = mix(count)
+        n = sum(counts.values())
+        c_host = sum(cycles[name] * k for name, k in counts.items()) / n  # us per instance
+        steps = max(args.steps, args.python_steps)
+        names, x, second = inputs(counts, steps)
+        for path, run, k in (("Python", run_python, args.python_steps),
+                             ("compiled", run_bank, args.steps)):
+            wall, cpu = run(fmus, names, x, second, k)
+            print(f"| {n} | {path} | {wall * 1e6:.1f} | {wall * 1e6 / n:.3f} | "
+                  f"{cpu * 1e6:.1f} | {STEP / wall:.3g} | {wall * 1e6 / n / c_host:.2f} |",
+                  flush=True)
+    print(f"\nload average (1 min) {load_before:.2f} before, {os.getloadavg()[0]:.2f} after, "
+          f"{os.cpu_count()} CPUs; 1 ms host steps, `corrected`, two passes per step.")
+    if args.long:
+        steps = 1_000_000
+        early, late, wall = long_run(fmus, steps)
+        print(f"\n{steps} corrected bank steps of three instances: RSS {early:.1f} MiB after "
+              f"10,000 steps, {late:.1f} MiB at the end; {wall:.1f} s wall")
+
+
+if __name__ == "__main__":
+    main()

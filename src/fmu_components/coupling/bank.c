@@ -1,0 +1,428 @@
+/*
+ * The coupling's per-host-step work for a bank of FMU instances in one call per pass
+ * (bank.py drives it; fmu.py, law.py and schemes.py are the readable reference it follows
+ * operation for operation, so that both give the same numbers).
+ *
+ * Each instance is an FMI 2.0 or FMI 3.0 co-simulation instance that Python made and
+ * initialised; the bank is handed its instance pointer and the addresses of its library's
+ * functions, and calls them itself: save the state, set the inputs, step, read the
+ * outputs, restore, and the load laws F(x) = F* + K_s(x) (x - x*) (law.py) the host
+ * applies between FMU steps. The arrays (laws, outputs, the host's deflections) belong to
+ * the caller (numpy); the bank keeps only what an instance is.
+ *
+ * Built with gcc -O2 -ffp-contract=off (no fused multiply-add: the same bits as Python's
+ * arithmetic). Needs libc and libm only.
+ */
+#include "bank.h"
+
+EXPORT int bank_version(void) { return BANK_VERSION; }
+
+EXPORT Bank *bank_new(int n) {
+    Bank *bank = calloc(1, sizeof(Bank));
+    if (bank == NULL) return NULL;
+    bank->instances = calloc(n > 0 ? n : 1, sizeof(Instance));
+    if (bank->instances == NULL) {
+        free(bank);
+        return NULL;
+    }
+    bank->n = n;
+    return bank;
+}
+
+EXPORT void bank_bind(Bank *bank, const double *deflection, double *laws, double *accepted,
+                      double *outputs, double *trial_outputs, double *seen, int64_t *counts,
+                      int *flagged) {
+    bank->deflection = deflection;
+    bank->laws = laws;
+    bank->accepted = accepted;
+    bank->outputs = outputs;
+    bank->trial_outputs = trial_outputs;
+    bank->seen = seen;
+    bank->counts = counts;
+    bank->flagged = flagged;
+}
+
+EXPORT void bank_set_scheme(Bank *bank, int scheme, int passes, double tolerance) {
+    bank->scheme = scheme;
+    bank->passes = passes;
+    bank->tolerance = tolerance;
+}
+
+/* vrs: deflection, rate, stiffness, then the n_outputs outputs. */
+EXPORT int bank_set_instance(Bank *bank, int i, int fmi_version, void *instance,
+                             void **functions, const unsigned *vrs, int n_outputs, int load,
+                             int stiffness, int flags) {
+    if (i < 0 || i >= bank->n || n_outputs < 1 || n_outputs > MAX_OUTPUTS) return -1;
+    Instance *c = &bank->instances[i];
+    c->fmi_version = fmi_version;
+    c->instance = instance;
+    memcpy(c->functions, functions, sizeof c->functions);
+    c->inputs[0] = vrs[0];
+    c->inputs[1] = vrs[1];
+    c->stiffness_vr = vrs[2];
+    memcpy(c->outputs, vrs + 3, sizeof(unsigned) * n_outputs);
+    c->n_outputs = n_outputs;
+    c->load = load;
+    c->stiffness = stiffness;
+    c->flags = flags;
+    return 0;
+}
+
+/* The Model Exchange instance that linearises instance i's step: vrs are the states
+   (n), the derivatives (n), the load, the stiffness, the deflection and the rate. */
+EXPORT int bank_set_model(Bank *bank, int i, void *model, void **functions, int n_states,
+                          const unsigned *vrs, int events) {
+    if (i < 0 || i >= bank->n || n_states < 1 || n_states > MAX_STATES) return -1;
+    Instance *c = &bank->instances[i];
+    c->model = model;
+    memcpy(c->model_functions, functions, sizeof c->model_functions);
+    c->n_states = n_states;
+    for (int k = 0; k < n_states; k++) {
+        c->state_vrs[k] = c->knowns[k] = vrs[k];
+        c->unknowns[k] = vrs[n_states + k];
+    }
+    c->unknowns[n_states] = vrs[2 * n_states];
+    c->unknowns[n_states + 1] = vrs[2 * n_states + 1];
+    c->knowns[n_states] = vrs[2 * n_states + 2];
+    c->knowns[n_states + 1] = vrs[2 * n_states + 3];
+    c->events = events;
+    c->contact = -1; /* not known: the first linearisation sets it */
+    return 0;
+}
+
+EXPORT void *bank_state(Bank *bank, int i) { return bank->instances[i].state; }
+
+EXPORT void bank_forget_states(Bank *bank) {
+    for (int i = 0; i < bank->n; i++) bank->instances[i].state = NULL;
+}
+
+EXPORT void bank_free(Bank *bank) {
+    if (bank == NULL) return;
+    free(bank->instances);
+    free(bank);
+}
+
+EXPORT void bank_failure(Bank *bank, int *instance, int *call, int *status, int *output,
+                         double *time, double *step) {
+    *instance = bank->failed_instance;
+    *call = bank->failed_call;
+    *status = bank->failed_status;
+    *output = bank->failed_output;
+    *time = bank->failed_time;
+    *step = bank->failed_step;
+}
+
+/* --- FMI calls, either version ----------------------------------------------------------- */
+
+static int set_inputs(Instance *c, const double *values) {
+    if (c->fmi_version == 3)
+        return ((Fmi3SetFloat64)c->functions[SET])(c->instance, c->inputs, 2, values, 2);
+    return ((Fmi2SetReal)c->functions[SET])(c->instance, c->inputs, 2, values);
+}
+
+static int get_outputs(Instance *c, double *values) {
+    if (c->fmi_version == 3)
+        return ((Fmi3GetFloat64)c->functions[GET])(c->instance, c->outputs, c->n_outputs,
+                                                   values, c->n_outputs);
+    return ((Fmi2GetReal)c->functions[GET])(c->instance, c->outputs, c->n_outputs, values);
+}
+
+static int do_step(Instance *c, double time, double step) {
+    if (c->fmi_version == 3) {
+        bool event = false, terminate = false, early = false;
+        double reached = 0.0;
+        return ((Fmi3DoStep)c->functions[DO_STEP])(c->instance, time, step, true, &event,
+                                                   &terminate, &early, &reached);
+    }
+    return ((Fmi2DoStep)c->functions[DO_STEP])(c->instance, time, step, 1);
+}
+
+static int save_state(Instance *c) {
+    return ((Fmi2GetState)c->functions[GET_STATE])(c->instance, &c->state);
+}
+
+static int restore_state(Instance *c) {
+    return ((Fmi2SetState)c->functions[SET_STATE])(c->instance, c->state);
+}
+
+static int stiffness_by_deflection(Instance *c, double *value) {
+    const double seed = 1.0;
+    if (c->fmi_version == 3)
+        return ((Fmi3Directional)c->functions[DIRECTIONAL])(c->instance, &c->stiffness_vr, 1,
+                                                            &c->inputs[0], 1, &seed, 1, value, 1);
+    return ((Fmi2Directional)c->functions[DIRECTIONAL])(c->instance, &c->stiffness_vr, 1,
+                                                        &c->inputs[0], 1, &seed, value);
+}
+
+int fail(Bank *bank, int i, int call, int status, double time, double step) {
+    bank->failed_instance = i;
+    bank->failed_call = call;
+    bank->failed_status = status;
+    bank->failed_time = time;
+    bank->failed_step = step;
+    return FAILED;
+}
+
+/* --- load laws (law.py) ---------------------------------------------------------------- */
+
+static double secant(const double *law, double x) {
+    double k = law[2];
+    if (law[3] == 0.0) return k;
+    double s = k + 0.5 * law[3] * (x - law[0]);
+    double low = k >= 0.0 ? 0.5 * k : 2.0 * k, high = k >= 0.0 ? 2.0 * k : 0.5 * k;
+    /* Python's min(max(s, low), high): the first of equals, NaN as it compares */
+    double clamped = low > s ? low : s;
+    return high < clamped ? high : clamped;
+}
+
+static double law_load(const double *law, int unilateral, double x) {
+    if (unilateral) {
+        if (x <= 0.0) return 0.0;
+        if (law[1] <= 0.0) {
+            double touch = law[4] * (x - (law[0] > 0.0 ? law[0] : 0.0));
+            return touch > 0.0 ? touch : 0.0;
+        }
+    }
+    double load = law[1] + secant(law, x) * (x - law[0]);
+    return unilateral ? (load > 0.0 ? load : 0.0) : load;
+}
+
+/* The loads of the current laws at the host's deflections, and their slopes. */
+EXPORT void bank_law_loads(const Bank *bank, const double *deflection, double *loads,
+                           double *slopes) {
+    for (int i = 0; i < bank->n; i++) {
+        const double *law = bank->laws + (size_t)i * LAW_COLUMNS;
+        int unilateral = bank->instances[i].flags & UNILATERAL;
+        double x = deflection[i];
+        loads[i] = law_load(law, unilateral, x);
+        if (slopes != NULL) {
+            double dx = 1e-9 * (fabs(x) > 1e-6 ? fabs(x) : 1e-6);
+            slopes[i] = (law_load(law, unilateral, x + dx) - law_load(law, unilateral, x - dx))
+                        / (2.0 * dx);
+        }
+    }
+}
+
+void set_law(Bank *bank, int i, double x, double load, double k, double q) {
+    double *law = bank->laws + (size_t)i * LAW_COLUMNS;
+    law[0] = x;
+    law[1] = load;
+    law[2] = k;
+    law[3] = q;
+    law[4] = bank->seen[2 * i + 1];
+    law[5] = 0.5 * q;
+    law[6] = k >= 0.0 ? 0.5 * k : 2.0 * k;
+    law[7] = k >= 0.0 ? 2.0 * k : 0.5 * k;
+}
+
+/* fmu.py's lagged_law: about the last accepted step */
+static void lagged_law(Bank *bank, int i) {
+    const Instance *c = &bank->instances[i];
+    const double *out = bank->outputs + (size_t)i * MAX_OUTPUTS;
+    set_law(bank, i, bank->accepted[3 * i + 1], out[c->load],
+            (c->flags & STEP_TANGENT) ? out[c->stiffness] : 0.0, 0.0);
+}
+
+EXPORT void bank_lagged_laws(Bank *bank) {
+    for (int i = 0; i < bank->n; i++) lagged_law(bank, i);
+}
+
+/* --- the step protocol (master.py) ----------------------------------------------------- */
+
+static int restore(Bank *bank, int i) {
+    Instance *c = &bank->instances[i];
+    int status = restore_state(c);
+    if (status > STATUS_OK)
+        return fail(bank, i, FAILED_SET_STATE, status, bank->accepted[3 * i], 0.0);
+    bank->counts[3 * i + 2]++;
+    c->stepped = 0;
+    return 0;
+}
+
+/* Every instance: undo a trial of a step given up, save the state, and the first law.
+   Instances whose first law is their linearised step are listed in `flagged`. */
+EXPORT int bank_begin_step(Bank *bank, double time) {
+    if (__sync_lock_test_and_set(&bank->busy, 1)) return BUSY;
+    int result = 0;
+    bank->n_flagged = 0;
+    for (int i = 0; i < bank->n && result == 0; i++) {
+        Instance *c = &bank->instances[i];
+        if (c->stepped && (result = restore(bank, i)) != 0) break;
+        int status = save_state(c);
+        if (status > STATUS_OK) {
+            result = fail(bank, i, FAILED_GET_STATE, status, bank->accepted[3 * i], 0.0);
+            break;
+        }
+        bank->counts[3 * i + 1]++;
+        c->saved = 1;
+        c->tried = 0;
+        lagged_law(bank, i);
+        if (bank->scheme != EXPLICIT && (c->flags & LINEARISED)) {
+            if (c->model == NULL)
+                bank->flagged[bank->n_flagged++] = i;
+            else if ((result = predicted_law(bank, i, time)) != 0)
+                break;
+        }
+    }
+    __sync_lock_release(&bank->busy);
+    return result == 0 ? bank->n_flagged : result;
+}
+
+/* fmu.py's trial: from the last accepted point along the secant to (time, x), in `pieces`
+   doSteps; 1 for a discarded step (restored), FAILED for an error. */
+static int trial(Bank *bank, int i, double time, int pieces) {
+    Instance *c = &bank->instances[i];
+    double *accepted = bank->accepted + 3 * i;
+    double step = time - accepted[0];
+    if (!(step > 0.0)) return fail(bank, i, FAILED_NO_STEP, 0, time, step);
+    if (c->stepped && restore(bank, i) != 0) return FAILED;
+    double x = bank->deflection[i];
+    double rate = (x - accepted[1]) / step;
+    c->stepped = 1;
+    double piece = step / pieces;
+    for (int k = 0; k < pieces; k++) {
+        double start = accepted[0] + k * piece;
+        double inputs[2] = {accepted[1] + rate * k * piece, rate};
+        int status = set_inputs(c, inputs);
+        if (status > STATUS_OK) return fail(bank, i, FAILED_SET, status, start, piece);
+        bank->counts[3 * i]++;
+        status = do_step(c, start, piece);
+        if (status == 2) { /* Discard */
+            fail(bank, i, FAILED_DO_STEP, status, start, piece);
+            if (restore(bank, i) != 0) return FAILED;
+            return 1;
+        }
+        if (status > STATUS_OK) return fail(bank, i, FAILED_DO_STEP, status, start, piece);
+    }
+    double *out = bank->trial_outputs + (size_t)i * MAX_OUTPUTS;
+    int status = get_outputs(c, out);
+    if (status > STATUS_OK) return fail(bank, i, FAILED_GET, status, time, step);
+    for (int k = 0; k < c->n_outputs; k++)
+        if (!isfinite(out[k])) {
+            bank->failed_output = k;
+            return fail(bank, i, FAILED_NOT_FINITE, 0, time, step);
+        }
+    double *seen = bank->seen + 2 * i;
+    if (fabs(out[c->load]) > seen[0]) seen[0] = fabs(out[c->load]);
+    if (out[c->stiffness] > 0.0) seen[1] = out[c->stiffness];
+    c->trial_deflection = x;
+    c->trial_secant = rate;
+    c->tried = 1;
+    return 0;
+}
+
+/* fmu.py's corrected_law, except the linearised steps (flagged for Python). */
+static int corrected_law(Bank *bank, int i, double time) {
+    Instance *c = &bank->instances[i];
+    const double *out = bank->trial_outputs + (size_t)i * MAX_OUTPUTS;
+    double x = bank->deflection[i], stiffness = out[c->stiffness], curvature = 0.0;
+    if (c->flags & CURVATURE) {
+        int status = stiffness_by_deflection(c, &curvature);
+        if (status > STATUS_OK) return fail(bank, i, FAILED_DIRECTIONAL, status, time, 0.0);
+    }
+    set_law(bank, i, x, out[c->load], stiffness, curvature);
+    const double *accepted = bank->accepted + 3 * i;
+    int linearised = c->flags & LINEARISED;
+    if (!linearised
+        && !((c->flags & LINEARISABLE)
+             && fabs(curvature * (x - accepted[1])) > CURVED * fabs(stiffness)))
+        return 0;
+    if (c->model == NULL) {
+        bank->flagged[bank->n_flagged++] = i;
+        return 0;
+    }
+    double step = time - accepted[0], result[3];
+    if (linearised_step(bank, i, x, (x - accepted[1]) / step, step, result) != 0) return FAILED;
+    double *law = bank->laws + (size_t)i * LAW_COLUMNS;
+    if (linearised) {
+        /* the same shape of the elastic force, reached through the step's tangent */
+        double ratio = stiffness != 0.0 ? result[1] / stiffness : 0.0;
+        set_law(bank, i, x, law[1], result[1],
+                stiffness != 0.0 ? curvature * (ratio * ratio) : 0.0);
+    } else {
+        set_law(bank, i, x, law[1], law[2], result[2]);
+    }
+    return 0;
+}
+
+/* After the host's solve to `time` (its deflections in the bound array): step every
+   instance, judge the pass (the scheme's mismatch, written to *mismatch), and on REPEAT
+   the next laws (instances to linearise listed in `flagged`, *n_flagged of them). A
+   discarded step restores the whole bank (RETRY); a host that cannot retry has the
+   instance's step cut into up to `max_pieces` pieces instead. */
+EXPORT int bank_end_pass(Bank *bank, double time, int pass, int max_pieces,
+                         double *mismatch, int *n_flagged, int *cut) {
+    if (__sync_lock_test_and_set(&bank->busy, 1)) return BUSY;
+    int verdict = ACCEPT;
+    double worst = 0.0;
+    bank->n_flagged = 0;
+    *cut = 0;
+    for (int i = 0; i < bank->n; i++) {
+        int pieces = 1, result;
+        while ((result = trial(bank, i, time, pieces)) == 1 && pieces < max_pieces) {
+            pieces *= 2;
+            (*cut)++;
+        }
+        if (result == 1) {
+            for (int j = 0; j < bank->n; j++)
+                if (bank->instances[j].stepped && restore(bank, j) != 0) {
+                    verdict = FAILED;
+                    break;
+                }
+            if (verdict != FAILED) verdict = RETRY;
+            goto done;
+        }
+        if (result != 0) {
+            verdict = FAILED;
+            goto done;
+        }
+    }
+    for (int i = 0; i < bank->n; i++) {
+        const Instance *c = &bank->instances[i];
+        const double *out = bank->trial_outputs + (size_t)i * MAX_OUTPUTS;
+        double load = out[c->load];
+        double scale = bank->seen[2 * i] > fabs(load) ? bank->seen[2 * i] : fabs(load);
+        if (scale < 1e-12) scale = 1e-12;
+        double off = fabs(load - law_load(bank->laws + (size_t)i * LAW_COLUMNS,
+                                          c->flags & UNILATERAL, bank->deflection[i])) / scale;
+        if (off > worst || i == 0) worst = off;
+    }
+    if (pass >= bank->passes || worst <= bank->tolerance) goto done;
+    verdict = REPEAT;
+    for (int i = 0; i < bank->n; i++)
+        if (corrected_law(bank, i, time) != 0) {
+            verdict = FAILED;
+            break;
+        }
+done:
+    *mismatch = worst;
+    *n_flagged = bank->n_flagged;
+    __sync_lock_release(&bank->busy);
+    return verdict;
+}
+
+/* The host accepted its step: every instance's last trial becomes its accepted point. */
+EXPORT int bank_accept(Bank *bank, double time) {
+    for (int i = 0; i < bank->n; i++) {
+        Instance *c = &bank->instances[i];
+        if (!c->tried) return fail(bank, i, FAILED_NO_STEP, 0, time, 0.0);
+        double *accepted = bank->accepted + 3 * i;
+        accepted[0] = time;
+        accepted[1] = c->trial_deflection;
+        accepted[2] = c->trial_secant;
+        memcpy(bank->outputs + (size_t)i * MAX_OUTPUTS,
+               bank->trial_outputs + (size_t)i * MAX_OUTPUTS, sizeof(double) * MAX_OUTPUTS);
+        c->stepped = c->saved = c->tried = 0;
+    }
+    return 0;
+}
+
+/* The host gave its step up: every instance back to its last accepted point. */
+EXPORT int bank_reject(Bank *bank) {
+    for (int i = 0; i < bank->n; i++) {
+        Instance *c = &bank->instances[i];
+        if (c->stepped && restore(bank, i) != 0) return FAILED;
+        c->tried = 0;
+    }
+    return 0;
+}

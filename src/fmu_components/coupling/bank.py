@@ -1,0 +1,392 @@
+"""A bank: the coupling's per-host-step work for many FMU instances in compiled code.
+
+`Coupling` (master.py) drives each component through fmpy, one Python call after another;
+`Bank` does the same steps for all its instances in one C call per pass (bank.c): save
+the state, set the inputs, step, read the outputs, restore, the schemes' bookkeeping and
+the load laws (law.py), through each FMU's own FMI functions. The host hands it the
+deflections of all instances as one array and gets the laws back as one array (a row
+x*, F*, K, Q, K_touch per instance, for its force elements to evaluate: exudyn_bank.py
+gives them to exudyn's compiled symbolic functions). The Python work per host step does
+not grow with the number of instances, except for the instances whose law is a
+linearised step (the damper, and the tyre where its tangent changes over a step: their
+Model Exchange linearisation, linearised.py, stays in Python).
+
+    bank = Bank([tyre, damper, ...], "corrected")   # FmuComponents, not yet started
+    bank.start(t0, deflections)
+    while t < t_end:
+        bank.begin_step(t + h)
+        while True:
+            host.solve_step(h)                  # its force elements: the laws in bank.laws
+            verdict = bank.end_pass(t + h, host_deflections())
+            ...                                 # as Coupling.end_pass's verdict
+        bank.accept(t + h)
+
+The same schemes give the same numbers as the Python path (tests/test_bank.py checks it to
+the bit); `corrected`, `converged` and `explicit` (`predicted` and `nepce`: the Python
+path). A bank is used by the thread that made it: another thread's call is refused.
+"""
+
+import ctypes
+import math
+import threading
+import warnings
+
+import numpy as np
+
+from .bank_build import library_path
+from .errors import CouplingError, StepDiscarded
+from .master import Verdict
+from .schemes import scheme_named
+
+MAX_OUTPUTS = 8
+LAW_COLUMNS = 8  # x*, F*, K, Q, K_touch; then Q/2, and the secant's bounds (law.py)
+SCHEME_CODES = {"explicit": 0, "corrected": 1, "converged": 2}
+UNILATERAL, STEP_TANGENT, CURVATURE, LINEARISABLE, LINEARISED = 1, 2, 4, 8, 16
+ACCEPT, REPEAT, RETRY, FAILED, BUSY = 0, 1, 2, -1, -2
+FUNCTIONS = {2: ("fmi2SetReal", "fmi2GetReal", "fmi2DoStep", "fmi2GetFMUstate",
+                 "fmi2SetFMUstate", "fmi2GetDirectionalDerivative"),
+             3: ("fmi3SetFloat64", "fmi3GetFloat64", "fmi3DoStep", "fmi3GetFMUState",
+                 "fmi3SetFMUState", "fmi3GetDirectionalDerivative")}
+FAILED_CALLS = {1: "{set}", 2: "{get}", 3: "{step}", 4: "{get_state}", 5: "{set_state}",
+                6: "{directional}"}
+STATUS = {2: "Discard", 3: "Error", 4: "Fatal"}
+MODEL_FUNCTIONS = ("fmi2SetReal", "fmi2GetReal", "fmi2SetContinuousStates",
+                   "fmi2GetDirectionalDerivative", "fmi2GetDerivatives", "fmi2EnterEventMode",
+                   "fmi2NewDiscreteStates", "fmi2EnterContinuousTimeMode")
+
+_library = None
+
+
+def library():
+    """The bank's shared library, loaded once per process (compiled on first use)."""
+    global _library
+    if _library is None:
+        lib = ctypes.CDLL(str(library_path()))
+        pointer, double, integer = ctypes.c_void_p, ctypes.c_double, ctypes.c_int
+        lib.bank_new.restype = pointer
+        lib.bank_new.argtypes = [integer]
+        lib.bank_bind.argtypes = [pointer] * 9
+        lib.bank_set_scheme.argtypes = [pointer, integer, integer, double]
+        lib.bank_set_instance.argtypes = [pointer, integer, integer, pointer, pointer, pointer,
+                                          integer, integer, integer, integer]
+        lib.bank_set_model.argtypes = [pointer, integer, pointer, pointer, integer, pointer,
+                                       integer]
+        lib.bank_state.restype = pointer
+        lib.bank_state.argtypes = [pointer, integer]
+        lib.bank_free.argtypes = [pointer]
+        lib.bank_failure.argtypes = [pointer] * 7
+        lib.bank_lagged_laws.argtypes = [pointer]
+        lib.bank_law_loads.argtypes = [pointer] * 4
+        lib.bank_begin_step.argtypes = [pointer, double]
+        lib.bank_end_pass.argtypes = [pointer, double, integer, integer, pointer, pointer,
+                                      pointer]
+        lib.bank_accept.argtypes = [pointer, double]
+        lib.bank_reject.argtypes = [pointer]
+        _library = lib
+    return _library
+
+
+def _address(array):
+    return array.ctypes.data_as(ctypes.c_void_p)
+
+
+class Bank:
+    """FmuComponents (fmu.py: instantiated, in initialization mode, not started) coupled
+    to one host by one scheme, their per-step work done in C. The arrays a host reads:
+    `laws` (rows x*, F*, K, Q, K_touch: the law of law.py, with each component's
+    `unilateral`; then Q/2, K/2 and 2K, the lower bound first), `outputs` and `trial_outputs` (columns as each component's
+    output_names), `accepted` (time, deflection, secant rate of the last accepted step)."""
+
+    def __init__(self, components, scheme="corrected", host_can_retry=True, record=None,
+                 linearise="c"):
+        """linearise: "c", the linearised steps in C (equal to the Python path's to
+        round-off: C's matrix exponential is not numpy's), or "python", by linearised.py
+        (the Python path's numbers to the bit, at its cost)."""
+        if linearise not in ("c", "python"):
+            raise ValueError(f"linearise {linearise!r}: 'c' or 'python'")
+        self.linearise = linearise
+        self.scheme = scheme_named(scheme) if isinstance(scheme, str) else scheme
+        if self.scheme.name not in SCHEME_CODES:
+            raise ValueError(f"the bank runs the schemes {', '.join(SCHEME_CODES)}; "
+                             f"{self.scheme.name!r} runs on the Python path (Coupling)")
+        self.components = list(components)
+        self.record = record
+        self.host_can_retry = host_can_retry
+        self._owner = threading.get_ident()
+        n = self.n = len(self.components)
+        self._lib = lib = library()
+        self.deflection = np.zeros(n)  # the host's, as end_pass was given it
+        self.laws = np.zeros((n, LAW_COLUMNS))
+        self.accepted = np.zeros((n, 3))
+        self.outputs = np.zeros((n, MAX_OUTPUTS))
+        self.trial_outputs = np.zeros((n, MAX_OUTPUTS))
+        self._seen = np.zeros((n, 2))  # peak |load|, the last contact stiffness
+        self._counts = np.zeros((n, 3), dtype=np.int64)  # doSteps, saves, restores
+        self._flagged = np.zeros(max(n, 1), dtype=np.intc)
+        self._handle = lib.bank_new(n)
+        if not self._handle:
+            raise MemoryError("no memory for the bank")
+        lib.bank_bind(self._handle, *map(_address, (
+            self.deflection, self.laws, self.accepted, self.outputs, self.trial_outputs,
+            self._seen, self._counts, self._flagged)))
+        lib.bank_set_scheme(self._handle, SCHEME_CODES[self.scheme.name], self.scheme.passes,
+                            self.scheme.tolerance)
+        self.unilateral = np.array([c.unilateral for c in self.components], dtype=bool)
+        self.load_index = np.zeros(n, dtype=int)
+        for i, component in enumerate(self.components):
+            self._hand_over(i, component)
+        self._out = (ctypes.c_double(), ctypes.c_int(), ctypes.c_int())
+        self.time = None
+        self.passes = self.steps = self.total_passes = self.retries = 0
+        self.unconverged_steps = 0
+        self.last_mismatch = 0.0
+
+    def _hand_over(self, i, component):
+        """Give the C bank the instance pointer and its library's function addresses."""
+        fmu = component._fmu
+        version = 3 if type(fmu).__name__.startswith("FMU3") else 2
+        functions = (ctypes.c_void_p * 6)(*[ctypes.cast(getattr(fmu.dll, name), ctypes.c_void_p)
+                                            for name in FUNCTIONS[version]])
+        if len(component.output_names) > MAX_OUTPUTS:
+            raise ValueError(f"{component.name}: more than {MAX_OUTPUTS} outputs")
+        vrs = (ctypes.c_uint * (3 + len(component.output_names)))(
+            *component._input_vrs, component._stiffness_vr[0], *component._output_vrs)
+        load = component.output_names.index(component.load_name)
+        self.load_index[i] = load
+        flags = ((UNILATERAL if component.unilateral else 0)
+                 | (STEP_TANGENT if component.stiffness_is_step_tangent else 0)
+                 | (CURVATURE if component._curvature else 0)
+                 | (LINEARISABLE if component._linearisable else 0)
+                 | (LINEARISED if component.step_model == "linearised" else 0))
+        if self._lib.bank_set_instance(self._handle, i, version, fmu.component, functions, vrs,
+                                       len(component.output_names), load,
+                                       component.output_names.index("stiffness"), flags):
+            raise ValueError(f"{component.name}: the bank cannot take this instance")
+        if self.linearise == "c" and version == 2 and component._linearisable and (
+                component.step_model == "linearised" or component._curvature):
+            self._hand_over_model(i, component)
+
+    def _hand_over_model(self, i, component):
+        """The Model Exchange side instance that linearises the component's step
+        (linearised.py makes it; the bank calls it)."""
+        from .linearised import Linearisation
+
+        if component._linearisation is None:
+            component._linearisation = Linearisation(
+                *component._unpacked, f"{component.name}.linearisation", component._parameters)
+        model = component._linearisation
+        fmu = model._fmu
+        functions = (ctypes.c_void_p * len(MODEL_FUNCTIONS))(
+            *[ctypes.cast(getattr(fmu.dll, name), ctypes.c_void_p) for name in MODEL_FUNCTIONS])
+        vrs = (ctypes.c_uint * (2 * model.n + 4))(*model.state_vrs, *model._unknowns,
+                                                   *model._inputs)
+        if self._lib.bank_set_model(self._handle, i, fmu.component, functions, model.n, vrs,
+                                    int(model._contact_events)):
+            raise ValueError(f"{component.name}: the bank cannot linearise this instance "
+                             f"({model.n} states)")
+
+    # --- the protocol (master.py's) ---------------------------------------------------------
+
+    def _self_check(self):
+        if threading.get_ident() != self._owner:
+            raise RuntimeError(f"this bank of {self.n} FMU instances belongs to thread "
+                               f"{self._owner} and was called from thread "
+                               f"{threading.get_ident()}: FMU instances are stepped by one "
+                               f"thread; make a bank per thread")
+
+    def start(self, time, deflection, rate=None):
+        """Leave initialization mode with every component relaxed at its deflection."""
+        self._self_check()
+        deflection = np.asarray(deflection, dtype=float)
+        rate = np.zeros(self.n) if rate is None else np.asarray(rate, dtype=float)
+        for i, component in enumerate(self.components):
+            component.start(time, float(deflection[i]), float(rate[i]))
+            values = [component.outputs[name] for name in component.output_names]
+            self.outputs[i, :len(values)] = values
+            self.accepted[i] = time, deflection[i], rate[i]
+            self._seen[i] = component.peak_load, component.touch_stiffness
+        self.deflection[:] = deflection
+        self.time = time
+        self._lib.bank_lagged_laws(self._handle)
+
+    def begin_step(self, time):
+        """The host starts a step to `time` from the last accepted point."""
+        self._self_check()
+        self.passes = 0
+        flagged = self._lib.bank_begin_step(self._handle, time)
+        if flagged < 0:
+            self._raise(busy=flagged == BUSY)
+        for i in self._flagged[:flagged]:
+            self._predicted_law(i, time)
+
+    def end_pass(self, time, deflection):
+        """After the host's solve to `time`, its deflections: step each FMU along the
+        secant to them and judge the pass (master.py's Verdict)."""
+        self._self_check()
+        self.passes += 1
+        self.total_passes += 1
+        np.copyto(self.deflection, deflection)
+        mismatch, flagged, cut = self._out
+        verdict = self._lib.bank_end_pass(self._handle, time, self.passes,
+                                          1 if self.host_can_retry else 64,
+                                          ctypes.byref(mismatch), ctypes.byref(flagged),
+                                          ctypes.byref(cut))
+        self.retries += cut.value
+        if verdict in (FAILED, BUSY):
+            self._raise(busy=verdict == BUSY)
+        if verdict == RETRY:
+            if not self.host_can_retry:
+                self._raise(cut_too=True)
+            self.retries += 1
+            return Verdict(retry_step=0.5 * (time - self.time))
+        self.last_mismatch = mismatch.value
+        if verdict == ACCEPT:
+            if mismatch.value > self.scheme.tolerance and self.scheme.warn_unconverged:
+                self.unconverged_steps += 1
+                if self.unconverged_steps == 1:
+                    warnings.warn(f"{self.scheme.name} coupling: at t = {time:.6g} s the "
+                                  f"loads still differ by {mismatch.value:.2g} of their "
+                                  f"scale after {self.passes} passes (the limit); further "
+                                  f"steps like it are counted in unconverged_steps",
+                                  stacklevel=2)
+            return Verdict(mismatch=mismatch.value)
+        for i in self._flagged[:flagged.value]:
+            self._corrected_law(i, time)
+        return Verdict(repeat=True, mismatch=mismatch.value)
+
+    def accept(self, time):
+        """The host accepted its step to `time` (at the time reached: only records)."""
+        self._self_check()
+        if time <= self.time:
+            if self.record:
+                self.record(time)
+            return
+        if self._lib.bank_accept(self._handle, time):
+            self._raise()
+        self.time = time
+        self.steps += 1
+        if self.record:
+            self.record(time)
+
+    def reject(self):
+        self._self_check()
+        if self._lib.bank_reject(self._handle):
+            self._raise()
+
+    # --- the laws ----------------------------------------------------------------------------
+
+    def law_loads(self, deflection, slopes=False):
+        """The current laws' loads at the host's deflections (and their slopes)."""
+        deflection = np.ascontiguousarray(deflection, dtype=float)
+        loads = np.empty(self.n)
+        slope = np.empty(self.n) if slopes else None
+        self._lib.bank_law_loads(self._handle, _address(deflection), _address(loads),
+                                 _address(slope) if slopes else None)
+        return (loads, slope) if slopes else loads
+
+    def _linearised(self, i, deflection, rate, step):
+        component = self.components[i]
+        component.time = self.accepted[i, 0]  # for its messages
+        return component._linearised_step(deflection, rate, step)
+
+    def _predicted_law(self, i, time):
+        """fmu.py's predicted_law for a linearised component."""
+        accepted_time, deflection, rate = self.accepted[i]
+        step = time - accepted_time
+        predicted, tangent, _ = self._linearised(i, deflection, rate, step)
+        self._set_law(i, deflection + rate * step, predicted, tangent, 0.0)
+
+    def _set_law(self, i, deflection, load, stiffness, curvature):
+        """A row of `laws` (bank.c's set_law)."""
+        low, high = ((0.5 * stiffness, 2.0 * stiffness) if stiffness >= 0.0
+                     else (2.0 * stiffness, 0.5 * stiffness))
+        self.laws[i] = (deflection, load, stiffness, curvature, self._seen[i, 1],
+                        0.5 * curvature, low, high)
+
+    def _corrected_law(self, i, time):
+        """fmu.py's corrected_law where it linearises (the bank wrote the rest)."""
+        component = self.components[i]
+        accepted_time, accepted_deflection, _ = self.accepted[i]
+        deflection = self.laws[i, 0]
+        stiffness = self.trial_outputs[i, component.output_names.index("stiffness")]
+        secant = (deflection - accepted_deflection) / (time - accepted_time)
+        load, tangent, curvature = self.laws[i, 1:4]
+        if component.step_model == "linearised":
+            _, tangent, _ = self._linearised(i, deflection, secant, time - accepted_time)
+            curvature = curvature * (tangent / stiffness) ** 2 if stiffness else 0.0
+        else:
+            curvature = self._linearised(i, deflection, secant, time - accepted_time)[2]
+        self._set_law(i, deflection, load, tangent, curvature)
+
+    # --- values ------------------------------------------------------------------------------
+
+    @property
+    def loads(self):
+        """Each instance's load after the last accepted step."""
+        return self.outputs[np.arange(self.n), self.load_index]
+
+    def costs(self):
+        steps, n = max(self.steps, 1), max(self.n, 1)
+        do_steps, saves, restores = self._counts.sum(axis=0)
+        return {"do_steps": do_steps / steps / n, "saves": saves / steps / n,
+                "restores": restores / steps / n, "passes": self.total_passes / steps}
+
+    # --- faults ------------------------------------------------------------------------------
+
+    def _raise(self, cut_too=False, busy=False):
+        if busy:
+            raise RuntimeError(f"the bank of {self.n} instances is in use by another call "
+                               f"(a call from an FMU's logger, or another thread)")
+        instance, call, status, output = (ctypes.c_int() for _ in range(4))
+        time, step = ctypes.c_double(), ctypes.c_double()
+        self._lib.bank_failure(self._handle, *(ctypes.byref(v) for v in (
+            instance, call, status, output, time, step)))
+        component = self.components[instance.value]
+        said = f": {component.messages[-1]}" if component.messages else ""
+        version = 3 if type(component._fmu).__name__.startswith("FMU3") else 2
+        status_name = f"fmi{version}{STATUS.get(status.value, 'Error')}"
+        names = dict(zip(("set", "get", "step", "get_state", "set_state", "directional"),
+                         FUNCTIONS[version]))
+        if cut_too:
+            discarded = StepDiscarded(component.name, time.value, step.value,
+                                      component.messages[-1] if component.messages
+                                      else "no message")
+            raise CouplingError(component.name, time.value,
+                                f"{discarded} (cut into 64 steps too)")
+        if call.value == 7:
+            name = component.output_names[output.value]
+            value = self.trial_outputs[instance.value, output.value]
+            raise CouplingError(component.name, time.value, f"output {name} = {value!r} is "
+                                f"not finite{said}")
+        if call.value == 9:
+            raise CouplingError(component.name, self.accepted[instance.value, 0],
+                                f"the linearised step over {step.value:.6g} s: its Model "
+                                f"Exchange instance returned {status_name}")
+        if call.value == 8:
+            raise ValueError(f"{component.name}: a trial or acceptance at t = "
+                             f"{time.value!r} s, not after the last accepted step")
+        if call.value == 3:
+            raise CouplingError(component.name, time.value, f"{names['step']} by "
+                                f"{step.value:.6g} s returned {status_name}{said}")
+        if call.value in FAILED_CALLS:
+            raise CouplingError(component.name, time.value,
+                                f"{FAILED_CALLS[call.value].format(**names)} returned "
+                                f"{status_name}{said}")
+        raise RuntimeError(f"the bank failed in {component.name} at t = {time.value!r} s")
+
+    def free(self):
+        """Free the bank and its components (their saved states with them)."""
+        if self._handle:
+            for i, component in enumerate(self.components):
+                state = self._lib.bank_state(self._handle, i)
+                if state:
+                    component._state.value = state
+            self._lib.bank_free(self._handle)
+            self._handle = None
+        for component in self.components:
+            component.free()
+
+    def __del__(self):
+        if getattr(self, "_handle", None):
+            self._lib.bank_free(self._handle)
+            self._handle = None

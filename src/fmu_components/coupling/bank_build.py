@@ -1,0 +1,102 @@
+"""Compiling the bank (bank.c) as the FMUs are compiled: gcc at build time, a shared
+library per platform, libc and libm only.
+
+`fmu-components build` (build_fmus.py) calls `build_bank()`, which puts the libraries
+beside the sources (bank.c, bank_linearised.c, bank.h) (linux64, and win64 where mingw-w64 is installed). A bank that finds no
+library there compiles one on first use into a cache (~/.cache/fmu_components, or
+$FMU_COMPONENTS_CACHE); where no compiler is found it says so and names the Python path.
+"""
+
+import hashlib
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+SOURCES = [HERE / "bank.c", HERE / "bank_linearised.c"]
+HEADERS = [HERE / "bank.h"]
+# Same bits as Python's arithmetic: no fused multiply-add, no fast math.
+FLAGS = ["-O2", "-std=c99", "-ffp-contract=off", "-fno-fast-math", "-Wall", "-Wextra"]
+COMPILERS = {"linux64": ("gcc", ".so", ["-shared", "-fPIC", "-fvisibility=hidden"]),
+             "win64": ("x86_64-w64-mingw32-gcc", ".dll", ["-shared", "-static-libgcc"])}
+
+
+class NoCompiler(RuntimeError):
+    """No C compiler for the bank: the host can use the coupling's Python path."""
+
+
+def platform_name():
+    if sys.platform.startswith("linux"):
+        return "linux64"
+    if sys.platform == "win32":
+        return "win64"
+    return sys.platform
+
+
+def source_tag():
+    """A hash of the bank's sources: a library built from other code is never loaded."""
+    digest = hashlib.sha256()
+    for path in SOURCES + HEADERS:
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:12]
+
+
+def library_name(platform):
+    return f"bank_{platform}_{source_tag()}{COMPILERS[platform][1]}"
+
+
+def compile_bank(platform, directory):
+    """Compile the bank for `platform` into `directory` (older builds of it there
+    removed); the library's path."""
+    compiler, _, flags = COMPILERS[platform]
+    if shutil.which(compiler) is None:
+        raise NoCompiler(f"{compiler} not found: the coupling bank (compiled per-step work) "
+                         f"needs a C compiler to build it once (Debian/Ubuntu: apt-get "
+                         f"install gcc), or use the Python path (path='python')")
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    target = directory / library_name(platform)
+    partial = target.with_suffix(f".{os.getpid()}.tmp")
+    run = subprocess.run([compiler, *FLAGS, *flags, *map(str, SOURCES), "-o", str(partial),
+                          "-lm"], capture_output=True, text=True)
+    if run.returncode != 0:
+        raise RuntimeError(f"compiling the bank with {compiler} failed:\n{run.stderr}")
+    partial.replace(target)  # atomic: a process loading it never sees half a file
+    for older in directory.glob(f"bank_{platform}_*{COMPILERS[platform][1]}"):
+        if older != target:
+            older.unlink(missing_ok=True)
+    return target
+
+
+def build_bank(directory=None):
+    """Build the bank's libraries beside its sources (or into `directory`): linux64, and
+    win64 where mingw-w64 is installed. {platform: path}, and the platforms skipped."""
+    directory = Path(directory or HERE)
+    built, skipped = {}, []
+    for platform in COMPILERS:
+        if shutil.which(COMPILERS[platform][0]) is None:
+            skipped.append(platform)
+            continue
+        built[platform] = compile_bank(platform, directory)
+    return built, skipped
+
+
+def cache_directory():
+    return Path(os.environ.get("FMU_COMPONENTS_CACHE")
+                or Path.home() / ".cache" / "fmu_components")
+
+
+def library_path():
+    """The bank's library for this platform: built beside its sources, in the cache, or
+    compiled into the cache now."""
+    platform = platform_name()
+    if platform not in COMPILERS:
+        raise NoCompiler(f"no bank for platform {platform}: use the Python path "
+                         f"(path='python')")
+    name = library_name(platform)
+    for directory in (HERE, cache_directory()):
+        if (directory / name).exists():
+            return directory / name
+    return compile_bank(platform, cache_directory())

@@ -1,0 +1,119 @@
+"""A bank (bank.py) in exudyn (1.13): the load laws in exudyn's compiled symbolic user
+functions, the bank's per-step work in the step hooks.
+
+exudyn evaluates a connector's force at every Newton iterate and for its numerical
+Jacobian. On the Python path (exudyn_host.py) that is a Python call each time; here each
+connector's force is a symbolic expression (exudyn.symbolic, an expression tree that
+exudyn's C++ evaluates) of the law of law.py, its numbers x*, F*, K, Q, K_touch read from
+one named symbolic matrix that the hooks set once per pass from the bank's `laws`
+(with Q/2 and the secant's bounds, so that each iterate evaluates no more than it must)
+(exudyn's named symbolic vectors cannot be set beyond a few entries in 1.13; its
+matrices can). The hooks:
+
+    pre-step user function      Bank.begin_step, then the laws into the matrix
+    post-Newton user function   the host's deflections (one call of the example's, from
+                                the system's coordinates), Bank.end_pass; on REPEAT the
+                                next laws into the matrix
+    post-step user function     Bank.accept
+
+exudyn is imported only when these functions run.
+"""
+
+from . import exudyn_host
+from .exudyn_host import ExudynCoupling
+
+
+class SymbolicLaws:
+    """The bank's laws as one named symbolic matrix, and each component's law as a
+    symbolic expression of a deflection (the same operations, in the same order, as
+    LoadLaw.__call__)."""
+
+    def __init__(self, bank, name="fmu_bank_laws"):
+        import exudyn as exu
+
+        self.esym = exu.symbolic
+        self.bank = bank
+        self.matrix = self.esym.Matrix(name, bank.laws.tolist())
+
+    def update(self):
+        self.matrix.SetMatrix(self.bank.laws)
+
+    def when(self, condition, if_true, if_false):
+        real = self.esym.Real
+        return self.esym.IfThenElse(*(v if isinstance(v, real) else real(float(v))
+                                      for v in (condition, if_true, if_false)))
+
+    def load(self, i, deflection):
+        """The symbolic load of instance i's law at a symbolic `deflection`."""
+        when, m = self.when, self.matrix
+        x_star, load, k, half_q, touch, low, high = (m[i, j] for j in (0, 1, 2, 5, 4, 6, 7))
+        dx = deflection - x_star
+        # LoadLaw.secant, min(max(K + Q/2 dx, low), high), its bounds from the bank; with
+        # Q = 0 it is K
+        secant = k + half_q * dx
+        raised = when(low > secant, low, secant)
+        secant = when(high < raised, high, raised)
+        about = load + secant * dx
+        if not self.bank.unilateral[i]:
+            return about
+        touching = touch * (deflection - when(x_star > 0.0, x_star, 0.0))
+        return when(deflection <= 0.0, 0.0,
+                    when(load <= 0.0, when(touching > 0.0, touching, 0.0),
+                         when(about > 0.0, about, 0.0)))
+
+
+def symbolic_function(mbs, item, function, name="springForceUserFunction"):
+    """Record `function` (Python, with symbolic arguments) as item's compiled user function;
+    keep the returned object alive as long as the system."""
+    from exudyn.advancedUtilities import CreateSymbolicUserFunction
+
+    compiled = CreateSymbolicUserFunction(mbs, function, name, item)
+    mbs.SetObjectParameter(item, name, compiled)
+    return compiled
+
+
+class ExudynBank(ExudynCoupling):
+    """Wires a Bank into an exudyn MainSystem's step hooks; `deflections()` returns the
+    host's deflection of every instance now, as one array."""
+
+    def __init__(self, mbs, bank, laws, deflections):
+        super().__init__(mbs, bank)
+        self.laws, self.deflections = laws, deflections
+
+    def _pre_step(self, t):
+        self.attempts += 1
+        self.coupling.begin_step(t)
+        self.laws.update()
+        return True
+
+    def _post_newton(self, t):
+        verdict = self.coupling.end_pass(t, self.deflections())
+        if verdict.retry_step is not None:
+            return [1.0, verdict.retry_step]
+        if verdict.repeat:
+            self.laws.update()
+        return [1.0 if verdict.repeat else 0.0, -1.0]
+
+
+class _Starting:
+    """What exudyn_host.solve starts and frees: the bank at the host's deflections, its
+    laws in the symbolic matrix."""
+
+    def __init__(self, bank, laws, deflections):
+        self.bank, self.laws, self.deflections = bank, laws, deflections
+
+    def start(self, time):
+        self.bank.start(time, self.deflections())
+        self.laws.update()
+
+    def free(self):
+        self.bank.free()
+
+
+def solve(mbs, bank, laws, deflections, end_time, step, start_time=0.0, settings=None):
+    """exudyn_host.solve for a bank: start its components at the host's initial state,
+    integrate with generalized-alpha at `step` to the first multiple of it at or after
+    end_time. Frees the bank. Returns the ExudynBank."""
+    return exudyn_host.solve(mbs, _Starting(bank, laws, deflections), end_time, step,
+                             start_time, settings,
+                             host=ExudynBank(mbs, bank, laws, deflections))

@@ -1,0 +1,363 @@
+"""The coupling's bank (fmu_components.coupling.bank: the per-step work of many FMU
+instances in C) against the Python path it follows: the same numbers to the bit, on a
+prescribed host and in the track span in exudyn; the faults as the Python path has them;
+memory over many steps; one thread; the build."""
+
+import ctypes
+import math
+import shutil
+import subprocess
+import sys
+import threading
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy import extract, read_model_description
+from fmpy.fmi3 import FMU3Slave
+
+from fmu_components.coupling import Coupling, CouplingError, FmuComponent, LoadLaw
+from fmu_components.coupling import bank_build
+from fmu_components.coupling.bank import Bank
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def mix(fmus, names=("tyre", "radial", "torsion", "damper")):
+    made = {"tyre": lambda: FmuComponent(fmus["RoadWheelTyre"], "tyre", unilateral=True),
+            "radial": lambda: FmuComponent(fmus["TrackBushRadial"], "radial"),
+            "torsion": lambda: FmuComponent(fmus["TrackBushTorsion"], "torsion"),
+            "damper": lambda: FmuComponent(fmus["RotaryDamper"], "damper")}
+    return [made[name]() for name in names]
+
+
+def motion(t, passes=0):
+    """Each instance's deflection; the host's solution moves a little with each pass, so
+    that every pass's law shows."""
+    t = t + 1e-5 * passes
+    return np.array([3e-3 + 1e-3 * math.sin(60 * t), 2e-4 + 1e-4 * math.sin(40 * t),
+                     0.1 * math.sin(20 * t), 0.05 * math.sin(30 * t)])
+
+
+def python_run(fmus, scheme, steps, step=1e-3):
+    components = mix(fmus)
+    coupling = Coupling(scheme)
+    now = [0.0, 0]
+    for i, component in enumerate(components):
+        coupling.add(component, lambda i=i: (motion(*now)[i], 0.0))
+    coupling.start(0.0)
+    rows = []
+    try:
+        for k in range(1, steps + 1):
+            now[:] = k * step, 0
+            coupling.begin_step(now[0])
+            while coupling.end_pass(now[0]).repeat:
+                now[1] += 1
+            coupling.accept(now[0])
+            probe = 1.01 * motion(now[0])
+            rows.append([c.load for c in components]
+                        + [c.law(x) for c, x in zip(components, probe)])
+    finally:
+        coupling.free()
+    return np.array(rows), coupling
+
+
+def bank_run(fmus, scheme, steps, step=1e-3):
+    bank = Bank(mix(fmus), scheme)
+    bank.start(0.0, motion(0.0))
+    rows = []
+    try:
+        for k in range(1, steps + 1):
+            t, passes = k * step, 0
+            bank.begin_step(t)
+            while bank.end_pass(t, motion(t, passes)).repeat:
+                passes += 1
+            bank.accept(t)
+            rows.append(list(bank.loads) + list(bank.law_loads(1.01 * motion(t))))
+    finally:
+        bank.free()
+    return np.array(rows), bank
+
+
+@pytest.mark.parametrize("scheme", ["corrected", "explicit", "converged"])
+def test_the_bank_gives_the_python_paths_numbers(native_fmus, scheme):
+    """A tyre, both bushes and the damper, every pass's law and every accepted load: to
+    the bit, except the damper's linearised law (its matrix exponential in C, not numpy's
+    LAPACK: to round-off, 1e-12 of its load)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # converged's pass limit, on both paths
+        expected, coupling = python_run(native_fmus, scheme, 200)
+        got, bank = bank_run(native_fmus, scheme, 200)
+    assert np.array_equal(got[:, :7], expected[:, :7])
+    damper = expected[:, 7]
+    assert np.max(np.abs(got[:, 7] - damper)) <= 1e-12 * np.max(np.abs(damper))
+    assert bank.costs() == pytest.approx(coupling.costs())
+
+
+@pytest.mark.parametrize("step", [4e-3, 1e-3, 5e-4])
+def test_the_track_span_compiled_path_gives_the_python_paths_numbers(native_fmus, step):
+    """exudyn with the laws in compiled symbolic functions against exudyn with a Python
+    force function per connector: the same histories (to the bit here; the target is
+    1e-12 of each history's range)."""
+    sys.path.insert(0, str(EXAMPLES))
+    try:
+        import track_span
+    finally:
+        sys.path.remove(str(EXAMPLES))
+    fmu_dir = Path(native_fmus["TrackBushRadial"]).parent
+    runs = {path: track_span.simulate(step, links=3, fmu_dir=fmu_dir, end_time=0.04,
+                                      path=path) for path in ("python", "compiled")}
+    for key in ("joint_torque", "radial_force", "link_height", "link_acceleration"):
+        python, compiled = runs["python"][key], runs["compiled"][key]
+        assert python.shape == compiled.shape
+        assert np.max(np.abs(compiled - python)) <= 1e-12 * np.ptp(python), key
+    assert runs["compiled"]["costs"]["passes"] == runs["python"]["costs"]["passes"] == 2
+
+
+def serialized(bank):
+    return [c.serialized_state() for c in bank.components]
+
+
+def test_a_discard_restores_the_whole_bank_and_the_host_retries(native_fmus):
+    """The damper driven at 100 rad/s from rest cannot finish a 1 ms step: every
+    instance of the bank goes back to the step's start, and the host retries shorter."""
+    bank = Bank(mix(native_fmus, ("tyre", "radial", "damper")), "corrected")
+    bank.start(0.0, [3e-3, 2e-4, 0.0])
+    try:
+        before = serialized(bank)
+        bank.begin_step(1e-3)
+        verdict = bank.end_pass(1e-3, [3.1e-3, 2.1e-4, 0.1])
+        assert verdict.retry_step == pytest.approx(5e-4)
+        assert serialized(bank) == before
+        assert bank.retries == 1
+        step = verdict.retry_step
+        while True:
+            bank.begin_step(step)
+            verdict = bank.end_pass(step, [3.1e-3, 2.1e-4, 100.0 * step])
+            while verdict.repeat:
+                verdict = bank.end_pass(step, [3.1e-3, 2.1e-4, 100.0 * step])
+            if verdict.retry_step is None:
+                break
+            step = verdict.retry_step
+        bank.accept(step)
+        assert step <= 5e-4 and np.all(np.isfinite(bank.loads)) and bank.loads[2] > 0.0
+    finally:
+        bank.free()
+
+
+def test_a_host_that_cannot_retry_gets_the_fmu_step_cut(native_fmus):
+    bank = Bank(mix(native_fmus, ("damper",)), "explicit", host_can_retry=False)
+    bank.start(0.0, [0.0])
+    try:
+        bank.begin_step(1e-3)
+        assert not bank.end_pass(1e-3, [0.1]).repeat
+        bank.accept(1e-3)
+        assert bank.costs()["do_steps"] > 2 and bank.retries >= 1
+        assert math.isfinite(bank.loads[0])
+    finally:
+        bank.free()
+
+
+def test_an_error_names_the_instance_and_the_time(native_fmus):
+    components = mix(native_fmus, ("radial", "tyre"))
+    components[1].name = "front_tyre"
+    bank = Bank(components, "corrected")
+    bank.start(0.0, [2e-4, 3e-3])
+    try:
+        bank.begin_step(1e-3)
+        with pytest.raises(CouplingError, match=r"front_tyre at t = 0 s: fmi2SetReal "
+                                                r"returned fmi2Error.*compression"):
+            bank.end_pass(1e-3, [2.1e-4, math.nan])
+    finally:
+        bank.free()
+
+
+def test_a_hundred_thousand_bank_steps_keep_memory_flat(native_fmus):
+    """One saved state per instance, reused, and no allocation per call: the process does
+    not grow between 10,000 and 100,000 corrected steps of the rubber instances
+    (benchmarks/coupling_scale.py --long measures 10^6)."""
+    def resident_kib():
+        return int(Path("/proc/self/statm").read_text().split()[1]) * 4
+
+    bank = Bank(mix(native_fmus, ("tyre", "radial", "torsion")), "corrected")
+    bank.start(0.0, motion(0.0)[:3])
+    try:
+        for k in range(1, 100_001):
+            t = k * 1e-4
+            bank.begin_step(t)
+            x = motion(t)[:3]
+            while bank.end_pass(t, x).repeat:
+                pass
+            bank.accept(t)
+            if k == 10_000:
+                early = resident_kib()
+        grown = resident_kib() - early
+        assert bank.costs()["do_steps"] == 2.0 and bank.costs()["saves"] == 1.0
+    finally:
+        bank.free()
+    assert grown < 512, f"{grown} KiB more after 90,000 further steps"
+
+
+def test_a_bank_used_from_a_second_thread_is_refused(native_fmus):
+    bank = Bank(mix(native_fmus, ("radial",)), "corrected")
+    bank.start(0.0, [2e-4])
+    refused = []
+
+    def other():
+        try:
+            bank.begin_step(1e-3)
+        except RuntimeError as error:
+            refused.append(str(error))
+
+    try:
+        thread = threading.Thread(target=other)
+        thread.start()
+        thread.join()
+        assert refused and "belongs to thread" in refused[0] and "called from thread" in refused[0]
+        bank.begin_step(1e-3)  # its own thread still can
+        assert not bank.end_pass(1e-3, [2.1e-4]).retry_step
+    finally:
+        bank.free()
+
+
+def test_the_symbolic_laws_are_the_load_laws_to_the_bit():
+    """exudyn's compiled expression of the law against LoadLaw, on random laws (curved,
+    straight, contacts in and out of touch)."""
+    exudyn = pytest.importorskip("exudyn")
+    from fmu_components.coupling.bank_exudyn import SymbolicLaws
+
+    class Laws:
+        laws = np.zeros((4, 8))
+        unilateral = np.array([False, True, False, True])
+
+    laws = SymbolicLaws(Laws, name="test_laws")
+    x = exudyn.symbolic.Real("test_x", 0.0)
+    expressions = [laws.load(i, x) for i in range(4)]
+    rng = np.random.default_rng(1)
+    for _ in range(2000):
+        Laws.laws[:, :5] = rng.normal(size=(4, 5)) * [1e-3, 1e4, 1e7, 1e10, 1e7]
+        Laws.laws[rng.random(4) < 0.3, 3] = 0.0
+        k = Laws.laws[:, 2]
+        Laws.laws[:, 5:] = np.c_[0.5 * Laws.laws[:, 3], np.where(k >= 0, 0.5 * k, 2 * k),
+                                 np.where(k >= 0, 2 * k, 0.5 * k)]  # as the bank writes them
+        laws.update()
+        value = rng.normal() * 2e-3
+        x.SetValue(value)
+        for i, expression in enumerate(expressions):
+            law = LoadLaw(*Laws.laws[i, :4], unilateral=bool(Laws.unilateral[i]),
+                          touch_stiffness=Laws.laws[i, 4])
+            assert expression.Evaluate() == law(value)
+
+
+def test_without_a_compiler_the_bank_says_so(monkeypatch, tmp_path):
+    monkeypatch.setattr(shutil, "which", lambda name: None)
+    with pytest.raises(bank_build.NoCompiler, match="gcc not found.*Python path"):
+        bank_build.compile_bank("linux64", tmp_path)
+
+
+@pytest.mark.skipif(shutil.which("x86_64-w64-mingw32-gcc") is None, reason="no mingw-w64")
+def test_the_bank_builds_for_win64(tmp_path):
+    """Built only: loading it needs Windows (or wine with a Windows Python)."""
+    library = bank_build.compile_bank("win64", tmp_path)
+    exports = subprocess.run(["x86_64-w64-mingw32-objdump", "-p", str(library)],
+                             capture_output=True, text=True, check=True).stdout
+    assert "bank_end_pass" in exports and "bank_begin_step" in exports
+    assert "python" not in exports.lower()
+
+
+class Fmi3Part:
+    """An FMI 3.0 co-simulation instance with what a Bank reads of an FmuComponent (which
+    makes FMI 2.0 instances only)."""
+    _linearisable = False
+    _curvature = True  # the FMUs provide directional derivatives
+    step_model = "tangent"
+
+    def __init__(self, path, name):
+        description = read_model_description(str(path))
+        assert description.fmiVersion.startswith("3.")
+        self.name, self.unilateral, self.messages = name, False, []
+        self._fmu = FMU3Slave(guid=description.guid, unzipDirectory=extract(str(path)),
+                              modelIdentifier=description.coSimulation.modelIdentifier,
+                              instanceName=name)
+        self._fmu.instantiate()
+        self._fmu.enterInitializationMode()
+        variables = description.modelVariables
+        vr = {v.name: v.valueReference for v in variables}
+        self.output_names = [v.name for v in variables if v.causality == "output"]
+        self._input_vrs = [v.valueReference for v in variables if v.causality == "input"]
+        self._output_vrs = [vr[n] for n in self.output_names]
+        self._stiffness_vr = [vr["stiffness"]]
+        self.load_name = self.output_names[0]
+        self.stiffness_is_step_tangent = True
+        self._state = ctypes.c_void_p()
+        self.peak_load = self.touch_stiffness = 0.0
+
+    def start(self, time, deflection, rate=0.0):
+        self._fmu.setFloat64(self._input_vrs, [deflection, rate])
+        self._fmu.exitInitializationMode()
+        self.outputs = dict(zip(self.output_names, self._fmu.getFloat64(self._output_vrs)))
+        self.peak_load = abs(self.outputs[self.load_name])
+        self.touch_stiffness = max(self.outputs["stiffness"], 0.0)
+
+    def free(self):
+        if self._state:
+            self._fmu.freeFMUState(self._state)
+        self._fmu.terminate()
+        self._fmu.freeInstance()
+
+
+def test_fmi3_instances_in_a_bank_give_the_fmi2_numbers(native_fmus):
+    """The bank drives FMI 3.0 instances through their fmi3* functions (save, set, step,
+    get, restore, the stiffness's directional derivative): the bushes' loads and laws are
+    those of their FMI 2.0 versions, to the bit."""
+    fmi3 = Path(__file__).resolve().parents[1] / "fmus" / "fmi3"
+    if not (fmi3 / "TrackBushTorsion.fmu").exists():
+        pytest.skip("no FMI 3.0 FMUs in fmus/fmi3: python build_fmus.py")
+
+    def run(parts):
+        bank = Bank(parts, "corrected")
+        bank.start(0.0, motion(0.0)[1:3])
+        rows = []
+        try:
+            for k in range(1, 201):
+                t, passes = k * 1e-3, 0
+                bank.begin_step(t)
+                while bank.end_pass(t, motion(t, passes)[1:3]).repeat:
+                    passes += 1
+                bank.accept(t)
+                rows.append(list(bank.loads) + list(bank.law_loads(1.01 * motion(t)[1:3])))
+        finally:
+            bank.free()
+        return np.array(rows)
+
+    fmi2 = run(mix(native_fmus, ("radial", "torsion")))
+    parts = [Fmi3Part(fmi3 / "TrackBushRadial.fmu", "radial"),
+             Fmi3Part(fmi3 / "TrackBushTorsion.fmu", "torsion")]
+    assert np.array_equal(run(parts), fmi2)
+
+
+def test_the_station_compiled_path_gives_the_python_paths_numbers(native_fmus, monkeypatch):
+    """The road-wheel station at 8 m/s: with the damper linearised by linearised.py the
+    compiled path gives the Python path's histories to the bit; with its linearisation in
+    C (the default), to the round-off of the matrix exponential as the run carries it."""
+    sys.path.insert(0, str(EXAMPLES))
+    try:
+        import bank_path
+        import road_wheel_station as station
+    finally:
+        sys.path.remove(str(EXAMPLES))
+    fmu_dir = Path(native_fmus["RoadWheelTyre"]).parent
+    profile = station.RoadProfile(bump_start=0.2)
+
+    def run(path):
+        return station.simulate(8.0, profile, 1e-3, fmu_dir, end_time=0.15, path=path)
+
+    python = run("python")
+    compiled = run("compiled")
+    real_bank = bank_path.Bank
+    monkeypatch.setattr(bank_path, "Bank", lambda *a, **k: real_bank(*a, linearise="python", **k))
+    exact = run("compiled")
+    for key in ("hull_acceleration", "tyre_force", "damper_torque"):
+        assert np.array_equal(exact[key], python[key]), key
+        assert np.max(np.abs(compiled[key] - python[key])) <= 1e-9 * np.ptp(python[key]), key
