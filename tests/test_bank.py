@@ -3,7 +3,6 @@ instances in C) against the Python path it follows: the same numbers to the bit,
 prescribed host and in the track span in exudyn; the faults as the Python path has them;
 memory over many steps; one thread; the build."""
 
-import ctypes
 import math
 import shutil
 import subprocess
@@ -14,8 +13,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fmpy import extract, read_model_description
-from fmpy.fmi3 import FMU3Slave
 
 from fmu_components.coupling import Coupling, CouplingError, FmuComponent, LoadLaw
 from fmu_components.coupling import bank_build
@@ -266,47 +263,6 @@ def test_the_bank_builds_for_win64(tmp_path):
     assert "python" not in exports.lower()
 
 
-class Fmi3Part:
-    """An FMI 3.0 co-simulation instance with what a Bank reads of an FmuComponent (which
-    makes FMI 2.0 instances only)."""
-    _linearisable = False
-    _curvature = True  # the FMUs provide directional derivatives
-    step_model = "tangent"
-
-    def __init__(self, path, name):
-        description = read_model_description(str(path))
-        assert description.fmiVersion.startswith("3.")
-        self.name, self.unilateral, self.messages = name, False, []
-        self._fmu = FMU3Slave(guid=description.guid, unzipDirectory=extract(str(path)),
-                              modelIdentifier=description.coSimulation.modelIdentifier,
-                              instanceName=name)
-        self._fmu.instantiate()
-        self._fmu.enterInitializationMode()
-        variables = description.modelVariables
-        vr = {v.name: v.valueReference for v in variables}
-        self.output_names = [v.name for v in variables if v.causality == "output"]
-        self._input_vrs = [v.valueReference for v in variables if v.causality == "input"]
-        self._output_vrs = [vr[n] for n in self.output_names]
-        self._stiffness_vr = [vr["stiffness"]]
-        self.load_name = self.output_names[0]
-        self.stiffness_is_step_tangent = True
-        self._state = ctypes.c_void_p()
-        self.peak_load = self.touch_stiffness = 0.0
-
-    def start(self, time, deflection, rate=0.0):
-        self._fmu.setFloat64(self._input_vrs, [deflection, rate])
-        self._fmu.exitInitializationMode()
-        self.outputs = dict(zip(self.output_names, self._fmu.getFloat64(self._output_vrs)))
-        self.peak_load = abs(self.outputs[self.load_name])
-        self.touch_stiffness = max(self.outputs["stiffness"], 0.0)
-
-    def free(self):
-        if self._state:
-            self._fmu.freeFMUState(self._state)
-        self._fmu.terminate()
-        self._fmu.freeInstance()
-
-
 def test_fmi3_instances_in_a_bank_give_the_fmi2_numbers(native_fmus):
     """The bank drives FMI 3.0 instances through their fmi3* functions (save, set, step,
     get, restore, the stiffness's directional derivative): the bushes' loads and laws are
@@ -332,8 +288,8 @@ def test_fmi3_instances_in_a_bank_give_the_fmi2_numbers(native_fmus):
         return np.array(rows)
 
     fmi2 = run(mix(native_fmus, ("radial", "torsion")))
-    parts = [Fmi3Part(fmi3 / "TrackBushRadial.fmu", "radial"),
-             Fmi3Part(fmi3 / "TrackBushTorsion.fmu", "torsion")]
+    parts = [FmuComponent(fmi3 / "TrackBushRadial.fmu", "radial"),
+             FmuComponent(fmi3 / "TrackBushTorsion.fmu", "torsion")]
     assert np.array_equal(run(parts), fmi2)
 
 

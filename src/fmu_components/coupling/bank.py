@@ -143,14 +143,16 @@ class Bank:
 
     def _hand_over(self, i, component):
         """Give the C bank the instance pointer and its library's function addresses."""
-        fmu = component._fmu
-        version = 3 if type(fmu).__name__.startswith("FMU3") else 2
-        functions = (ctypes.c_void_p * 6)(*[ctypes.cast(getattr(fmu.dll, name), ctypes.c_void_p)
-                                            for name in FUNCTIONS[version]])
+        instance = component.instance
+        version = 3 if instance.fmi3 else 2
+        functions = (ctypes.c_void_p * 6)(*[
+            ctypes.cast(getattr(instance.fmpy.dll, name), ctypes.c_void_p)
+            for name in FUNCTIONS[version]])
         if len(component.output_names) > MAX_OUTPUTS:
             raise ValueError(f"{component.name}: more than {MAX_OUTPUTS} outputs")
         vrs = (ctypes.c_uint * (3 + len(component.output_names)))(
-            *component._input_vrs, component._stiffness_vr[0], *component._output_vrs)
+            *component._inputs.references, instance.fmu.value_references["stiffness"],
+            *component._outputs.references)
         load = component.output_names.index(component.load_name)
         self.load_index[i] = load
         flags = ((UNILATERAL if component.unilateral else 0)
@@ -158,7 +160,7 @@ class Bank:
                  | (CURVATURE if component._curvature else 0)
                  | (LINEARISABLE if component._linearisable else 0)
                  | (LINEARISED if component.step_model == "linearised" else 0))
-        if self._lib.bank_set_instance(self._handle, i, version, fmu.component, functions, vrs,
+        if self._lib.bank_set_instance(self._handle, i, version, instance.component, functions, vrs,
                                        len(component.output_names), load,
                                        component.output_names.index("stiffness"), flags):
             raise ValueError(f"{component.name}: the bank cannot take this instance")
@@ -169,18 +171,15 @@ class Bank:
     def _hand_over_model(self, i, component):
         """The Model Exchange side instance that linearises the component's step
         (linearised.py makes it; the bank calls it)."""
-        from .linearised import Linearisation
-
-        if component._linearisation is None:
-            component._linearisation = Linearisation(
-                *component._unpacked, f"{component.name}.linearisation", component._parameters)
-        model = component._linearisation
-        fmu = model._fmu
-        functions = (ctypes.c_void_p * len(MODEL_FUNCTIONS))(
-            *[ctypes.cast(getattr(fmu.dll, name), ctypes.c_void_p) for name in MODEL_FUNCTIONS])
-        vrs = (ctypes.c_uint * (2 * model.n + 4))(*model.state_vrs, *model._unknowns,
-                                                   *model._inputs)
-        if self._lib.bank_set_model(self._handle, i, fmu.component, functions, model.n, vrs,
+        model = component.linearisation()
+        instance = model._instance
+        functions = (ctypes.c_void_p * len(MODEL_FUNCTIONS))(*[
+            ctypes.cast(getattr(instance.fmpy.dll, name), ctypes.c_void_p)
+            for name in MODEL_FUNCTIONS])
+        vrs = (ctypes.c_uint * (2 * model.n + 4))(
+            *instance.fmu.references(model.state_names), *model._jacobian.unknowns,
+            *model._inputs.references)
+        if self._lib.bank_set_model(self._handle, i, instance.component, functions, model.n, vrs,
                                     int(model._contact_events)):
             raise ValueError(f"{component.name}: the bank cannot linearise this instance "
                              f"({model.n} states)")
@@ -343,7 +342,7 @@ class Bank:
             instance, call, status, output, time, step)))
         component = self.components[instance.value]
         said = f": {component.messages[-1]}" if component.messages else ""
-        version = 3 if type(component._fmu).__name__.startswith("FMU3") else 2
+        version = 3 if component.instance.fmi3 else 2
         status_name = f"fmi{version}{STATUS.get(status.value, 'Error')}"
         names = dict(zip(("set", "get", "step", "get_state", "set_state", "directional"),
                          FUNCTIONS[version]))

@@ -195,17 +195,23 @@ class FmuComponent:
             _, _, curvature = self._linearised_step(deflection, secant, time - self.time)
         return self._law(deflection, outputs[self.load_name], tangent, curvature)
 
-    def _linearised_step(self, deflection, rate, step):
-        """(load after `step` at `rate`, its tangent by the end deflection), linearised
-        at the FMU's current states and `deflection`: the accepted point's (a
-        prediction) or a trial's end (the tangent for the next pass)."""
+    def linearisation(self):
+        """The Model Exchange side instance that linearises the step, made when first
+        needed (the bank hands it to its C code)."""
         if self._linearisation is None:
             self._linearisation = Linearisation(self._fmu_file, f"{self.name}.linearisation",
                                                 self._parameters)
             self._states = self.instance.reals(self._linearisation.state_names)
+        return self._linearisation
+
+    def _linearised_step(self, deflection, rate, step):
+        """(load after `step` at `rate`, its tangent by the end deflection), linearised
+        at the FMU's current states and `deflection`: the accepted point's (a
+        prediction) or a trial's end (the tangent for the next pass)."""
+        linearisation = self.linearisation()
         states = self.instance.get(self._states)
         try:
-            return self._linearisation.step(states, deflection, rate, step)
+            return linearisation.step(states, deflection, rate, step)
         except CouplingError as error:
             raise CouplingError(self.name, self.time, f"the linearised step at deflection "
                                 f"{deflection!r}, rate {rate!r}: {error}") from None
