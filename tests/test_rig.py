@@ -23,7 +23,7 @@ from fmu_components import cli
 
 from fmu_components.verification import reference
 
-from fmu_components.lab import rig
+from fmu_components.lab import rig, rig_plots
 from fmu_components.lab.harmonics import first_harmonic
 from fmu_components.runtime.catalog import COMPONENTS
 from fmu_components.lab.signals import THESIS_SINES
@@ -216,7 +216,8 @@ def test_structure_comparison_shows_what_the_thesis_saw(tmp_path):
                      "--out", str(tmp_path)]) == 0
     assert (tmp_path / "structures.png").stat().st_size > 1000
     assert "| four-element | Figs. 6.3-4, 6.3-5 |" in (tmp_path / "structures.md").read_text()
-    table = {row["structure"]: row for row in rig.compare_structures(tmp_path, processes=1)}
+    table = {row["structure"]: row for row in rig_plots.compare_structures(tmp_path,
+                                                                             processes=1)}
     loops = {s: row["small_loop_area_mean"] for s, row in table.items()}
     assert loops["four-element"] > loops["final"] > loops["haupt-sedlan"]
     early = {s: row["relaxed_0.1s"] for s, row in table.items()}

@@ -16,6 +16,7 @@ from fmpy import simulate_fmu
 from fmpy.util import read_csv
 
 from fmu_components import cli
+from fmu_components.commands import cases as case_command
 from fmu_components.verification import cases, reference, verify
 from fmu_components.runtime.catalog import COMPONENTS
 from fmu_components.lab.signals import piecewise_linear_rate, write_csv
@@ -159,12 +160,13 @@ def test_committed_files_are_those_of_the_case_definition(case):
 
 def test_regeneration_reproduces_the_committed_references():
     """A fresh independent solve of the cheap subset gives the committed files."""
-    assert cases.main(["--check", *[f"--case={key}" for key in cases.QUICK_CHECK]]) == 0
+    assert case_command.main(["--check", *[f"--case={key}" for key in cases.QUICK_CHECK]]) == 0
 
 
 def test_regenerate_writes_what_check_then_reproduces(tmp_path):
     key = "TrackBushRadial/IV_relaxation_0.3mm"
-    assert cases.main(["--regenerate", f"--case={key}", f"--reference-data={tmp_path}"]) == 0
+    assert case_command.main(["--regenerate", f"--case={key}",
+                              f"--reference-data={tmp_path}"]) == 0
     case = BY_KEY[key]
     fresh, committed = cases.read(case, tmp_path), cases.read(case)
     for fresh_table, committed_table in zip(fresh[:2], committed[:2]):

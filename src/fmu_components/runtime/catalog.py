@@ -15,8 +15,7 @@ from .integrator import DEFAULT_RTOL
 from .model import Model
 from .rubber import Branch, MaxwellElement, rubber_equations
 
-PER_DEG = 180.0 / math.pi  # multiplies a per-degree value into per-radian
-MM = 1e-3
+from .units import MM, PER_DEG
 
 
 POSITIVE, NON_NEGATIVE = "positive", "zero or positive"
