@@ -19,6 +19,8 @@ import textwrap
 
 from .errors import UsageError
 
+PROG = "fmu-components"
+
 # name -> (module, one line of help). Modules are imported only when their command runs.
 COMMANDS = {
     "build": ("fmu_components.commands.build", "build the FMUs of both flavours and run each once"),
@@ -76,7 +78,7 @@ def _parser(names):
     configured (their modules imported), the others not, so that the top-level help
     imports no command."""
     parser = argparse.ArgumentParser(
-        prog="fmu-components",
+        prog=PROG,
         description="Tracked-vehicle running-gear components as FMI 2.0 and FMI 3.0 FMUs: "
                     "build, verify, validate and drive them.")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
@@ -101,12 +103,18 @@ def main(argv=None):
     # Configure only the command asked for, so that one command's imports never slow another
     # and the top-level help imports none.
     wanted = [a for a in argv[:1] if a in COMMANDS]
-    parser, subparsers = _parser(wanted)
     try:
+        parser, subparsers = _parser(wanted)  # imports the command: Ctrl-C may come here too
         args = parser.parse_args(argv)
         status = _run(subparsers[args.command], args)
         sys.stdout.flush()
         return status
+    except KeyboardInterrupt:
+        # Ctrl-C: one line, no traceback, and the status a shell gives a process ended by
+        # SIGINT. Every file a command writes is written whole or not at all (lab/files.py).
+        below_a_bar = "\n" if sys.stderr.isatty() else ""  # a progress bar ends its line
+        print(f"{below_a_bar}{PROG}: interrupted", file=sys.stderr)
+        return 128 + 2
     except BrokenPipeError:
         # The reader stopped reading (`... | head -1`): end quietly, as SIGPIPE would, and
         # keep Python from complaining when it flushes stdout at exit.

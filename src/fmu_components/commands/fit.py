@@ -68,7 +68,8 @@ def run_command(args):
             print(f"{test.path}: deflection from column {deflection!r}, load from column "
                   f"{force!r}", file=sys.stderr)
     try:
-        result = fit(args.component, tests, args.fix, args.structure, args.starts, args.jobs)
+        result = fit(args.component, tests, args.fix, args.structure, args.starts, args.jobs,
+                     progress=True)
     except HistoryError as error:
         raise UsageError(str(error)) from None
     args.out.parent.mkdir(parents=True, exist_ok=True)

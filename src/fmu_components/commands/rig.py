@@ -15,6 +15,7 @@ from ..errors import UsageError
 from ..lab.rig import (DRIVERS, HOLD_TIME, MAX_CYCLES, MAX_STEP, RATES, RIG_RTOL, RISE_TIME,
                        SAMPLES_PER_CYCLE, STEADY, RigError, make_setup, relaxation_record,
                        run_rig, units, write_relaxation, write_rows)
+from ..lab.signals import check_deflection
 from ..runtime.catalog import COMPONENTS, STRUCTURES
 from ..runtime.integrator import DEFAULT_RTOL
 
@@ -110,6 +111,8 @@ def _run(args):
     setup = make_setup(args.component, args.structure, args.params, args.engine, args.fmu,
                        args.rtol)
     step = args.relaxation if args.relaxation is not None else max(args.amplitude)
+    if args.relaxation is not None:  # the sine's points are checked by run_rig
+        check_deflection(COMPONENTS[args.component], [args.preload[0], args.preload[0] + step])
     record = relaxation_record(setup, args.preload[0], step, args.rise, args.hold)
     files = write_rows(rows, args.out, args.component)
     files.append(write_relaxation(record, args.out / "relaxation.csv", args.component))
@@ -121,8 +124,8 @@ def _run(args):
     _print_rows(rows, args.component)
     unsteady = [r for r in rows if not r.steady]
     for row in unsteady:
-        print(f"warning: preload {row.preload:g}, amplitude {row.amplitude:g}, frequency "
-              f"{row.frequency:g} Hz not periodic after {row.cycles} cycles (last change "
+        print(f"warning: preload {row.preload:g} {length}, amplitude {row.amplitude:g} {length}, "
+              f"frequency {row.frequency:g} Hz not periodic after {row.cycles} cycles (last change "
               f"{row.change:.2g}); raise --max-cycles", file=sys.stderr)
     print(f"{len(rows)} points in {sweep_time:.1f} s ({args.engine}); wrote "
           + ", ".join(str(f) for f in files))
@@ -131,9 +134,10 @@ def _run(args):
 
 def _print_rows(rows, component):
     length, load, stiffness = units(component)
-    print(f"{'preload':>10s} {'amplitude':>10s} {'f Hz':>7s} {'|K*| ' + stiffness:>16s} "
-          f"{'delta deg':>9s} {'E/cycle':>11s} {'secant':>11s} {'cycles':>6s}")
+    print(f"{'preload ' + length:>11s} {'amplitude ' + length:>13s} {'f Hz':>7s} "
+          f"{'|K*| ' + stiffness:>16s} {'delta deg':>9s} {'E/cycle J':>11s} "
+          f"{'secant ' + stiffness:>16s} {'cycles':>6s}")
     for r in rows:
-        print(f"{r.preload:10.4g} {r.amplitude:10.4g} {r.frequency:7.3g} "
+        print(f"{r.preload:11.4g} {r.amplitude:13.4g} {r.frequency:7.3g} "
               f"{r.dynamic_stiffness:16.6g} {r.loss_angle_deg:9.4f} {r.energy_per_cycle:11.5g} "
-              f"{r.secant_stiffness:11.5g} {r.cycles:6d}")
+              f"{r.secant_stiffness:16.6g} {r.cycles:6d}")

@@ -11,7 +11,7 @@ import sys
 
 from ..errors import UsageError
 from ..runtime.catalog import COMPONENTS
-from ..lab.signals import (THESIS_SINES, deflection_slip, input_table, ramp_and_hold, sine,
+from ..lab.signals import (THESIS_SINES, check_deflection, input_table, ramp_and_hold, sine,
                            time_grid, write_csv)
 
 EXAMPLES = """examples:
@@ -58,10 +58,6 @@ def run_command(args):
         raise UsageError("--amplitude 0 makes the sine a constant; give the amplitude (m or "
                          "rad), e.g. the thesis sine of this component: "
                          + thesis_sine_options(args.fmu))
-    slip = deflection_slip(COMPONENTS[args.fmu], x)
-    if slip and slip[0] == "error":
-        raise UsageError(slip[1])
-    if slip:
-        print(f"warning: {slip[1]}", file=sys.stderr)
+    check_deflection(COMPONENTS[args.fmu], x)
     write_csv(input_table(args.fmu, t, x), sys.stdout)
     return 0

@@ -6,13 +6,13 @@ The input is read and checked, run and written by ``lab.simulate``; docs/simulat
 describes the command.
 """
 
-import math
 import sys
 
 from ..errors import UsageError
 from ..export.parameters import ParameterError
-from ..lab.simulate import (Component, check_columns, check_times, check_units, finer_grid,
-                            plot_loop, read_input, simulate, write_result)
+from ..lab.simulate import (Component, check_columns, check_times, check_tolerance, check_units,
+                            finer_grid, plot_loop, prepare_output, read_input, simulate,
+                            write_result)
 
 EXAMPLES = """examples:
   fmu-components signal RoadWheelTyre sine --mean 3.5e-3 --amplitude 1e-3 > tyre_in.csv
@@ -60,8 +60,8 @@ def run_command(args):
     check_units(component, names, values, args.input)
     times = values[:, 0]
     stop_time, step = check_times(times, args.stop_time, args.step, args.input)
-    if args.tolerance is not None and not (args.tolerance > 0.0 and math.isfinite(args.tolerance)):
-        raise UsageError(f"--tolerance {args.tolerance!r} must be a positive number")
+    check_tolerance(args.tolerance)
+    prepare_output(args.out, args.plot)
     times, columns = finer_grid(times, {name: values[:, names.index(name)] for name in feed},
                                 stop_time, step, *component.inputs)
     warnings, errors = [], []

@@ -31,15 +31,19 @@ and a warning for each parameter the data cannot identify.
 
 import json
 import math
+import multiprocessing
 import os
-from concurrent.futures import ProcessPoolExecutor
+import signal
+import sys
+import threading
+from contextlib import contextmanager
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 from scipy.optimize import least_squares
 
 from ..errors import UsageError
+from .files import write_text
 from .history import component_definition, native_history
 from .measured import History, deflection_limit
 
@@ -183,18 +187,33 @@ def residuals_of(test, response):
 # --- the fit ----------------------------------------------------------------------------
 
 _PROBLEM = None  # the problem a pool worker solves
+_SIMULATIONS = None  # a counter shared with the parent: the residual evaluations run
 
 
-def _adopt(problem):
-    global _PROBLEM
-    _PROBLEM = problem
+def _adopt(problem, simulations=None):
+    global _PROBLEM, _SIMULATIONS
+    _PROBLEM, _SIMULATIONS = problem, simulations
+
+
+def _start_worker(problem, simulations):
+    # Ctrl-C goes to the whole process group: the parent answers it and ends the workers.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _adopt(problem, simulations)
+
+
+def _counted_residuals(u):
+    residuals = _PROBLEM.residuals(u)
+    if _SIMULATIONS is not None:
+        with _SIMULATIONS.get_lock():
+            _SIMULATIONS.value += 1
+    return residuals
 
 
 def _solve_from(u0):
     problem = _PROBLEM
     lower = [s.lower for s in problem.free]
     upper = [s.upper for s in problem.free]
-    result = least_squares(problem.residuals, u0, bounds=(lower, upper), method="trf",
+    result = least_squares(_counted_residuals, u0, bounds=(lower, upper), method="trf",
                            diff_step=1e-4, x_scale=1.0, ftol=1e-10, xtol=1e-10, gtol=1e-10,
                            max_nfev=200)
     return result.x, float(result.cost), result.jac, int(result.nfev), result.message
@@ -295,9 +314,38 @@ def starting_points(free, thesis, count, seed=0):
     return points
 
 
+@contextmanager
+def _progress(simulations, starts, shown):
+    """A progress bar on stderr of the simulations the fit has run (it draws on a terminal
+    only, as verify's), followed from the shared counter twice a second."""
+    if not shown:
+        yield
+        return
+    from tqdm import tqdm
+
+    bar = tqdm(desc=f"fitting from {starts} start{'s' if starts > 1 else ''}",
+               unit=" simulations", file=sys.stderr, disable=None)
+    finished = threading.Event()
+
+    def follow():
+        while not finished.wait(0.5):
+            bar.update(simulations.value - bar.n)
+
+    follower = threading.Thread(target=follow, daemon=True)
+    follower.start()
+    try:
+        yield
+    finally:
+        finished.set()
+        follower.join()
+        bar.update(simulations.value - bar.n)
+        bar.close()
+
+
 def fit(component, tests, fix=(), structure="final", starts=4, jobs=None, seed=0,
-        start_values=None):
-    """Fit the free parameters to the tests (History or RigTable); a FitResult."""
+        start_values=None, progress=False):
+    """Fit the free parameters to the tests (History or RigTable); a FitResult. progress:
+    a progress bar on stderr (on a terminal)."""
     import time
 
     definition = component_definition(component, structure)
@@ -314,15 +362,18 @@ def fit(component, tests, fix=(), structure="final", starts=4, jobs=None, seed=0
     points = starting_points(free, start, max(1, starts), seed)
     started = time.perf_counter()
     jobs = max(1, min(jobs or os.cpu_count() or 1, len(points)))
+    context = multiprocessing.get_context("fork")
+    simulations = context.Value("q", 0)
     if jobs == 1:
-        _adopt(problem)
-        outcomes = [_solve_from(p) for p in points]
+        _adopt(problem, simulations)
+        with _progress(simulations, len(points), progress):
+            outcomes = [_solve_from(p) for p in points]
     else:
-        import multiprocessing
-
-        with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("fork"),
-                                 initializer=_adopt, initargs=(problem,)) as pool:
-            outcomes = list(pool.map(_solve_from, points))
+        # A Pool, not a ProcessPoolExecutor: leaving its block on an exception (Ctrl-C)
+        # terminates the workers instead of waiting for their fits to end.
+        with context.Pool(jobs, initializer=_start_worker, initargs=(problem, simulations)) \
+                as pool, _progress(simulations, len(points), progress):
+            outcomes = pool.map(_solve_from, points, chunksize=1)
     best = min(outcomes, key=lambda o: o[1])
     u = best[0]
     values = problem.parameters(u)
@@ -348,4 +399,4 @@ def data_scales(tests, definition):
 
 
 def write_parameters(path, values):
-    Path(path).write_text(json.dumps({n: float(v) for n, v in values.items()}, indent=2) + "\n")
+    write_text(path, json.dumps({n: float(v) for n, v in values.items()}, indent=2) + "\n")

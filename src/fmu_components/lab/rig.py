@@ -39,11 +39,14 @@ from multiprocessing import get_context
 
 import numpy as np
 
+from .files import written_whole
 from .harmonics import first_harmonic
+from .signals import check_deflection
 from ..export.identity import NotOurFmu, read_identity
 from ..export.parameters import ParameterError, parameter_set
 from ..runtime.catalog import COMPONENTS, component_definition, structures_of
 from ..runtime.cosim import CoSimulation
+from ..runtime.units import column_name
 
 CSV_COLUMNS = ("preload", "amplitude", "frequency", "dynamic_stiffness", "loss_angle_deg",
                "energy_per_cycle", "secant_stiffness")
@@ -410,6 +413,9 @@ def run_rig(component, preloads, amplitudes, frequencies, params=None, structure
             raise RigError(f"each {label} must be a positive number (SI units)")
     if not preloads or any(not math.isfinite(p) for p in preloads):
         raise RigError("each preload must be a finite number (SI units)")
+    if component in COMPONENTS:  # else make_setup says what to choose
+        check_deflection(COMPONENTS[component], [p + s * a for p in preloads
+                                                 for a in amplitudes for s in (-1, 1)])
     setup = make_setup(component, structure, params, engine, fmu, rtol, rate, max_step)
     points = [(p, a, f) for p in preloads for a in amplitudes for f in frequencies]
     options = dict(samples_per_cycle=samples_per_cycle, steady=steady, max_cycles=max_cycles)
@@ -422,28 +428,27 @@ def run_rig(component, preloads, amplitudes, frequencies, params=None, structure
 
 
 def write_rows(rows, out, component):
-    """DIR/rig.csv, and for the damper DIR/equivalent.csv."""
+    """DIR/rig.csv, and for the damper DIR/equivalent.csv; each header names its column's
+    unit in brackets ("preload [m]"; read_rows and the fit read them with or without)."""
     out.mkdir(parents=True, exist_ok=True)
     paths = [out / "rig.csv"]
-    with open(paths[0], "w", newline="") as f:
-        writer = csv.writer(f)
-        writer.writerow(CSV_COLUMNS)
-        for row in rows:
-            writer.writerow([repr(float(getattr(row, c))) for c in CSV_COLUMNS])
+    tables = [(paths[0], CSV_COLUMNS)]
     if component == "RotaryDamper":
         paths.append(out / "equivalent.csv")
-        with open(paths[1], "w", newline="") as f:
+        tables.append((paths[1], EQUIVALENT_COLUMNS))
+    for path, columns in tables:
+        with written_whole(path) as whole, open(whole, "w", newline="") as f:
             writer = csv.writer(f)
-            writer.writerow(EQUIVALENT_COLUMNS)
+            writer.writerow(csv_header(columns, component))
             for row in rows:
-                writer.writerow([repr(float(getattr(row, c))) for c in EQUIVALENT_COLUMNS])
+                writer.writerow([repr(float(getattr(row, c))) for c in columns])
     return paths
 
 
 def read_rows(path):
-    """The rows of a rig.csv, as dicts of floats."""
+    """The rows of a rig.csv, as dicts of floats by the columns' bare names."""
     with open(path, newline="") as f:
-        return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
+        return [{column_name(k): float(v) for k, v in row.items()} for row in csv.DictReader(f)]
 
 
 def units(component):
@@ -452,10 +457,21 @@ def units(component):
     return length, load, f"{load}/{length}"
 
 
+def csv_header(columns, component):
+    """The rig table's header: each column's name and its unit in brackets (the loss angle's
+    name says its unit)."""
+    length, load, stiffness = units(component)
+    unit = {"preload": length, "amplitude": length, "frequency": "Hz",
+            "dynamic_stiffness": stiffness, "energy_per_cycle": "J",
+            "secant_stiffness": stiffness, "equivalent_stiffness": stiffness,
+            "equivalent_damping": f"{load}.s/{length}"}
+    return [f"{c} [{unit[c]}]" if c in unit else c for c in columns]
+
+
 def write_relaxation(record, path, component):
     times, deflection, force = record[:3]
     definition = COMPONENTS[component]
-    with open(path, "w", newline="") as f:
+    with written_whole(path) as whole, open(whole, "w", newline="") as f:
         writer = csv.writer(f)
         writer.writerow(["time", definition.inputs[0].name, definition.outputs[0].name])
         for row in zip(times, deflection, force):

@@ -12,9 +12,11 @@ one is ``fmu-components signal`` (``commands/signal.py``).
 
 import csv
 import math
+import sys
 
 import numpy as np
 
+from ..errors import UsageError
 from ..runtime.catalog import COMPONENTS
 from ..runtime.units import RAD_PER_DEG, UNITS
 
@@ -184,3 +186,14 @@ def deflection_slip(definition, deflection):
                            f"thesis measured; if the values are in deg, {convert[0].lower()}"
                            f"{convert[1:]}")
     return None
+
+
+def check_deflection(definition, deflection, where=""):
+    """The unit check every tool gives a deflection it is handed (signal, simulate, rig): a
+    UsageError where it looks typed in mm or deg, a warning on stderr where an angle may
+    be (deflection_slip). `where` prefixes the message (a file's name)."""
+    slip = deflection_slip(definition, np.asarray(deflection, dtype=float))
+    if slip and slip[0] == "error":
+        raise UsageError(f"{where}{slip[1]}")
+    if slip:
+        print(f"warning: {where}{slip[1]}", file=sys.stderr)

@@ -11,6 +11,14 @@ PER_DEG = DEG  # multiplies a per-degree value into per-radian
 RAD_PER_DEG = math.pi / 180.0  # a value in deg times RAD_PER_DEG is in rad
 MM = 1e-3  # a value in mm times MM is in m
 
+
+
+def column_name(header):
+    """A CSV column's name without the unit its header gives in brackets:
+    'preload [m]' -> 'preload' (a header without one is its name)."""
+    return header.split(" [", 1)[0].strip()
+
+
 UNITS = {
     "m": ({"m": 1}, [("mm", 1e3)]),
     "m/s": ({"m": 1, "s": -1}, [("mm/s", 1e3)]),

@@ -23,8 +23,11 @@ The reference comes from ``reference`` (scipy Radau on plain right-hand sides); 
 thing taken from the FMU side is the variable names in the catalog.
 """
 
+import contextlib
 import fnmatch
+import io
 import math
+import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -372,13 +375,24 @@ def check(case, root=REFERENCE_DATA):
     return problems
 
 
-def simulate_case(fmu_path, inputs, options, outputs):
+def simulate_case(fmu_path, inputs, options, outputs, label=None):
     """(fmpy's result, wall time in s) of one case's input table run through an FMU with the
-    case's options (StartTime, StopTime, StepSize, RelTol): the output interval is the step."""
+    case's options (StartTime, StopTime, StepSize, RelTol): the output interval is the step.
+    What the FMU logs (fmpy prints it) goes to stderr, each line headed by `label` (the
+    case's key), so that a warning says which case it is about."""
     started = time.perf_counter()
-    result = simulate_fmu(str(fmu_path), start_time=options["StartTime"],
-                          stop_time=options["StopTime"], output_interval=options["StepSize"],
-                          relative_tolerance=options["RelTol"], input=inputs, output=outputs)
+    said = io.StringIO()
+    try:
+        with contextlib.redirect_stdout(said):
+            result = simulate_fmu(str(fmu_path), start_time=options["StartTime"],
+                                  stop_time=options["StopTime"],
+                                  output_interval=options["StepSize"],
+                                  relative_tolerance=options["RelTol"], input=inputs,
+                                  output=outputs)
+    finally:
+        for line in said.getvalue().splitlines():
+            if line.strip():
+                print(f"{label}: {line}" if label else line, file=sys.stderr)
     return result, time.perf_counter() - started
 
 

@@ -214,7 +214,8 @@ class Runs:
             inputs = case.inputs()
             outputs = [v.name for v in COMPONENTS[case.fmu].outputs]
             try:
-                result, _ = programme.simulate_case(self.fmu(case.fmu), inputs, case.options(), outputs)
+                result, _ = programme.simulate_case(self.fmu(case.fmu), inputs, case.options(),
+                                                    outputs, label=case.key)
             except Exception as exc:  # an FMU that fails is reported, not a crash
                 self.failures[case.key] = f"{case.key}: {type(exc).__name__}: {exc}"
                 raise RunFailure(self.failures[case.key]) from None
@@ -488,7 +489,7 @@ def rows(comparisons):
         table.append((
             m.id, m.measured_text,
             with_unit(c.model, m.unit) if c.ran else "-",
-            f"{c.difference:+.4g}" if c.difference is not None else "-",
+            with_unit(c.difference, m.unit, "+.4g") if c.difference is not None else "-",
             f"{c.percent:+.1f}" if c.percent is not None else "-",
             m.basis, m.thesis_agreement or "-", c.verdict))
     return table

@@ -66,7 +66,9 @@ def run_case(case, fmu_path, reference_data=programme.REFERENCE_DATA, identity=N
     else:
         inputs, expected, options = programme.read(case, reference_data)
         part = ""
-    result, wall = programme.simulate_case(fmu_path, inputs, options, list(expected.dtype.names[1:]))
+    result, wall = programme.simulate_case(fmu_path, inputs, options,
+                                           list(expected.dtype.names[1:]),
+                                           label=f"{part or case.fmu}/{case.name}")
     errors, outliers, problem = compare(result, expected, options["StopTime"])
     return Outcome(case, errors, outliers, wall, result, expected, inputs, problem, part)
 
