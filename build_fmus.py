@@ -1,7 +1,8 @@
 """Build both flavours of the four FMUs and run each once: ``fmu-components build``.
 
 Kept so that ``python build_fmus.py`` works from the repository root; the code is in
-``src/fmu_components/lab/build_command.py`` (the command) and
+``src/fmu_components/commands/build.py`` (the command),
+``src/fmu_components/lab/build_command.py`` (its checks and the run) and
 ``src/fmu_components/export/build.py`` (the build).
 """
 

@@ -1,9 +1,12 @@
 """The command-line tool's mistakes come out as one line that says what to do, no traceback."""
 
 import os
+import signal
 import subprocess
 import sys
+import time
 
+import numpy as np
 import pytest
 
 from conftest import ROOT
@@ -93,3 +96,65 @@ def test_a_small_angle_that_may_be_in_deg_is_warned_about(fmu, mean, amplitude):
     assert result.returncode == 0
     assert "warning:" in result.stderr and "if the values are in deg" in result.stderr
     assert "divide by 57.2958" in result.stderr
+
+
+# --- Ctrl-C: "interrupted", exit status 130, nothing half written -------------------------
+
+def interrupt(arguments, after, tmp_path):
+    """Run `fmu-components ARGUMENTS`, send SIGINT (Ctrl-C) `after` seconds in, and return the
+    CompletedProcess-like (returncode, stdout, stderr). The process must end within 60 s
+    of the signal (worker processes included)."""
+    environment = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
+    process = subprocess.Popen([sys.executable, "-m", "fmu_components", *map(str, arguments)],
+                               cwd=ROOT, env=environment, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+    time.sleep(after)
+    assert process.poll() is None, "it ended before it could be interrupted"
+    process.send_signal(signal.SIGINT)
+    out, err = process.communicate(timeout=60)
+    return process.returncode, out, err
+
+
+def assert_interrupted(status, err):
+    assert status == 130, err
+    assert "Traceback" not in err, err
+    assert err.strip().splitlines()[-1] == "fmu-components: interrupted"
+
+
+def test_ctrl_c_during_simulate(tmp_path, all_fmus):
+    from fmu_components.lab.signals import input_table, sine, time_grid, write_csv
+
+    t = time_grid(60.0, 1e-3)
+    with open(tmp_path / "in.csv", "w") as f:
+        write_csv(input_table("RoadWheelTyre", t, sine(t, 3.5e-3, 1e-3, 1.0)), f)
+    out = tmp_path / "out.csv"
+    status, _, err = interrupt(["simulate", all_fmus["native"]["RoadWheelTyre"],
+                                tmp_path / "in.csv", "--out", out, "--step", "1e-4"], 8, tmp_path)
+    assert_interrupted(status, err)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["in.csv"]  # no partial result
+
+
+def test_ctrl_c_during_verify(tmp_path, all_fmus):
+    report = tmp_path / "report"
+    status, _, err = interrupt(["verify", "--fmus", all_fmus["native"]["RoadWheelTyre"].parent,
+                                "--fmu", "RoadWheelTyre", "--report", report], 20, tmp_path)
+    assert_interrupted(status, err)
+    assert not (report / "summary.md").exists()
+
+
+def test_ctrl_c_during_fit_ends_its_workers_too(tmp_path):
+    # 200 cycles sampled every 1 ms: each simulation of the fit reads 200,000 samples, and a
+    # fit from four starts takes minutes
+    t = np.arange(200_001) * 1e-3
+    x = 2e-4 + 1e-4 * np.sin(2 * np.pi * t)
+    data = tmp_path / "sine.csv"
+    np.savetxt(data, np.column_stack([t, x, 81.8e6 * x]), delimiter=",", fmt="%.17g",
+               header="time,deflection,force", comments="")
+    out = tmp_path / "fitted.json"
+    started = time.perf_counter()
+    status, _, err = interrupt(["fit", "--component", "TrackBushRadial", "--starts", "4",
+                                "--jobs", "2", "--out", out, data], 10, tmp_path)
+    assert_interrupted(status, err)
+    assert not out.exists() and not list(tmp_path.glob("*.part*"))
+    # the workers were stopped, not waited for
+    assert time.perf_counter() - started < 40

@@ -51,3 +51,21 @@ def test_a_closed_pipe_ends_quietly():
     result = subprocess.run(["bash", "-c", command], capture_output=True, text=True, cwd=ROOT)
     assert result.stdout == '"time","compression","compression_rate"\n'
     assert result.stderr == ""
+
+
+def test_the_top_level_help_imports_no_command():
+    """The one-line summaries are in the registry: `fmu-components --help` imports none of
+    the command modules, nor what they use (scipy, the lab, the verification)."""
+    code = ("import sys\nfrom fmu_components import cli\n"
+            "try:\n    cli.main(['--help'])\nexcept SystemExit:\n    pass\n"
+            "print(' '.join(sorted(sys.modules)), file=sys.stderr)")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            cwd=ROOT)
+    assert result.returncode == 0, result.stderr
+    for name in cli.COMMANDS:
+        assert name in result.stdout
+    loaded = result.stderr.split()
+    heavy = [m for m in loaded if m.split(".")[0] in ("scipy", "numpy", "fmpy", "matplotlib")
+             or m.startswith(("fmu_components.commands", "fmu_components.lab",
+                              "fmu_components.verification", "fmu_components.export"))]
+    assert not heavy, heavy

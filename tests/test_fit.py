@@ -221,3 +221,67 @@ def test_fit_reads_what_simulate_writes_and_says_which_columns(native_fmus, tmp_
     fitted = json.loads((tmp_path / "p.json").read_text())
     assert fitted["k1"] == pytest.approx(component_definition("TrackBushTorsion")
                                          .default_parameters()["k1"], rel=1e-3)
+
+
+def test_a_rig_table_is_read_with_the_old_header_and_the_new(tmp_path):
+    """rig.csv's header says the units since ("preload [m]", ...); a table written before,
+    with the bare names, reads the same."""
+    from fmu_components.lab import rig
+    from fmu_components.lab.measured import read_data
+
+    definition = component_definition(COMPONENT)
+    rows = [rig.RigRow(3e-4, a, f, k, d, 0.0, k, 0.0, 0.0, 5, True, 0.0)
+            for a, f, k, d in ((2e-5, 1.0, 1.2e8, 8.0), (1e-4, 1.0, 1.0e8, 9.0),
+                               (1e-4, 10.0, 1.1e8, 10.0))]
+    new = rig.write_rows(rows, tmp_path / "new", COMPONENT)[0]
+    assert new.read_text().startswith("preload [m],amplitude [m],frequency [Hz],"
+                                      "dynamic_stiffness [N/m],loss_angle_deg,")
+    old = tmp_path / "old.csv"
+    old.write_text("\n".join([",".join(rig.CSV_COLUMNS)] + [
+        ",".join(repr(float(getattr(r, c))) for c in rig.CSV_COLUMNS) for r in rows]) + "\n")
+    tables = [read_data(path, definition) for path in (new, old)]
+    assert np.array_equal(tables[0].rows, tables[1].rows)
+    assert tables[0].rows[:, 3].tolist() == [1.2e8, 1.0e8, 1.1e8]
+
+
+def test_fit_shows_its_progress_on_a_terminal(tmp_path):
+    """A fit runs for a minute or more: on a terminal, stderr carries a progress bar of the
+    simulations run (tqdm, as verify's); in a log (no terminal) it stays quiet."""
+    import fcntl
+    import os
+    import pty
+    import struct
+    import subprocess
+    import sys
+    import termios
+
+    from conftest import ROOT
+
+    history, _ = measured("sine.csv", 0.3 * MM, 0.1 * MM, 1.0, 2, 0)
+    data = synthetic.write_history(tmp_path / "sine.csv", history)
+    command = [sys.executable, "-m", "fmu_components", "fit", "--component", COMPONENT,
+               "--fix", *FIXED, "--starts", "2", "--jobs", "2", "--out", tmp_path / "p.json",
+               data]
+    environment = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
+    terminal, other_end = pty.openpty()
+    # a terminal 100 columns wide (a new pseudo-terminal has none, and tqdm fits its width)
+    fcntl.ioctl(other_end, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 100, 0, 0))
+    process = subprocess.Popen(list(map(str, command)), cwd=ROOT, env=environment,
+                               stdout=subprocess.PIPE, stderr=other_end)
+    os.close(other_end)
+    shown = b""
+    while True:
+        try:
+            chunk = os.read(terminal, 4096)
+        except OSError:  # the other end closed
+            break
+        if not chunk:
+            break
+        shown += chunk
+    process.wait(timeout=600)
+    os.close(terminal)
+    assert process.returncode == 0, shown
+    assert b"fitting from 2 starts" in shown and b"simulations" in shown
+    quiet = subprocess.run(list(map(str, command)), cwd=ROOT, env=environment,
+                           capture_output=True, text=True, timeout=600)
+    assert quiet.returncode == 0 and "fitting from" not in quiet.stderr

@@ -11,7 +11,7 @@ import pytest
 PACKAGE = Path(__file__).resolve().parents[1] / "src" / "fmu_components"
 # Lower number, lower layer. The package root and errors are below everything.
 LAYERS = {"": 0, "errors": 0, "runtime": 1, "coupling": 1, "export": 2, "lab": 3,
-          "verification": 4, "cli": 5, "__main__": 5}
+          "verification": 4, "commands": 5, "cli": 6, "__main__": 6}
 
 
 def module_name(path):
@@ -209,3 +209,22 @@ def c_source_params():
 def test_no_c_source_is_over_the_line_limit(path):
     lines = len(path.read_text().splitlines())
     assert lines <= C_LINE_LIMIT, f"{path.relative_to(PACKAGE)} has {lines} lines"
+
+
+LIBRARIES = ("runtime", "coupling", "export", "lab", "verification")
+
+
+def test_the_libraries_never_read_the_command_line():
+    """lab/, verification/ and the layers below are libraries a user imports: the command
+    line (argparse, sys.argv) is the commands layer's alone."""
+    readers = []
+    for module, path in sorted(MODULES.items()):
+        if "." not in module or module.split(".")[1] not in LIBRARIES:
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import) else
+                     [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            if any(n.split(".")[0] == "argparse" for n in names) or (
+                    isinstance(node, ast.Attribute) and node.attr == "argv"):
+                readers.append(f"{module} line {node.lineno}")
+    assert not readers, f"the command line read below the commands layer: {readers}"

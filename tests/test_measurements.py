@@ -273,3 +273,10 @@ def test_usage_mistakes_are_one_line(tmp_path, capsys, arguments, words):
         validate(f"--fmus={tmp_path}", f"--report={tmp_path / 'report'}", *arguments)
     assert stop.value.code == 2
     assert words in capsys.readouterr().err
+
+
+def test_the_printed_table_gives_the_difference_its_unit():
+    header, row = measurements.rows([Comparison(_row(measured=200.0, relation="=",
+                                                     unit="N.m"), model=230.0)])
+    assert header[3] == "difference"
+    assert row[2] == "230 N.m" and row[3] == "+30 N.m"

@@ -23,7 +23,7 @@ from fmu_components import cli
 
 from fmu_components.verification import reference
 
-from fmu_components.lab import rig
+from fmu_components.lab import rig, rig_plots
 from fmu_components.lab.harmonics import first_harmonic
 from fmu_components.runtime.catalog import COMPONENTS
 from fmu_components.lab.signals import THESIS_SINES
@@ -131,7 +131,7 @@ def test_command_writes_the_table_and_plots(tmp_path):
     assert status == 0
     with open(out / "rig.csv", newline="") as f:
         lines = list(csv.reader(f))
-    assert lines[0] == list(rig.CSV_COLUMNS)
+    assert lines[0] == rig.csv_header(rig.CSV_COLUMNS, "TrackBushRadial")
     assert len(lines) == 5
     rows = rig.read_rows(out / "rig.csv")
     assert [(r["amplitude"], r["frequency"]) for r in rows] == [
@@ -216,7 +216,8 @@ def test_structure_comparison_shows_what_the_thesis_saw(tmp_path):
                      "--out", str(tmp_path)]) == 0
     assert (tmp_path / "structures.png").stat().st_size > 1000
     assert "| four-element | Figs. 6.3-4, 6.3-5 |" in (tmp_path / "structures.md").read_text()
-    table = {row["structure"]: row for row in rig.compare_structures(tmp_path, processes=1)}
+    table = {row["structure"]: row for row in rig_plots.compare_structures(tmp_path,
+                                                                             processes=1)}
     loops = {s: row["small_loop_area_mean"] for s, row in table.items()}
     assert loops["four-element"] > loops["final"] > loops["haupt-sedlan"]
     early = {s: row["relaxed_0.1s"] for s, row in table.items()}
@@ -238,3 +239,47 @@ def test_the_fmu_engine_takes_fmi3_fmus_with_the_fmi2_numbers(all_fmus, name):
     assert rows["native"] == rows["fmi3"]
     assert np.array_equal(holds["native"], holds["fmi3"])
     assert np.isfinite(holds["fmi3"]).all() and rows["fmi3"].dynamic_stiffness > 0.0
+
+
+@pytest.mark.parametrize("component, preload, amplitude, meant", [
+    ("RoadWheelTyre", "3.5", "1", "mm"),         # mm typed where m are expected
+    ("TrackBushRadial", "0.3", "0.1", "mm"),
+    ("TrackBushTorsion", "10", "5", "deg"),      # deg typed where rad are expected
+])
+def test_a_point_in_mm_or_deg_is_refused_as_signal_refuses_it(tmp_path, capsys, component,
+                                                              preload, amplitude, meant):
+    with pytest.raises(SystemExit) as stop:
+        cli.main(["rig", "--component", component, "--preload", preload, "--amplitude",
+                  amplitude, "--frequency", "1", "--out", str(tmp_path / "out")])
+    assert stop.value.code == 2
+    error = capsys.readouterr().err
+    assert f"it looks like {meant}" in error and "Convert to SI" in error
+    assert len(error.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_small_angle_that_may_be_in_deg_is_warned_about(tmp_path, capsys):
+    """0.8 typed as rad for the torsion bush: past the 33 deg the thesis measured."""
+    assert cli.main(["rig", "--component", "TrackBushTorsion", "--preload", "0.3",
+                     "--amplitude", "0.5", "--frequency", "1", "--hold", "1",
+                     "--out", str(tmp_path / "out")]) == 0
+    error = capsys.readouterr().err
+    assert "warning:" in error and "if the values are in deg" in error
+
+
+def test_the_table_and_its_csv_say_their_units(tmp_path, capsys):
+    out = tmp_path / "rig"
+    assert cli.main(["rig", "--component", "TrackBushTorsion", "--preload", "0.1745",
+                     "--amplitude", "0.0873", "--frequency", "1", "--hold", "1",
+                     "--out", str(out)]) == 0
+    printed = capsys.readouterr().out.splitlines()[0].split()
+    for word in ("preload", "rad", "amplitude", "E/cycle", "J", "secant", "N.m/rad"):
+        assert word in printed, printed
+    assert printed.count("rad") == 2 and printed.count("N.m/rad") == 2  # |K*| and secant
+    with open(out / "rig.csv", newline="") as f:
+        header = next(csv.reader(f))
+    assert header == ["preload [rad]", "amplitude [rad]", "frequency [Hz]",
+                      "dynamic_stiffness [N.m/rad]", "loss_angle_deg",
+                      "energy_per_cycle [J]", "secant_stiffness [N.m/rad]"]
+    (row,) = rig.read_rows(out / "rig.csv")  # read back by the bare names
+    assert row["preload"] == 0.1745 and row["dynamic_stiffness"] > 0

@@ -253,3 +253,110 @@ def test_an_fmi3_fmu_gives_the_fmi2_fmus_result_to_the_bit(all_fmus, name, tmp_p
     assert written["native", 0] == written["fmi3", 0]
     assert written["native", 3] == written["fmi3", 3]
     assert written["native", 0] != written["native", 3]
+
+
+# --- arguments and inputs that must not pass ----------------------------------------------
+
+def run_apart(*args, timeout=120):
+    """`fmu-components simulate ...` in a process of its own (a hang or a runaway memory
+    stays there): (exit status, stderr)."""
+    completed = subprocess.run([sys.executable, "-m", "fmu_components", "simulate",
+                                *map(str, args)], capture_output=True, text=True, cwd=ROOT,
+                               timeout=timeout)
+    return completed.returncode, completed.stderr
+
+
+@pytest.mark.parametrize("option, value, words", [
+    ("--stop-time", "nan", ["--stop-time nan"]),
+    ("--stop-time", "-1", ["--stop-time -1", "after the input's start at 0 s"]),
+    ("--stop-time", "0", ["--stop-time 0", "after the input's start at 0 s"]),
+    ("--tolerance", "5", ["--tolerance 5", "between 0 and 1"]),
+    ("--tolerance", "nan", ["--tolerance nan"]),
+    ("--step", "1e-9", ["--step 1e-09", "1e+09 communication steps"]),
+])
+def test_a_stop_time_tolerance_or_step_that_cannot_be_meant_is_one_line(native_fmus, tmp_path,
+                                                                        option, value, words):
+    source, out = tmp_path / "in.csv", tmp_path / "out.csv"
+    write_input(source, "RoadWheelTyre")
+    status, errors = run_apart(native_fmus["RoadWheelTyre"], source, "--out", out, option,
+                               value, timeout=60)
+    assert status == 2 and not out.exists()
+    lines = errors.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in errors, errors
+    for word in words:
+        assert word in lines[0], lines[0]
+
+
+@pytest.mark.parametrize("step", ["0.5", "0.01"])
+def test_a_step_coarser_than_the_samples_is_warned_about(native_fmus, tmp_path, capsys, step):
+    """The FMU holds each communication point's rate over the whole step: samples between
+    steps are skipped and the force is wrong. The user is told which step and which
+    spacing."""
+    source, out = tmp_path / "in.csv", tmp_path / "out.csv"
+    write_input(source, "RoadWheelTyre")
+    status, _, errors = run(capsys, native_fmus["RoadWheelTyre"], source, "--out", out,
+                            "--step", step)
+    assert status == 0
+    assert f"--step {step} s is coarser than the input's sampling (0.001 s)" in errors
+    # the input's own step says nothing
+    status, _, errors = run(capsys, native_fmus["RoadWheelTyre"], source, "--out", out)
+    assert status == 0 and errors == ""
+
+
+def test_the_result_folder_is_made_before_the_run(native_fmus, tmp_path, capsys):
+    source = tmp_path / "in.csv"
+    write_input(source, "TrackBushRadial")
+    out, plot = tmp_path / "nodir" / "sub" / "o.csv", tmp_path / "plots" / "loop.png"
+    status, said, errors = run(capsys, native_fmus["TrackBushRadial"], source, "--out", out,
+                               "--plot", plot)
+    assert status == 0 and errors == "", errors
+    assert len(read_result(out)[1]) == 1001 and plot.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("cell, words", [
+    ("nan", ["row 6", "time 0.004 s", "compression", "nan"]),
+    ("abc", ["row 6", "time 0.004 s", "'abc'"]),
+    ("", ["row 6", "time 0.004 s", "''"]),
+])
+def test_a_bad_cell_is_named_by_its_row_and_time(native_fmus, tmp_path, capsys, cell, words):
+    source = tmp_path / "in.csv"
+    write_input(source, "RoadWheelTyre")
+    lines = source.read_text().splitlines()
+    time, _, rate = lines[5].split(",")  # row 6 of the file, the 5th sample
+    lines[5] = ",".join([time, cell, rate])
+    source.write_text("\n".join(lines) + "\n")
+    status, _, errors = run(capsys, native_fmus["RoadWheelTyre"], source, "--out",
+                            tmp_path / "out.csv")
+    assert status == 2 and len(errors.strip().splitlines()) == 1, errors
+    for word in words:
+        assert word in errors, errors
+
+
+def test_a_semicolon_separated_file_gets_a_hint(native_fmus, tmp_path, capsys):
+    source = tmp_path / "in.csv"
+    write_input(source, "RoadWheelTyre")
+    source.write_text(source.read_text().replace(",", ";"))
+    status, _, errors = run(capsys, native_fmus["RoadWheelTyre"], source, "--out",
+                            tmp_path / "out.csv")
+    assert status == 2 and len(errors.strip().splitlines()) == 1, errors
+    assert "separated by ';'" in errors and "commas" in errors
+
+
+def test_the_damper_plot_shows_its_torque_and_its_parts(native_fmus, tmp_path):
+    """The torque is drawn wide and light under its parts, so that a part equal to it
+    (the dashpot's torque, most of the time) does not hide it."""
+    from fmu_components.lab.simulate import Component, loop_figure
+
+    component = Component(str(native_fmus["RotaryDamper"]))
+    table = write_input(tmp_path / "in.csv", "RotaryDamper")
+    columns = {"time": table["time"], "angle": table["angle"], "angle_rate": table["angle_rate"]}
+    for output in component.outputs:
+        columns[output] = np.sin(table["time"])  # every part equal to the torque
+    figure = loop_figure(component, columns)
+    histories = figure.axes[3]
+    lines = {line.get_label(): line for line in histories.get_lines()}
+    torque = lines["torque"]
+    parts = [lines[n] for n in lines if n != "torque"]
+    assert parts and all(torque.get_linewidth() > 2 * p.get_linewidth() for p in parts)
+    assert all(torque.get_zorder() < p.get_zorder() for p in parts)
+    assert figure.axes[0].get_xlabel() == "angle (rad)"  # as the thesis gives its tests

@@ -1,5 +1,5 @@
-"""Tracked-vehicle running-gear components as FMI 2.0 FMUs, in two flavours from one
-definition of their equations: native C and pythonfmu.
+"""Tracked-vehicle running-gear components as FMI 2.0 and FMI 3.0 FMUs, in two flavours from
+one definition of their equations: native C and pythonfmu.
 
 The layers, each importing only those above it in this list:
 
@@ -12,9 +12,12 @@ The layers, each importing only those above it in this list:
   (fmpy and numpy only; it imports nothing else of this package, so any Python host can
   use it alone);
 * ``export``: building the FMUs (the C printer, the modelDescription writer, the build);
-* ``lab``: the tools an engineer runs (signals, simulate, rig, fit, the build command);
-* ``verification``: the FMUs against an independent solve of the same equations;
-* ``cli``: the command line over all of them.
+* ``lab``: the tools an engineer runs, as a library (signals, simulate, rig, fit, the build's
+  run); it never reads the command line;
+* ``verification``: the FMUs against an independent solve of the same equations, and the
+  model against the thesis's measurements; a library too;
+* ``commands``: the command line's commands, one module each, over the layers above;
+* ``cli``: the command line's registry and entry point.
 
 This file travels inside the Python FMUs too, so it imports nothing.
 "Spec section N" in comments refers to the model specification, docs/model-spec.md.

@@ -1,15 +1,7 @@
-"""Build both flavours of the FMUs and simulate each once through fmpy, printing a summary.
-
-The build itself is ``export.build``; this is the command around it.
-
-    fmu-components build            # build fmus/*.fmu (native) and fmus/python/*.fmu, then run
-    fmu-components build --no-run   # build only
-    fmu-components build --only RotaryDamper --flavour native
-    fmu-components build --structure four-element   # another of the thesis's model structures
-    fmu-components build --params bush.json --name MyBush --component TrackBushRadial
-
-(``python build_fmus.py`` in the repository root does the same.) Building needs gcc, and
-x86_64-w64-mingw32-gcc for the native FMUs' win64 binaries.
+"""What ``fmu-components build`` does around the build itself (``export.build``): the host
+checked before it starts, an engineer's own part read from its PARAMS.json, and each built
+FMU simulated once through fmpy with a summary printed. The command is
+``commands/build.py``.
 """
 
 import math
@@ -23,10 +15,10 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UsageError
-from ..export.build import FLAVOURS, Own, build
+from ..export.build import Own
 from ..export.identity import read_identity
 from ..export.parameters import ParameterError, parameter_set
-from ..runtime.catalog import COMPONENTS, STRUCTURES, structures_of
+from ..runtime.catalog import COMPONENTS, structures_of
 from .signals import THESIS_SINES, input_table, sine, time_grid
 
 
@@ -62,43 +54,6 @@ def run(built):
                   f"{wall / steps * 1e6:8.1f}")
 
 
-EXAMPLES = """examples:
-  fmu-components build                          both flavours of all four FMUs into fmus/, then run each
-  fmu-components build --no-run --only RotaryDamper --flavour native
-  fmu-components build --structure four-element  the torsion bush's four-element model (Appendix 4a)
-                                                into fmus/four-element/
-  fmu-components build --params bush.json --name MyBush --component TrackBushRadial
-                                                your part (fmu-components fit) as fmus/MyBush.fmu
-                                                and fmus/python/MyBush.fmu
-"""
-
-
-def configure(parser):
-    parser.add_argument("--dest", type=Path, default=Path("fmus"),
-                        help="where the native FMUs go; the Python ones go to DEST/python "
-                             "(default: fmus)")
-    parser.add_argument("--only", nargs="+", choices=sorted(COMPONENTS), default=None,
-                        help="these components (default: all four, or those that come in "
-                             "--structure)")
-    parser.add_argument("--structure", choices=list(STRUCTURES), default="final",
-                        help="the thesis's model structure of the rubber components: final "
-                             "(section 6.4, the default), four-element (Appendix 4a, torsion "
-                             "bush only) or haupt-sedlan (section 6.1); DEST defaults to "
-                             "fmus/STRUCTURE for all but final")
-    parser.add_argument("--flavour", nargs="+", choices=FLAVOURS, default=list(FLAVOURS),
-                        help="native (FMI 2.0 in compiled C, fmus/), python (FMI 2.0 through "
-                             "pythonfmu, fmus/python/) and/or fmi3 (FMI 3.0 in compiled C, "
-                             "fmus/fmi3/)")
-    parser.add_argument("--no-run", action="store_true", help="build only")
-    parser.add_argument("--params", type=Path, metavar="PARAMS.json",
-                        help="parameter start values (FMU names, SI; fmu-components fit writes "
-                             "them) for one FMU of your own: needs --name and --component")
-    parser.add_argument("--name", help="with --params: the FMU's model name, identifier and "
-                                       "file name (a C identifier)")
-    parser.add_argument("--component", choices=sorted(COMPONENTS),
-                        help="with --params: the component the values are for")
-
-
 def check_host(flavours, will_run):
     """Everything the build needs, checked before it starts: one line on what to install."""
     if shutil.which("gcc") is None:
@@ -109,25 +64,6 @@ def check_host(flavours, will_run):
         raise UsageError(f"{', '.join(missing)} not installed in {sys.executable}: run inside the "
                          f"project's environment (python3.11 -m venv .venv && "
                          f'.venv/bin/pip install -e ".[test]")')
-
-
-def run_command(args):
-    structure = args.structure
-    check_host(args.flavour, not args.no_run)
-    if args.params or args.name or args.component:
-        return build_own(args)
-    names = args.only or [n for n in COMPONENTS if structure in structures_of(n)]
-    for name in names:
-        if structure not in structures_of(name):
-            raise UsageError(f"{name} comes in no {structure!r} structure (it has: "
-                             f"{', '.join(structures_of(name))}); choose another --only or "
-                             f"--structure")
-    destination = args.dest
-    if structure != "final" and args.dest == Path("fmus"):
-        destination = args.dest / structure
-    built = build(names, destination, args.flavour, structure)
-    build_coupling_bank()
-    return report_built(built, args.no_run)
 
 
 def build_coupling_bank():
@@ -172,9 +108,3 @@ def read_own(path, name, component, structure):
     except ParameterError as error:
         raise UsageError(f"{path}: {error}") from None
     return Own(name, component, structure, values)
-
-
-def build_own(args):
-    own = read_own(args.params, args.name, args.component, args.structure)
-    return report_built(build([own.name], args.dest, args.flavour, args.structure, own),
-                        args.no_run)

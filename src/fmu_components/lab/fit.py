@@ -1,6 +1,5 @@
-"""Identify a rubber component's parameters from measured data: fmu-components fit.
-
-    fmu-components fit --component TrackBushRadial --out bush.json loops_1hz.csv relax.csv
+"""Identify a rubber component's parameters from measured data (the API behind
+``fmu-components fit``, ``commands/fit.py``).
 
 Each DATA.csv is one measured test, in one of two formats, told apart by the header:
 
@@ -32,18 +31,21 @@ and a warning for each parameter the data cannot identify.
 
 import json
 import math
+import multiprocessing
 import os
+import signal
 import sys
-from concurrent.futures import ProcessPoolExecutor
+import threading
+from contextlib import contextmanager
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 from scipy.optimize import least_squares
 
 from ..errors import UsageError
-from .history import STRUCTURES, HistoryError, component_definition, native_history
-from .measured import History, deflection_limit, read_data
+from .files import write_text
+from .history import component_definition, native_history
+from .measured import History, deflection_limit
 
 # A rig-table row is a measured steady sine, so it is simulated as close to the continuous
 # sine as the FMU's semantics allow: from the relaxed preload (as the rig starts), rig.py's
@@ -185,18 +187,33 @@ def residuals_of(test, response):
 # --- the fit ----------------------------------------------------------------------------
 
 _PROBLEM = None  # the problem a pool worker solves
+_SIMULATIONS = None  # a counter shared with the parent: the residual evaluations run
 
 
-def _adopt(problem):
-    global _PROBLEM
-    _PROBLEM = problem
+def _adopt(problem, simulations=None):
+    global _PROBLEM, _SIMULATIONS
+    _PROBLEM, _SIMULATIONS = problem, simulations
+
+
+def _start_worker(problem, simulations):
+    # Ctrl-C goes to the whole process group: the parent answers it and ends the workers.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _adopt(problem, simulations)
+
+
+def _counted_residuals(u):
+    residuals = _PROBLEM.residuals(u)
+    if _SIMULATIONS is not None:
+        with _SIMULATIONS.get_lock():
+            _SIMULATIONS.value += 1
+    return residuals
 
 
 def _solve_from(u0):
     problem = _PROBLEM
     lower = [s.lower for s in problem.free]
     upper = [s.upper for s in problem.free]
-    result = least_squares(problem.residuals, u0, bounds=(lower, upper), method="trf",
+    result = least_squares(_counted_residuals, u0, bounds=(lower, upper), method="trf",
                            diff_step=1e-4, x_scale=1.0, ftol=1e-10, xtol=1e-10, gtol=1e-10,
                            max_nfev=200)
     return result.x, float(result.cost), result.jac, int(result.nfev), result.message
@@ -297,9 +314,38 @@ def starting_points(free, thesis, count, seed=0):
     return points
 
 
+@contextmanager
+def _progress(simulations, starts, shown):
+    """A progress bar on stderr of the simulations the fit has run (it draws on a terminal
+    only, as verify's), followed from the shared counter twice a second."""
+    if not shown:
+        yield
+        return
+    from tqdm import tqdm
+
+    bar = tqdm(desc=f"fitting from {starts} start{'s' if starts > 1 else ''}",
+               unit=" simulations", file=sys.stderr, disable=None)
+    finished = threading.Event()
+
+    def follow():
+        while not finished.wait(0.5):
+            bar.update(simulations.value - bar.n)
+
+    follower = threading.Thread(target=follow, daemon=True)
+    follower.start()
+    try:
+        yield
+    finally:
+        finished.set()
+        follower.join()
+        bar.update(simulations.value - bar.n)
+        bar.close()
+
+
 def fit(component, tests, fix=(), structure="final", starts=4, jobs=None, seed=0,
-        start_values=None):
-    """Fit the free parameters to the tests (History or RigTable); a FitResult."""
+        start_values=None, progress=False):
+    """Fit the free parameters to the tests (History or RigTable); a FitResult. progress:
+    a progress bar on stderr (on a terminal)."""
     import time
 
     definition = component_definition(component, structure)
@@ -316,15 +362,18 @@ def fit(component, tests, fix=(), structure="final", starts=4, jobs=None, seed=0
     points = starting_points(free, start, max(1, starts), seed)
     started = time.perf_counter()
     jobs = max(1, min(jobs or os.cpu_count() or 1, len(points)))
+    context = multiprocessing.get_context("fork")
+    simulations = context.Value("q", 0)
     if jobs == 1:
-        _adopt(problem)
-        outcomes = [_solve_from(p) for p in points]
+        _adopt(problem, simulations)
+        with _progress(simulations, len(points), progress):
+            outcomes = [_solve_from(p) for p in points]
     else:
-        import multiprocessing
-
-        with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("fork"),
-                                 initializer=_adopt, initargs=(problem,)) as pool:
-            outcomes = list(pool.map(_solve_from, points))
+        # A Pool, not a ProcessPoolExecutor: leaving its block on an exception (Ctrl-C)
+        # terminates the workers instead of waiting for their fits to end.
+        with context.Pool(jobs, initializer=_start_worker, initargs=(problem, simulations)) \
+                as pool, _progress(simulations, len(points), progress):
+            outcomes = pool.map(_solve_from, points, chunksize=1)
     best = min(outcomes, key=lambda o: o[1])
     u = best[0]
     values = problem.parameters(u)
@@ -350,72 +399,4 @@ def data_scales(tests, definition):
 
 
 def write_parameters(path, values):
-    Path(path).write_text(json.dumps({n: float(v) for n, v in values.items()}, indent=2) + "\n")
-
-
-# --- command line -----------------------------------------------------------------------
-
-EXAMPLES = """examples:
-  fmu-components fit --component TrackBushRadial --out bush.json test1.csv test2.csv
-  fmu-components fit --component TrackBushTorsion --fix geometric.h elastic.a2 elastic.a3 \\
-      --out torsion.json sweep.csv relaxation.csv
-  fmu-components fit --component RoadWheelTyre --out tyre.json rig_table.csv
-
-DATA.csv: time,deflection,force (a measured test, SI) or
-preload,amplitude,frequency,dynamic_stiffness,loss_angle_deg (a rig table, SI and deg).
-"""
-
-RUBBER = ("RoadWheelTyre", "TrackBushRadial", "TrackBushTorsion")
-
-
-def configure(parser):
-    parser.add_argument("--component", required=True, metavar="NAME",
-                        help=f"the FMU's name: {', '.join(RUBBER)}")
-    parser.add_argument("--fix", nargs="+", default=[], metavar="NAME",
-                        help="parameters kept at their thesis values (fitted: k1 c1 xi1 ... "
-                             "of each Maxwell element, elastic.a0..a3, geometric.h)")
-    parser.add_argument("--structure", default="final", choices=STRUCTURES,
-                        help="the thesis's model structure (default: final)")
-    parser.add_argument("--out", required=True, type=Path, metavar="PARAMS.json",
-                        help="the fitted parameters; the report goes beside it")
-    parser.add_argument("--starts", type=int, default=4,
-                        help="starting points, fitted in parallel (default: 4)")
-    parser.add_argument("--jobs", type=int, default=None,
-                        help="worker processes (default: one per core)")
-    parser.add_argument("data", nargs="+", type=Path, metavar="DATA.csv",
-                        help="one measured test (time,deflection,force) or rig table per file")
-
-
-def run_command(args):
-    if args.component not in RUBBER:
-        raise UsageError(f"--component {args.component}: the fit identifies a rubber "
-                         f"component's parameters; give one of {', '.join(RUBBER)}")
-    try:
-        definition = component_definition(args.component, args.structure)
-    except KeyError as error:
-        raise UsageError(f"--structure {args.structure}: {error.args[0]}") from None
-    unknown = [n for n in args.fix if n not in fitted_names(definition)]
-    if unknown:
-        raise UsageError(f"--fix {unknown[0]}: not a fitted parameter of {args.component} "
-                         f"({args.structure}); give any of {' '.join(fitted_names(definition))}")
-    if args.starts < 1:
-        raise UsageError("--starts must be 1 or more")
-    tests = [read_data(path, definition) for path in args.data]
-    for test in tests:
-        if isinstance(test, History):
-            _, deflection, force = test.columns
-            print(f"{test.path}: deflection from column {deflection!r}, load from column "
-                  f"{force!r}", file=sys.stderr)
-    try:
-        result = fit(args.component, tests, args.fix, args.structure, args.starts, args.jobs)
-    except HistoryError as error:
-        raise UsageError(str(error)) from None
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    write_parameters(args.out, result.values)
-    from .fit_report import write_report
-
-    report = write_report(result, args.out)
-    print(f"wrote {args.out} and {report} (fit in {result.wall_time:.1f} s)")
-    for note in result.warnings():
-        print(f"warning: {note}", file=sys.stderr)
-    return 0
+    write_text(path, json.dumps({n: float(v) for n, v in values.items()}, indent=2) + "\n")

@@ -11,6 +11,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from .display import DISPLAY  # noqa: E402
+from .files import save_figure, write_text  # noqa: E402
 from .measured import History  # noqa: E402
 
 DPI = 200
@@ -48,7 +49,7 @@ def plot_responses(result, responses, path):
     for ax in list(axes.flat)[len(result.tests):]:
         ax.axis("off")
     fig.tight_layout()
-    fig.savefig(path, dpi=DPI)
+    save_figure(fig, path, dpi=DPI)
     plt.close(fig)
 
 
@@ -72,7 +73,7 @@ def plot_residuals(result, responses, path):
     for ax in list(axes.flat)[len(result.tests):]:
         ax.axis("off")
     fig.tight_layout()
-    fig.savefig(path, dpi=DPI)
+    save_figure(fig, path, dpi=DPI)
     plt.close(fig)
 
 
@@ -85,7 +86,7 @@ def plot_correlation(result, path):
     fig.colorbar(image, ax=ax, shrink=0.8, label="correlation")
     ax.set_title("parameter correlation at the solution", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=DPI)
+    save_figure(fig, path, dpi=DPI)
     plt.close(fig)
 
 
@@ -144,5 +145,5 @@ def write_report(result, out):
     notes = result.warnings()
     lines += ["", "## Warnings", ""] + ([f"* {n}" for n in notes] or ["None."]) + [""]
     path = out.parent / f"{stem.name}_report.md"
-    path.write_text("\n".join(lines))
+    write_text(path, "\n".join(lines))
     return path

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UsageError
+from ..runtime.units import column_name
 
 HISTORY_COLUMNS = ("time", "deflection", "force")
 TABLE_COLUMNS = ("preload", "amplitude", "frequency", "dynamic_stiffness", "loss_angle_deg")
@@ -77,7 +78,8 @@ def read_data(path, definition):
     try:
         with open(path, newline="") as f:
             reader = csv.DictReader(f)
-            header = tuple(name.strip() for name in (reader.fieldnames or ()))
+            # a rig table's header may give units ("preload [m]", fmu-components rig)
+            header = tuple(column_name(name) for name in (reader.fieldnames or ()))
             reader.fieldnames = list(header)
             rows = list(reader)
     except OSError as error:

@@ -1,9 +1,5 @@
-"""A virtual test rig: the sine and step-and-hold tests of an elastomer test machine.
-
-They run on a component model or its FMU:
-
-    fmu-components rig --component NAME [--params PARAMS.json] [--structure S]
-                       --preload P... --amplitude A... --frequency F... --out DIR
+"""The virtual test rig's engine: the sine and step-and-hold tests of an elastomer test
+machine, run on a component model or its FMU, and the rig table they give.
 
 Each point (preload P, amplitude A, frequency f; SI) drives the deflection
 x(t) = P + A sin(2 pi f t) from rest at the preload, with the component relaxed there, and
@@ -11,7 +7,7 @@ runs whole cycles until it is periodic: until the first-harmonic result of a cyc
 from the last one's, and by the trend of those changes will change in all, by less than
 --steady (relative), within --max-cycles. The last cycle gives (fmu_components.lab.harmonics)
 the dynamic stiffness |K*|, the loss angle, the energy per cycle and the secant stiffness:
-one row of DIR/rig.csv. For the damper (RotaryDamper, arm angle in) DIR/equivalent.csv adds
+one row of DIR/rig.csv (``write_rows``). For the damper (RotaryDamper, arm angle in) DIR/equivalent.csv adds
 the equivalent stiffness K' = |K*| cos(delta) and damping c_eq = |K*| sin(delta) / omega.
 
 The drive follows the FMUs' co-simulation semantics (spec section 4; runtime/cosim.py):
@@ -29,28 +25,29 @@ by --relaxation STEP (default: the largest amplitude) in --rise seconds, then ho
 
 Engines: ``model`` (the Python model of catalog.component_definition, stepped through
 runtime.cosim.CoSimulation, as the Python flavour's adapter does) or ``fmu`` (a built FMU
-of either flavour, FMI 2.0 or 3.0, through coupling/instance.py). Points run in parallel over --processes.
+of either flavour, FMI 2.0 or 3.0, through coupling/instance.py).
+Points run in parallel over --processes.
+The plots and the structure study are ``rig_plots``; the command is ``commands/rig.py``.
 """
 
 import csv
 import math
 import os
 import sys
-import time
 from contextlib import contextmanager
 from dataclasses import dataclass
 from multiprocessing import get_context
-from pathlib import Path
 
 import numpy as np
 
+from .files import written_whole
 from .harmonics import first_harmonic
-from ..errors import UsageError
+from .signals import check_deflection
 from ..export.identity import NotOurFmu, read_identity
 from ..export.parameters import ParameterError, parameter_set
-from ..runtime.catalog import COMPONENTS, STRUCTURES, component_definition, structures_of
+from ..runtime.catalog import COMPONENTS, component_definition, structures_of
 from ..runtime.cosim import CoSimulation
-from ..runtime.integrator import DEFAULT_RTOL
+from ..runtime.units import column_name
 
 CSV_COLUMNS = ("preload", "amplitude", "frequency", "dynamic_stiffness", "loss_angle_deg",
                "energy_per_cycle", "secant_stiffness")
@@ -414,6 +411,9 @@ def run_rig(component, preloads, amplitudes, frequencies, params=None, structure
             raise RigError(f"each {label} must be a positive number (SI units)")
     if not preloads or any(not math.isfinite(p) for p in preloads):
         raise RigError("each preload must be a finite number (SI units)")
+    if component in COMPONENTS:  # else make_setup says what to choose
+        check_deflection(COMPONENTS[component], [p + s * a for p in preloads
+                                                 for a in amplitudes for s in (-1, 1)])
     setup = make_setup(component, structure, params, engine, fmu, rtol, rate, max_step)
     points = [(p, a, f) for p in preloads for a in amplitudes for f in frequencies]
     options = dict(samples_per_cycle=samples_per_cycle, steady=steady, max_cycles=max_cycles)
@@ -426,31 +426,28 @@ def run_rig(component, preloads, amplitudes, frequencies, params=None, structure
 
 
 def write_rows(rows, out, component):
-    """DIR/rig.csv, and for the damper DIR/equivalent.csv."""
+    """DIR/rig.csv, and for the damper DIR/equivalent.csv; each header names its column's
+    unit in brackets ("preload [m]"; read_rows and the fit read them with or without)."""
     out.mkdir(parents=True, exist_ok=True)
     paths = [out / "rig.csv"]
-    with open(paths[0], "w", newline="") as f:
-        writer = csv.writer(f)
-        writer.writerow(CSV_COLUMNS)
-        for row in rows:
-            writer.writerow([repr(float(getattr(row, c))) for c in CSV_COLUMNS])
+    tables = [(paths[0], CSV_COLUMNS)]
     if component == "RotaryDamper":
         paths.append(out / "equivalent.csv")
-        with open(paths[1], "w", newline="") as f:
+        tables.append((paths[1], EQUIVALENT_COLUMNS))
+    for path, columns in tables:
+        with written_whole(path) as whole, open(whole, "w", newline="") as f:
             writer = csv.writer(f)
-            writer.writerow(EQUIVALENT_COLUMNS)
+            writer.writerow(csv_header(columns, component))
             for row in rows:
-                writer.writerow([repr(float(getattr(row, c))) for c in EQUIVALENT_COLUMNS])
+                writer.writerow([repr(float(getattr(row, c))) for c in columns])
     return paths
 
 
 def read_rows(path):
-    """The rows of a rig.csv, as dicts of floats."""
+    """The rows of a rig.csv, as dicts of floats by the columns' bare names."""
     with open(path, newline="") as f:
-        return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
+        return [{column_name(k): float(v) for k, v in row.items()} for row in csv.DictReader(f)]
 
-
-# --- plots ---------------------------------------------------------------------------------
 
 def units(component):
     definition = COMPONENTS[component]
@@ -458,319 +455,23 @@ def units(component):
     return length, load, f"{load}/{length}"
 
 
-def plot_rows(rows, out, component, relaxation=None, dpi=200):
-    """|K*| and loss angle against frequency (a curve per amplitude) and against amplitude
-    (a curve per frequency), per preload; for the damper its equivalent stiffness and
-    damping likewise; the relaxation record on a log time axis. Returns the files."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+def csv_header(columns, component):
+    """The rig table's header: each column's name and its unit in brackets (the loss angle's
+    name says its unit)."""
     length, load, stiffness = units(component)
-    quantities = [("dynamic_stiffness", f"|K*| ({stiffness})"),
-                  ("loss_angle_deg", "loss angle (deg)")]
-    if component == "RotaryDamper":
-        quantities += [("equivalent_stiffness", f"equivalent stiffness K' ({stiffness})"),
-                       ("equivalent_damping", f"equivalent damping c_eq ({load}.s/{length})")]
-    preloads = sorted({r.preload for r in rows})
-    files = []
-    for against, by, label, log in (("frequency", "amplitude", "frequency (Hz)", True),
-                                    ("amplitude", "frequency", f"amplitude ({length})", False)):
-        figure, axes = plt.subplots(len(quantities), 1, figsize=(6.5, 2.6 * len(quantities)),
-                                    sharex=True, squeeze=False)
-        for preload in preloads:
-            for level in sorted({getattr(r, by) for r in rows}):
-                curve = sorted((r for r in rows if r.preload == preload and getattr(r, by) == level),
-                               key=lambda r: getattr(r, against))
-                if not curve:
-                    continue
-                unit = "Hz" if by == "frequency" else length
-                name = f"{by} {level:g} {unit}" + (
-                    f", preload {preload:g} {length}" if len(preloads) > 1 else "")
-                style = "o-" if len(curve) > 1 else "o"
-                for axis, (quantity, _) in zip(axes[:, 0], quantities):
-                    axis.plot([getattr(r, against) for r in curve],
-                              [getattr(r, quantity) for r in curve], style, ms=3, label=name)
-        for axis, (_, title) in zip(axes[:, 0], quantities):
-            axis.set_ylabel(title)
-            axis.grid(True, which="both", alpha=0.3)
-            if log:
-                axis.set_xscale("log")
-        axes[-1, 0].set_xlabel(label)
-        axes[0, 0].legend(fontsize=7, ncol=2)
-        axes[0, 0].set_title(f"{component}: first harmonic at periodic steady state")
-        figure.tight_layout()
-        path = out / f"rig_{against}.png"
-        figure.savefig(path, dpi=dpi)
-        plt.close(figure)
-        files.append(path)
-    if relaxation is not None:
-        files.append(plot_relaxation(relaxation, out / "rig_relaxation.png", component, dpi))
-    return files
-
-
-def plot_relaxation(records, path, component, dpi=200, title=None):
-    """records: {label: (times, deflection, force, rise)}; the force over the hold against
-    the time since the ramp ended, log axis (as the thesis plots relaxation, Fig. 5.6-1)."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    _, load, _ = units(component)
-    figure, axis = plt.subplots(figsize=(6.5, 3.6))
-    for label, (times, _, force, rise) in records.items():
-        shown = times > rise
-        axis.semilogx(times[shown] - rise, force[shown], label=label)
-    axis.set_xlabel("time since the ramp ended (s)")
-    axis.set_ylabel(f"{COMPONENTS[component].outputs[0].name} ({load})")
-    axis.grid(True, which="both", alpha=0.3)
-    axis.legend(fontsize=8)
-    axis.set_title(title or f"{component}: step and hold")
-    figure.tight_layout()
-    figure.savefig(path, dpi=dpi)
-    plt.close(figure)
-    return path
+    unit = {"preload": length, "amplitude": length, "frequency": "Hz",
+            "dynamic_stiffness": stiffness, "energy_per_cycle": "J",
+            "secant_stiffness": stiffness, "equivalent_stiffness": stiffness,
+            "equivalent_damping": f"{load}.s/{length}"}
+    return [f"{c} [{unit[c]}]" if c in unit else c for c in columns]
 
 
 def write_relaxation(record, path, component):
     times, deflection, force = record[:3]
     definition = COMPONENTS[component]
-    with open(path, "w", newline="") as f:
+    with written_whole(path) as whole, open(whole, "w", newline="") as f:
         writer = csv.writer(f)
         writer.writerow(["time", definition.inputs[0].name, definition.outputs[0].name])
         for row in zip(times, deflection, force):
             writer.writerow([repr(float(v)) for v in row])
     return path
-
-
-# --- structure comparison (thesis Figs. 6.1-1/6.3-2, 6.3-4, 6.3-5, 6.4-2, 6.4-3) ------------
-
-RAD_PER_DEG = math.pi / 180.0
-DUAL_SINE = (10.0 * RAD_PER_DEG, [(7.5 * RAD_PER_DEG, 0.1), (0.75 * RAD_PER_DEG, 1.5)])
-DUAL_SINE_STEP, DUAL_SINE_STOP, DUAL_SINE_SHOWN = 5e-3, 20.0, 10.0  # as cases.py, section 5.8
-RELAXATION_FROM, RELAXATION_TO = 10.0 * RAD_PER_DEG, 25.0 * RAD_PER_DEG  # section 5.6, Fig. 5.6-1
-RELAXATION_TIMES = (0.1, 1.0, 10.0, 100.0)  # s after the ramp, the table's columns
-
-
-def dual_sine_record(setup):
-    """The torsion dual sine of section 5.8 (10 deg + 7.5 deg at 0.1 Hz + 0.75 deg at
-    1.5 Hz), exact rates at each sample, from rest at its start."""
-    mean, components = DUAL_SINE
-    times = np.arange(int(round(DUAL_SINE_STOP / DUAL_SINE_STEP)) + 1) * DUAL_SINE_STEP
-    deflection = mean + sum(a * np.sin(2 * math.pi * f * times) for a, f in components)
-    rates = sum(a * 2 * math.pi * f * np.cos(2 * math.pi * f * times) for a, f in components)
-    return times, deflection, drive(setup, times, deflection, rates)
-
-
-def secondary_loop_areas(times, force, start=DUAL_SINE_SHOWN):
-    """The energy the 1.5 Hz motion of the dual sine dissipates in each of its cycles from
-    `start`: the integral of T dx2 over the cycle, x2 the 1.5 Hz component alone (it closes
-    each cycle; the 0.1 Hz motion does not). It is the area of the small loops the measured
-    response encloses (Fig. 5.8-1): near zero where the small motion meets a stiffness alone."""
-    amplitude, frequency = DUAL_SINE[1][1]
-    per_cycle = int(round(1.0 / (frequency * DUAL_SINE_STEP)))
-    small = amplitude * np.sin(2 * math.pi * frequency * times)
-    first = int(np.searchsorted(times, start))
-    areas = []
-    while first + per_cycle <= len(times) - 1:
-        x, f = small[first:first + per_cycle + 1], force[first:first + per_cycle + 1]
-        areas.append(float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(x))))
-        first += per_cycle
-    return np.array(areas)
-
-
-def _structure_task(structure):
-    setup = make_setup("TrackBushTorsion", structure)
-    dual = dual_sine_record(setup)
-    relax = relaxation_record(setup, RELAXATION_FROM, RELAXATION_TO - RELAXATION_FROM,
-                              RISE_TIME, HOLD_TIME)
-    return structure, dual, relax
-
-
-def compare_structures(out, processes=None, dpi=200):
-    """The three structures of the torsion bush on the dual sine and the step-and-hold test:
-    a figure (DIR/structures.png) and a Markdown table (DIR/structures.md). Returns the
-    table's rows as dicts."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    out.mkdir(parents=True, exist_ok=True)
-    structures = [s for s in STRUCTURES if s in structures_of("TrackBushTorsion")]
-    processes = min(processes or _cores(), len(structures))
-    if processes > 1:
-        with get_context("fork").Pool(processes) as pool:
-            results = pool.map(_structure_task, structures, chunksize=1)
-    else:
-        results = [_structure_task(s) for s in structures]
-    figure, (loops, relaxation) = plt.subplots(1, 2, figsize=(11, 4.2))
-    table = []
-    figures = {"final": "Fig. 6.4-2, 6.4-3", "four-element": "Figs. 6.3-4, 6.3-5",
-               "haupt-sedlan": "Fig. 6.3-2"}
-    for structure, (t, x, f), (tr, xr, fr) in results:
-        shown = t >= DUAL_SINE_SHOWN
-        loops.plot(np.degrees(x[shown]), f[shown], lw=0.8, label=structure)
-        held = tr > RISE_TIME
-        relaxation.semilogx(tr[held] - RISE_TIME, fr[held], label=structure)
-        areas = secondary_loop_areas(t, f)
-        peak = fr[np.argmin(np.abs(tr - RISE_TIME))]
-        final = fr[-1]
-        row = {"structure": structure, "thesis": figures[structure],
-               "dual_sine_range": float(np.ptp(f[shown])),
-               "small_loop_area_mean": float(np.mean(areas)),
-               "small_loop_area_min": float(np.min(areas)),
-               "relaxation_peak": float(peak)}
-        for after in RELAXATION_TIMES:
-            value = float(np.interp(RISE_TIME + after, tr, fr))
-            row[f"relaxed_{after:g}s"] = (peak - value) / (peak - final) if peak != final else 0.0
-            row[f"torque_{after:g}s"] = value
-        table.append(row)
-    loops.set_xlabel("angle (deg)")
-    loops.set_ylabel("torque (N.m)")
-    loops.set_title("dual sine, 10 + 7.5 sin(0.1 Hz) + 0.75 sin(1.5 Hz) deg")
-    relaxation.set_xlabel("time since the ramp ended (s)")
-    relaxation.set_ylabel("torque (N.m)")
-    relaxation.set_title("step 10 to 25 deg in 0.1 s, hold")
-    for axis in (loops, relaxation):
-        axis.grid(True, which="both", alpha=0.3)
-        axis.legend(fontsize=8)
-    figure.suptitle("TrackBushTorsion: the thesis's three model structures")
-    figure.tight_layout()
-    figure.savefig(out / "structures.png", dpi=dpi)
-    plt.close(figure)
-    (out / "structures.md").write_text(structures_table(table))
-    return table
-
-
-def structures_table(table):
-    head = ("| structure | thesis | dual sine range (N.m) | 1.5 Hz loops: energy per cycle, mean / "
-            "min (J) "
-            "| torque at the end of the ramp (N.m) | "
-            + " | ".join(f"{t:g} s" for t in RELAXATION_TIMES) + " |")
-    lines = [head, "|" + "---|" * (5 + len(RELAXATION_TIMES))]
-    for row in table:
-        relaxed = " | ".join(f"{row[f'torque_{t:g}s']:.1f} ({100 * row[f'relaxed_{t:g}s']:.0f} %)"
-                             for t in RELAXATION_TIMES)
-        lines.append(f"| {row['structure']} | {row['thesis']} | {row['dual_sine_range']:.1f} | "
-                     f"{row['small_loop_area_mean']:.3g} / {row['small_loop_area_min']:.3g} | "
-                     f"{row['relaxation_peak']:.1f} | {relaxed} |")
-    return ("Torque after the step (in brackets: the share of the relaxation over the whole "
-            "hold that has happened by then)\n\n" + "\n".join(lines) + "\n")
-
-
-# --- command line --------------------------------------------------------------------------
-
-EXAMPLES = """examples:
-  fmu-components rig --component TrackBushRadial --preload 3e-4 --amplitude 2e-5 1e-4 3e-4 \\
-      --frequency 0.1 1 10 --out rig_radial
-  fmu-components rig --component TrackBushTorsion --params fitted.json --preload 0.1745 \\
-      --amplitude 0.0873 --frequency 1 --engine fmu --fmu fmus/TrackBushTorsion.fmu --out rig_fmu
-  fmu-components rig --component RotaryDamper --preload 0 --amplitude 0.05 0.21 \\
-      --frequency 0.1 0.5 1 3 --out rig_damper     (adds equivalent.csv: K' and c_eq)
-  fmu-components rig --component TrackBushTorsion --compare-structures --out structures
-"""
-
-
-def configure(parser):
-    parser.add_argument("--component", required=True, metavar="NAME",
-                        help=f"the FMU's name: {', '.join(sorted(COMPONENTS))}")
-    parser.add_argument("--params", metavar="PARAMS.json",
-                        help="FMU parameter names to SI values; the rest keep the thesis values")
-    parser.add_argument("--structure", default="final", choices=list(STRUCTURES),
-                        help="the thesis's model structure (default final, section 6.4)")
-    parser.add_argument("--preload", type=float, nargs="+", metavar="P",
-                        help="mean deflections (m or rad)")
-    parser.add_argument("--amplitude", type=float, nargs="+", metavar="A",
-                        help="sine amplitudes (m or rad)")
-    parser.add_argument("--frequency", type=float, nargs="+", metavar="F", help="Hz")
-    parser.add_argument("--out", type=Path, required=True, metavar="DIR",
-                        help="folder for rig.csv, relaxation.csv and the plots")
-    parser.add_argument("--engine", choices=sorted(DRIVERS), default="model",
-                        help="the Python model (default) or a built FMU (--fmu)")
-    parser.add_argument("--fmu", metavar="PATH", help="the FMU for --engine fmu (either flavour)")
-    parser.add_argument("--relaxation", type=float, metavar="STEP",
-                        help="the step-and-hold test's step from the first preload (default: "
-                             "the largest amplitude)")
-    parser.add_argument("--hold", type=float, default=HOLD_TIME, metavar="SECONDS",
-                        help=f"how long the step is held (default {HOLD_TIME:g} s)")
-    parser.add_argument("--rise", type=float, default=RISE_TIME, metavar="SECONDS",
-                        help=f"the step's ramp time (default {RISE_TIME:g} s)")
-    parser.add_argument("--samples-per-cycle", type=int, default=SAMPLES_PER_CYCLE,
-                        help=f"the fewest steps per cycle (default {SAMPLES_PER_CYCLE}; a "
-                             f"multiple of 4)")
-    parser.add_argument("--max-step", type=float, default=MAX_STEP, metavar="SECONDS",
-                        help=f"the longest sine step (default {MAX_STEP:g} s)")
-    parser.add_argument("--rate", choices=RATES, default="secant",
-                        help="the rate held over each step: the secant to the next sample "
-                             "(default) or the sine's own rate at the sample")
-    parser.add_argument("--steady", type=float, default=STEADY,
-                        help=f"periodic steady state: the relative change still to come of "
-                             f"the harmonic result (default {STEADY:g})")
-    parser.add_argument("--max-cycles", type=int, default=MAX_CYCLES,
-                        help="the most cycles run towards periodic steady state")
-    parser.add_argument("--rtol", type=float, default=RIG_RTOL,
-                        help=f"the integrator's relative tolerance (default {RIG_RTOL:g}; "
-                             f"the FMUs' own default is {DEFAULT_RTOL:g})")
-    parser.add_argument("--processes", type=int, default=None,
-                        help="worker processes (default: one per core)")
-    parser.add_argument("--compare-structures", action="store_true",
-                        help="run the torsion bush's three structures on the dual sine and "
-                             "step-and-hold tests instead (structures.png, structures.md)")
-
-
-def run_command(args):
-    try:
-        return _run(args)
-    except RigError as error:
-        raise UsageError(str(error)) from None
-
-
-def _run(args):
-    if args.compare_structures:
-        if args.component != "TrackBushTorsion":
-            raise RigError("--compare-structures runs the torsion bush (the thesis compares "
-                           "the structures on it): use --component TrackBushTorsion")
-        started = time.perf_counter()
-        table = compare_structures(args.out, args.processes)
-        print(structures_table(table))
-        print(f"wrote {args.out / 'structures.png'} and {args.out / 'structures.md'} "
-              f"({time.perf_counter() - started:.1f} s)")
-        return 0
-    for option in ("preload", "amplitude", "frequency"):
-        if not getattr(args, option):
-            raise RigError(f"give --{option} (one or more values, SI units)")
-    started = time.perf_counter()
-    rows = run_rig(args.component, args.preload, args.amplitude, args.frequency,
-                   params=args.params, structure=args.structure, engine=args.engine,
-                   fmu=args.fmu, rtol=args.rtol, samples_per_cycle=args.samples_per_cycle,
-                   steady=args.steady, max_cycles=args.max_cycles, processes=args.processes,
-                   rate=args.rate, max_step=args.max_step)
-    sweep_time = time.perf_counter() - started
-    setup = make_setup(args.component, args.structure, args.params, args.engine, args.fmu,
-                       args.rtol)
-    step = args.relaxation if args.relaxation is not None else max(args.amplitude)
-    record = relaxation_record(setup, args.preload[0], step, args.rise, args.hold)
-    files = write_rows(rows, args.out, args.component)
-    files.append(write_relaxation(record, args.out / "relaxation.csv", args.component))
-    length = units(args.component)[0]
-    label = f"{args.preload[0]:g} to {args.preload[0] + step:g} {length} in {args.rise:g} s"
-    files += plot_rows(rows, args.out, args.component, {label: (*record, args.rise)})
-    _print_rows(rows, args.component)
-    unsteady = [r for r in rows if not r.steady]
-    for row in unsteady:
-        print(f"warning: preload {row.preload:g}, amplitude {row.amplitude:g}, frequency "
-              f"{row.frequency:g} Hz not periodic after {row.cycles} cycles (last change "
-              f"{row.change:.2g}); raise --max-cycles", file=sys.stderr)
-    print(f"{len(rows)} points in {sweep_time:.1f} s ({args.engine}); wrote "
-          + ", ".join(str(f) for f in files))
-    return 0
-
-
-def _print_rows(rows, component):
-    length, load, stiffness = units(component)
-    print(f"{'preload':>10s} {'amplitude':>10s} {'f Hz':>7s} {'|K*| ' + stiffness:>16s} "
-          f"{'delta deg':>9s} {'E/cycle':>11s} {'secant':>11s} {'cycles':>6s}")
-    for r in rows:
-        print(f"{r.preload:10.4g} {r.amplitude:10.4g} {r.frequency:7.3g} "
-              f"{r.dynamic_stiffness:16.6g} {r.loss_angle_deg:9.4f} {r.energy_per_cycle:11.5g} "
-              f"{r.secant_stiffness:11.5g} {r.cycles:6d}")

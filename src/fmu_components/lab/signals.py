@@ -6,10 +6,8 @@ host that knows the deflection at the end of the step should feed the secant rat
 (x[k+1] - x[k]) / h: the deflection then follows the straight path through the samples
 and the only error left is that of the path itself, O(h^2). Feeding the rate at the start
 of the step instead lags by half a step: at 1 ms that costs about 2.5 % of the peak-to-peak
-force at 20 Hz (see README). Every history here uses secant rates.
-
-    fmu-components signal RoadWheelTyre sine --mean 3.5e-3 --amplitude 1e-3 \\
-        --frequency 1 --stop-time 2 --step 1e-3 > tyre_in.csv
+force at 20 Hz (see README). Every history here uses secant rates. The command that writes
+one is ``fmu-components signal`` (``commands/signal.py``).
 """
 
 import csv
@@ -20,7 +18,7 @@ import numpy as np
 
 from ..errors import UsageError
 from ..runtime.catalog import COMPONENTS
-from ..runtime.units import UNITS
+from ..runtime.units import RAD_PER_DEG, UNITS
 
 # The standard test input of each component, a sine inside the range the thesis measured:
 # (mean, amplitude, frequency in Hz), SI units; the damper's is test A (Table 11.2-1).
@@ -59,6 +57,13 @@ def dual_sine(times, mean, components):
     """mean + sum of amplitude*sin(2*pi*f*t) over components [(amplitude, f)]."""
     t = np.asarray(times)
     return mean + sum(a * np.sin(2 * math.pi * f * t) for a, f in components)
+
+
+# The torsion bush's dual sine of section 5.8 (Fig. 5.8-1): (mean, [(amplitude, frequency)])
+# in rad and Hz, 10 deg + 7.5 deg at 0.1 Hz + 0.75 deg at 1.5 Hz, sampled every 5 ms for
+# 20 s; the second half, settled, is the part shown and analysed.
+DUAL_SINE = (10.0 * RAD_PER_DEG, [(7.5 * RAD_PER_DEG, 0.1), (0.75 * RAD_PER_DEG, 1.5)])
+DUAL_SINE_STEP, DUAL_SINE_STOP, DUAL_SINE_SHOWN = 5e-3, 20.0, 10.0  # s
 
 
 def ramp_and_hold(times, start, end, ramp_time):
@@ -155,28 +160,6 @@ def describe(times, deflection, display_factor=1.0, unit=""):
     return f"{v(low)} to {v(high)} over {span:.3g} s, turning {turns} times"
 
 
-EXAMPLES = """examples:
-  fmu-components signal RoadWheelTyre sine --mean 3.5e-3 --amplitude 1e-3 --frequency 1 > in.csv
-  fmu-components signal TrackBushTorsion ramp --mean 0.1745 --amplitude 0.2618 --stop-time 200
-"""
-
-
-def configure(parser):
-    parser.add_argument("fmu", choices=sorted(COMPONENTS), help="the component the input is for")
-    parser.add_argument("shape", choices=["sine", "ramp"],
-                        help="sine: mean + amplitude sin(2 pi f t); ramp: from mean, rising "
-                             "by amplitude over the ramp time, then held")
-    parser.add_argument("--mean", type=float, required=True,
-                        help="sine mean, or ramp start (m or rad)")
-    parser.add_argument("--amplitude", type=float, required=True,
-                        help="sine amplitude, or ramp rise (m or rad)")
-    parser.add_argument("--frequency", type=float, default=1.0, help="sine frequency (Hz)")
-    parser.add_argument("--ramp-time", type=float, default=0.1, help="ramp duration (s)")
-    parser.add_argument("--stop-time", type=float, default=2.0, help="end of the signal (s)")
-    parser.add_argument("--step", type=float, default=1e-3,
-                        help="sample interval, the communication step to feed it at (s)")
-
-
 # A deflection this many times the largest the thesis measured is a unit mistake, not a test.
 UNIT_MISTAKE_FACTOR = 10.0
 
@@ -205,32 +188,12 @@ def deflection_slip(definition, deflection):
     return None
 
 
-def thesis_sine_options(fmu_name):
-    mean, amplitude, frequency = THESIS_SINES[fmu_name]
-    return f"--mean {mean:.6g} --amplitude {amplitude:.6g} --frequency {frequency:g}"
-
-
-def run_command(args):
-    if not (args.step > 0 and args.stop_time >= args.step):
-        raise UsageError("--step must be > 0 and --stop-time at least one step (seconds), "
-                         "e.g. --stop-time 2 --step 1e-3")
-    if args.shape == "sine" and args.frequency <= 0:
-        raise UsageError("--frequency must be > 0 (Hz), e.g. --frequency 1")
-    if args.shape == "ramp" and args.ramp_time <= 0:
-        raise UsageError("--ramp-time must be > 0 (seconds), e.g. --ramp-time 0.1")
-    t = time_grid(args.stop_time, args.step)
-    if args.shape == "sine":
-        x = sine(t, args.mean, args.amplitude, args.frequency)
-    else:
-        x = ramp_and_hold(t, args.mean, args.mean + args.amplitude, args.ramp_time)
-    if args.shape == "sine" and args.amplitude == 0.0:
-        raise UsageError("--amplitude 0 makes the sine a constant; give the amplitude (m or "
-                         "rad), e.g. the thesis sine of this component: "
-                         + thesis_sine_options(args.fmu))
-    slip = deflection_slip(COMPONENTS[args.fmu], x)
+def check_deflection(definition, deflection, where=""):
+    """The unit check every tool gives a deflection it is handed (signal, simulate, rig): a
+    UsageError where it looks typed in mm or deg, a warning on stderr where an angle may
+    be (deflection_slip). `where` prefixes the message (a file's name)."""
+    slip = deflection_slip(definition, np.asarray(deflection, dtype=float))
     if slip and slip[0] == "error":
-        raise UsageError(slip[1])
+        raise UsageError(f"{where}{slip[1]}")
     if slip:
-        print(f"warning: {slip[1]}", file=sys.stderr)
-    write_csv(input_table(args.fmu, t, x), sys.stdout)
-    return 0
+        print(f"warning: {where}{slip[1]}", file=sys.stderr)

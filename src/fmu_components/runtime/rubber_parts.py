@@ -13,9 +13,7 @@ import math
 from .definition import NON_NEGATIVE, POSITIVE, ComponentDefinition, Structure, Variable
 from .expressions import Symbol
 from .rubber import Branch, MaxwellElement, rubber_equations
-
-PER_DEG = 180.0 / math.pi  # multiplies a per-degree value into per-radian
-MM = 1e-3
+from .units import MM, PER_DEG
 
 
 # --- the thesis's model structures ---------------------------------------------------------

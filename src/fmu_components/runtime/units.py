@@ -6,7 +6,18 @@ display value is factor * SI value (FMI 2.0 section 2.2.2).
 
 import math
 
-DEG = 180.0 / math.pi
+DEG = 180.0 / math.pi  # degrees per radian: a value in rad times DEG is in deg
+PER_DEG = DEG  # multiplies a per-degree value into per-radian
+RAD_PER_DEG = math.pi / 180.0  # a value in deg times RAD_PER_DEG is in rad
+MM = 1e-3  # a value in mm times MM is in m
+
+
+
+def column_name(header):
+    """A CSV column's name without the unit its header gives in brackets:
+    'preload [m]' -> 'preload' (a header without one is its name)."""
+    return header.split(" [", 1)[0].strip()
+
 
 UNITS = {
     "m": ({"m": 1}, [("mm", 1e3)]),

@@ -5,5 +5,7 @@ comparison (``verify``, ``outcome``) and its report (``report``); synthetic meas
 that check the fit (``synthetic``). Validation: the model against the thesis's own
 measurements (``measurements``, report in ``measurements_report``).
 
-Imports ``runtime``, ``export`` and ``lab``; nothing imports it but the command line.
+A library: the commands ``verify`` and ``validate`` are in ``commands``, the cases' own
+(``python -m fmu_components.commands.cases``) too. Imports ``runtime``, ``export`` and
+``lab``; nothing imports it but the command line.
 """

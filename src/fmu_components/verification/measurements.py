@@ -18,7 +18,7 @@ A row is judged (``Comparison.inside``) when it has a measured value whose basis
 measurement (rig, fit, supplier): the model within +-``BAND`` % of the measured value (of
 the row's ``scale`` where it gives one), or on the right side of a bound. The band is a
 convention for flagging, not a measurement uncertainty: the thesis gives none and fitted
-its models by eye. The command is ``fmu-components validate`` (``validate_command``).
+its models by eye. The command is ``fmu-components validate`` (``commands/validate.py``).
 
 This is a validation of the model; ``verify`` checks that the FMUs solve its equations.
 """
@@ -31,15 +31,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..lab.harmonics import first_harmonic
-from ..lab.rig import secondary_loop_areas
+from ..lab.harmonics import first_harmonic, secondary_loop_areas
 from ..lab.simulate import main_frequency
 from ..runtime.catalog import COMPONENTS
 from ..runtime.units import UNITS
 from . import cases as programme
 from .outcome import aligned
 from .reference import THESIS_DATA
-from .verify import simulate_case
 
 MEASUREMENTS = THESIS_DATA / "measurements.csv"
 BAND = 10.0  # % of the measured value (or of the row's scale): --strict
@@ -216,7 +214,8 @@ class Runs:
             inputs = case.inputs()
             outputs = [v.name for v in COMPONENTS[case.fmu].outputs]
             try:
-                result, _ = simulate_case(self.fmu(case.fmu), inputs, case.options(), outputs)
+                result, _ = programme.simulate_case(self.fmu(case.fmu), inputs, case.options(),
+                                                    outputs, label=case.key)
             except Exception as exc:  # an FMU that fails is reported, not a crash
                 self.failures[case.key] = f"{case.key}: {type(exc).__name__}: {exc}"
                 raise RunFailure(self.failures[case.key]) from None
@@ -490,7 +489,7 @@ def rows(comparisons):
         table.append((
             m.id, m.measured_text,
             with_unit(c.model, m.unit) if c.ran else "-",
-            f"{c.difference:+.4g}" if c.difference is not None else "-",
+            with_unit(c.difference, m.unit, "+.4g") if c.difference is not None else "-",
             f"{c.percent:+.1f}" if c.percent is not None else "-",
             m.basis, m.thesis_agreement or "-", c.verdict))
     return table
@@ -518,3 +517,9 @@ def tally(comparisons):
             + (f" ({len(disagree)} where the thesis itself reports disagreement)"
                if outside else "")
             + (f". {len(failed)} could not run: the FMU failed" if failed else "") + ".")
+
+
+def select(measurements, fmus=None, patterns=None):
+    return [m for m in measurements
+            if (not fmus or m.component in fmus)
+            and (not patterns or any(fnmatch.fnmatchcase(m.id, p) for p in patterns))]

@@ -21,6 +21,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from ..lab.display import DISPLAY  # noqa: E402
+from ..lab.files import save_figure, write_text  # noqa: E402
 from ..runtime.catalog import COMPONENTS  # noqa: E402
 from .measurements import BAND, loop_centre, tally, with_unit  # noqa: E402
 
@@ -33,7 +34,7 @@ ELASTIC_STYLE = dict(color="0.6", linewidth=2.0)
 def _save(fig, title, path):
     fig.axes[0].set_title(title, fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=DPI, bbox_inches="tight")
+    save_figure(fig, path, dpi=DPI, bbox_inches="tight")
     plt.close(fig)
 
 
@@ -199,10 +200,10 @@ def write_report(comparisons, runs, folder):
         lines.append("| " + " | ".join(_cell(v) for v in (
             m.id, m.quantity, m.conditions, m.measured_text,
             with_unit(c.model, m.unit) if c.ran else "-",
-            f"{c.difference:+.4g}" if c.difference is not None else "-",
+            with_unit(c.difference, m.unit, "+.4g") if c.difference is not None else "-",
             f"{c.percent:+.1f}" if c.percent is not None else "-",
             m.basis, f"{m.source}: \"{m.quote}\"", said or "-",
             c.problem or c.verdict)) + " |")
     summary = folder / "summary.md"
-    summary.write_text("\n".join(lines) + "\n")
+    write_text(summary, "\n".join(lines) + "\n")
     return summary

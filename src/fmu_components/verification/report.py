@@ -20,6 +20,7 @@ from . import cases as programme  # noqa: E402
 from . import reference  # noqa: E402
 from ..runtime.catalog import COMPONENTS  # noqa: E402
 from ..lab.display import DISPLAY  # noqa: E402
+from ..lab.files import save_figure, write_text  # noqa: E402
 from .outcome import STRICT_LIMIT, rows  # noqa: E402
 
 DPI = 200  # print quality
@@ -278,7 +279,7 @@ def plot_case(outcome, path):
 def _save(fig, title, path):
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=DPI, bbox_inches="tight")
+    save_figure(fig, path, dpi=DPI, bbox_inches="tight")
     plt.close(fig)
 
 
@@ -324,5 +325,5 @@ def write_report(outcomes, folder, progress=None):
         lines.append("| " + " | ".join(row) + (f" | [plot]({name}) |" if outcome.reference
                                                is not None else " |  |"))
     summary = folder / "summary.md"
-    summary.write_text("\n".join(lines) + "\n")
+    write_text(summary, "\n".join(lines) + "\n")
     return summary

@@ -3,21 +3,20 @@
     fmu-components validate [--fmu NAME] [--case GLOB] [--fmus DIR] [--report DIR] [--strict]
 
 Runs every selected row of ``reference_data/thesis/measurements.csv`` that names a metric
-through the built FMUs (``measurements``), prints the table of measured and model values,
-and writes the report (``measurements_report``: summary.md and plots, default
-reports/validation). Exit status 0 when every row ran, 1 when an FMU failed to run; with
+through the built FMUs (``verification.measurements``), prints the table of measured and
+model values, and writes the report (``verification.measurements_report``: summary.md and
+plots, default reports/validation). Exit status 0 when every row ran, 1 when an FMU failed to run; with
 ``--strict`` also 1 when a judged row lies outside the +-10 % band or breaks its bound.
 ``fmu-components verify`` is the other check: the FMUs against an independent solve of the
 same equations.
 """
 
-import fnmatch
 import sys
 from pathlib import Path
 
 from ..errors import UsageError
 from ..runtime.catalog import COMPONENTS
-from .measurements import BAND, Runs, compare_all, read_measurements, table, tally
+from ..verification.measurements import BAND
 
 EXAMPLES = """examples:
   fmu-components validate                    every measured quantity, report in reports/validation
@@ -42,14 +41,11 @@ def configure(parser):
                              f"(or its bound); see docs/validation.md")
 
 
-def select(measurements, fmus=None, patterns=None):
-    return [m for m in measurements
-            if (not fmus or m.component in fmus)
-            and (not patterns or any(fnmatch.fnmatchcase(m.id, p) for p in patterns))]
-
-
 def run_command(args):
     from tqdm import tqdm
+
+    from ..verification.measurements import (Runs, compare_all, read_measurements, select,
+                                             table, tally)
 
     selected = select(read_measurements(), args.fmu, args.case)
     if not selected:
@@ -70,7 +66,7 @@ def run_command(args):
     comparisons = compare_all(selected, runs)
     progress.close()
 
-    from .measurements_report import write_report  # matplotlib only once there is a result
+    from ..verification.measurements_report import write_report  # matplotlib only once there is a result
     summary = write_report(comparisons, runs, args.report)
     print(table(comparisons))
     print(f"\n{tally(comparisons)}\nreport: {summary}")
