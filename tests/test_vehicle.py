@@ -16,13 +16,7 @@ from conftest import ROOT
 
 sys.path.insert(0, str(ROOT / "examples"))  # the example scripts, imported as modules
 
-try:
-    import exudyn  # noqa: F401
-    HAVE_EXUDYN = True
-except ImportError:
-    HAVE_EXUDYN = False
-needs_exudyn = pytest.mark.skipif(
-    not HAVE_EXUDYN, reason='exudyn is not installed: pip install -e ".[examples]"')
+NO_EXUDYN = 'exudyn is not installed: pip install -e ".[examples]"'
 
 
 def test_track_loop_closes_with_every_joint_one_chord():
@@ -65,11 +59,10 @@ def test_wk_weighting_follows_iso_2631(frequency, weight):
     assert abs(response[0]) == pytest.approx(weight, rel=0.01)
 
 
-@needs_exudyn
 def test_a_link_through_a_wheel_stops_the_run_naming_wheel_and_time(native_fmus):
     """Road wheel 2 pushed 45 mm into the link beneath (more than its 37.5 mm of rubber):
     the check names the wheel and the time."""
-    import exudyn as exu
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
     from vehicle.course import Bump
     from vehicle.model import Vehicle, VehicleError
 
@@ -86,11 +79,11 @@ def test_a_link_through_a_wheel_stops_the_run_naming_wheel_and_time(native_fmus)
         vehicle.coupling.free()
 
 
-@needs_exudyn
 def test_a_short_run_prints_its_summary_and_writes_the_csv(native_fmus, tmp_path):
     """Four host steps of 1 ms after a short settling: the summary counts the 175 FMU
     instances and the cost, the CSV has SI columns, the track stays closed and every wheel
     stays on it."""
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
     run = subprocess.run(
         [sys.executable, str(ROOT / "examples" / "tracked_vehicle.py"), "--end-time", "0.004",
          "--settle-time", "0.004", "--csv", "--out", str(tmp_path),

@@ -30,7 +30,6 @@ from .model import (ENGAGEMENT_RAMP, GROUND_DAMPING, GROUND_STIFFNESS, HORN_HEIG
 # Damping that brings the vehicle to rest while it settles (not in the run).
 SETTLE_DAMPING = {"seat": 300.0, "arm": 5e3, "hull": 2e5, "hull_pitch": 6e5}
 TYRE_STIFFNESS_FLOOR = 2e6  # N/m: the Jacobian's tyre stiffness near first touch
-SIGN = 1.0
 TOOTH_SPACING = 2 * math.pi / lay.SPROCKET_TEETH
 
 
@@ -129,7 +128,7 @@ class Contacts:
                 left = ga.T @ block
                 for ib, gb in rows:
                     jacobian[ia:ia + 3, ib:ib + 3] += left @ gb
-        return SIGN * jacobian
+        return jacobian
 
     def _g(self, body, point):
         """d(point)/d(body's x, y, angle)."""

@@ -23,6 +23,10 @@ class Course:
         """Ground height at x (array in, array out)."""
         return np.zeros_like(np.asarray(x, dtype=float))
 
+    def along(self, x, length):
+        """Distance past the flat start, in units of `length`."""
+        return (np.asarray(x, dtype=float) - self.front - self.start) / length
+
     def describe(self):
         return "flat ground"
 
@@ -35,7 +39,7 @@ class Bump(Course):
         self.bump_height, self.length = height, length
 
     def height(self, x):
-        u = (np.asarray(x, dtype=float) - self.front - self.start) / self.length
+        u = self.along(x, self.length)
         inside = (u > 0.0) & (u < 1.0)
         return np.where(inside, 0.5 * self.bump_height * (1 - np.cos(2 * math.pi * u)), 0.0)
 
@@ -55,7 +59,7 @@ class Sine(Course):
         self.amplitude, self.wavelength = amplitude, wavelength
 
     def height(self, x):
-        u = (np.asarray(x, dtype=float) - self.front - self.start) / self.wavelength
+        u = self.along(x, self.wavelength)
         return np.where(u > 0.0, self.amplitude * (1 - np.cos(2 * math.pi * u)), 0.0)
 
     def describe(self):

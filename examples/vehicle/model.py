@@ -50,8 +50,7 @@ SURGE_FREQUENCY = 0.5  # Hz, the speed hold's (critically damped)
 # (the track's guide horns are about this high; assumed); a compression beyond the tyre's
 # rubber means the link has passed through it (section 5.1.1).
 HORN_HEIGHT = 0.05
-VERBOSE = 0
-MODIFIED = True
+VERBOSE = 0  # exudyn's solver output while settling (1: per step)
 
 
 class VehicleError(RuntimeError):
@@ -78,13 +77,14 @@ def static_points(fmu_dir=None):
             component.free()
 
 
+TRACK_LINKS = 80  # the loop Layout closes (checked by tests/test_vehicle.py)
 GROUND_SHARE = 0.4  # of the track's weight, carried by the ground directly (about its bottom run)
 
 
 def wheel_load():
     """Static load of one wheel (both half-wheels): the side's mass less what of the track
     lies on the ground, over the stations. The static solve refines it."""
-    track = 66 * lay.LINK_MASS
+    track = TRACK_LINKS * lay.LINK_MASS
     return (lay.SIDE_MASS - GROUND_SHARE * track) * GRAVITY / lay.STATIONS
 
 
@@ -99,7 +99,7 @@ class RelaxedTable:
 
     def __init__(self, component, fmu):
         low, high = self.RANGES[fmu]
-        self.x = np.linspace(low, high, 4001)
+        self.x = np.linspace(low, high, 1201)
         self.load = np.array([component.host_load(x) for x in self.x])
 
     def __call__(self, deflection, rate=0.0):
@@ -385,7 +385,6 @@ def configure(settings):
     """Solver settings every run of the vehicle needs: the contacts are loads computed from
     the whole state (contacts.py); a sparse linear solver for the loop's banded system."""
     settings.linearSolverType = exu.LinearSolverType.EigenSparse
-    settings.timeIntegration.newton.useModifiedNewton = MODIFIED
 
 
 def _seat_deflection(displacement, velocity):
