@@ -376,15 +376,30 @@ class Vehicle:
     def run(self, end_time, step, settle=True):
         if settle:
             self.settle()
-        self.host = solve(self.mbs, self.coupling, end_time, step)
+        try:
+            self.host = solve(self.mbs, self.coupling, end_time, step, settings=run_settings())
+        except exu.SolverError:
+            raise VehicleError(f"exudyn's solver gave up at t = {self.coupling.time:.4f} s "
+                               f"(its Newton did not converge even on shortened steps; "
+                               f"docs/vehicle.md, What remains)") from None
         from .outputs import histories
         return histories(self)
+
+
+def run_settings():
+    """The settings of the coupled run (exudyn_host.solve adds what the coupling needs)."""
+    settings = exu.SimulationSettings()
+    settings.timeIntegration.verboseMode = VERBOSE
+    settings.solution.file.write = False
+    settings.solution.sensors.active = False
+    configure(settings)
+    return settings
 
 
 def configure(settings):
     """Solver settings every run of the vehicle needs: the contacts are loads computed from
     the whole state (contacts.py); a sparse linear solver for the loop's banded system."""
-    settings.linearSolverType = exu.LinearSolverType.EigenSparse
+    settings.linearSolver.solverType = exu.LinearSolverType.EigenSparse
 
 
 def _seat_deflection(displacement, velocity):
