@@ -1,0 +1,108 @@
+"""One side of a Warrior-class tracked vehicle in the pitch plane, in the exudyn multibody
+host, every running-gear part an FMU: 12 RoadWheelTyre (two per wheel), 3 RotaryDamper
+(stations 1, 2 and 6, section 9.0), a TrackBushRadial and a TrackBushTorsion at each of
+the 80 joints of the closed track loop, coupled by fmu_components.coupling. See
+docs/vehicle.md for the model, its values and its present state.
+
+    python examples/tracked_vehicle.py --course bump --speed 5 --end-time 2
+    python examples/tracked_vehicle.py --course random --csv --animate
+    python examples/tracked_vehicle.py --course sine --linear   # and the Kelvin vehicle
+
+Plots, CSV and the animation go to reports/tracked_vehicle/ (or --out).
+"""
+
+import argparse
+import sys
+import time
+import warnings
+from pathlib import Path
+
+from fmu_components.coupling import DEFAULT_SCHEME, SCHEMES
+
+from coupling_study import write_csv
+from vehicle import outputs
+from vehicle.course import COURSES
+from vehicle.model import Linear, Vehicle, VehicleError, static_points
+
+DEFAULT_STEP = 1e-3  # s
+
+
+def simulate(course_name, speed, end_time, step, coupling=DEFAULT_SCHEME, linear=None,
+             statics=None, settle_time=0.3, fmu_dir=None):
+    """One run; returns (vehicle, histories, wall seconds, CPU seconds) of the run proper
+    (the settling to the static point excluded)."""
+    statics = statics or static_points(fmu_dir)
+    vehicle = Vehicle(None, speed, fmu_dir, linear, coupling, statics)
+    vehicle.course = COURSES[course_name](vehicle.layout.sprocket[0] + 0.3)
+    if settle_time > 0:
+        vehicle.settle(settle_time)
+    wall, cpu = time.perf_counter(), time.process_time()
+    result = vehicle.run(end_time, step, settle=False)
+    return vehicle, result, time.perf_counter() - wall, time.process_time() - cpu
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--speed", type=float, default=5.0, help="m/s (default 5)")
+    parser.add_argument("--course", choices=sorted(COURSES), default="bump")
+    parser.add_argument("--end-time", type=float, default=1.0, help="s of driving")
+    parser.add_argument("--step", type=float, default=DEFAULT_STEP, help="host step, s")
+    parser.add_argument("--coupling", choices=sorted(SCHEMES), default=DEFAULT_SCHEME,
+                        help=f"coupling scheme (default {DEFAULT_SCHEME}; docs/coupling.md)")
+    parser.add_argument("--settle-time", type=float, default=0.3,
+                        help="s of damped settling to the static point before the run")
+    parser.add_argument("--linear", action="store_true",
+                        help="also run the vehicle with linear Kelvin elements")
+    parser.add_argument("--csv", action="store_true", help="write the histories (SI) as CSV")
+    parser.add_argument("--animate", action="store_true", help="write an animated GIF")
+    parser.add_argument("--fmu-dir", type=Path, help="default: fmus/")
+    parser.add_argument("--out", type=Path, default=Path("reports") / "tracked_vehicle")
+    args = parser.parse_args(argv)
+    if args.speed < 0 or args.end_time <= 0 or args.step <= 0:
+        parser.error("--speed must be >= 0, --end-time and --step > 0")
+    args.out.mkdir(parents=True, exist_ok=True)
+    warnings.simplefilter("once")
+    statics = static_points(args.fmu_dir)
+    runs = {}
+    try:
+        vehicle, result, wall, cpu = simulate(args.course, args.speed, args.end_time,
+                                              args.step, args.coupling, None, statics,
+                                              args.settle_time, args.fmu_dir)
+        runs["FMUs"] = result
+        if args.linear:
+            linear = Linear(statics, args.fmu_dir)
+            print(f"Kelvin equivalents: {linear.describe()}")
+            runs["linear"] = simulate(args.course, args.speed, args.end_time, args.step,
+                                      args.coupling, linear, statics, args.settle_time,
+                                      args.fmu_dir)[1]
+    except VehicleError as error:
+        sys.exit(f"tracked_vehicle: {error}")
+    simulated = result["time"][-1] - result["time"][0]
+    name = f"{args.course}_{args.speed:g}mps"
+    print(f"{vehicle.instances} FMU instances ({vehicle.links} links), course: "
+          f"{vehicle.course.describe()}; {args.speed:g} m/s, host step {args.step * 1e3:g} ms, "
+          f"coupling {args.coupling}")
+    print(f"{simulated:.3f} s simulated in {wall:.1f} s wall, {cpu:.1f} s CPU: "
+          f"{wall / simulated:.1f} s wall and {cpu / simulated:.1f} s CPU per simulated "
+          f"second")
+    for key, label, unit, scale in outputs.FIGURE_LABELS:
+        values = "  ".join(f"{model}: {outputs.figures(r)[key] * scale:.3g} {unit}"
+                           for model, r in runs.items())
+        print(f"  {label}: {values}")
+    written = [args.out / f"{name}.png", args.out / f"{name}_shapes.png"]
+    outputs.plot_histories(written[0], result, runs.get("linear"),
+                           f"Tracked vehicle, {vehicle.course.describe()}, {args.speed:g} m/s")
+    outputs.plot_shapes(written[1], result, vehicle.course)
+    if args.csv:
+        for model, run in runs.items():
+            path = args.out / f"{name}{'' if model == 'FMUs' else '_linear'}.csv"
+            write_csv(path, run, outputs.csv_columns(run))
+            written.append(path)
+    if args.animate:
+        written.append(args.out / f"{name}.gif")
+        outputs.animate(written[-1], result, vehicle.course)
+    print("wrote " + ", ".join(str(p) for p in written))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,353 @@
+"""The vehicle's contacts, all computed at once from the host's current state and applied
+as loads on the bodies (exudyn calls one load function per body; they share one
+evaluation per state):
+
+* tyres: a road wheel overlaps the inner face of the link beneath it (the face
+  LINK_INNER inside the pin line) by the tyre's compression R - d, d the wheel centre's
+  distance from that face, over the link whose face the wheel overlaps most. Both
+  half-wheels' RoadWheelTyre instances get this compression and its rate; their forces
+  push the wheel away from the face and the link the other way, split between the link's
+  pin seats by where the contact lies along it.
+* pins on the ground: a vertical penalty contact of the link's ground face (frictionless:
+  the sprocket, turning with the hull's travel, holds the ground run still);
+* the sprocket's teeth: each pin within the sprocket's wrap is pulled to the tooth space
+  nearest it, the pull taken up and let go over ENGAGEMENT_RAMP at the wrap's ends;
+* idler and support roller: pins on a circle, radial penalty contact.
+"""
+
+import math
+
+import numpy as np
+
+import exudyn as exu
+from exudyn.itemInterface import ObjectGenericODE2
+
+from . import layout as lay
+from .model import (ENGAGEMENT_RAMP, GROUND_DAMPING, GROUND_STIFFNESS, HORN_HEIGHT,
+                    SPROCKET_DAMPING, SPROCKET_STIFFNESS, VehicleError, WHEEL_DAMPING,
+                    WHEEL_STIFFNESS)
+
+# Damping that brings the vehicle to rest while it settles (not in the run).
+SETTLE_DAMPING = {"seat": 300.0, "arm": 5e3, "hull": 2e5, "hull_pitch": 6e5}
+TYRE_STIFFNESS_FLOOR = 2e6  # N/m: the Jacobian's tyre stiffness near first touch
+TOOTH_SPACING = 2 * math.pi / lay.SPROCKET_TEETH
+
+
+def _cross(omega, r):
+    """omega (scalar, about z) x r (n x 2)."""
+    return np.stack([-omega * r[..., 1], omega * r[..., 0]], axis=-1)
+
+
+def _rotate(angle, r):
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([c * r[0] - s * r[1], s * r[0] + c * r[1]])
+
+
+class Contacts:
+    def __init__(self, vehicle):
+        self.v = vehicle
+        geo = vehicle.layout
+        self.cg = geo.cg
+        self.sprocket_local = geo.sprocket - geo.cg
+        self.roller_local = geo.roller - geo.cg
+        arc = geo.arc(2)
+        self.wrap_start, self.wrap_sweep = arc.start, arc.sweep
+        # the tooth spaces line up with the pin nearest the middle of the wrap
+        middle = arc.start + 0.5 * arc.sweep
+        angles = np.arctan2(*(geo.pins - geo.sprocket).T[::-1])
+        near = np.argmin(np.abs(np.angle(np.exp(1j * (angles - middle)))))
+        self.tooth_phase = angles[near]
+        self.hull_x0 = geo.cg[0]
+        self.wheel_offset = np.array(vehicle.wheel_offset)
+        # fixed points where the tensions are read (hull frame): where the front span meets
+        # the sprocket (the tight side driving forward) and the top run meets the idler
+        self.tension_points = (geo.arc(2).point(0.0) - geo.cg,
+                               geo.arc(4).point(0.0) - geo.cg)
+        self._key = None
+
+    def add_object(self):
+        """One exudyn object carries every contact force: a generic ODE2 object over the
+        hull, the arms, the idler's crank and the links, with the force as its user
+        function and its Jacobian (each contact's stiffness and damping mapped onto the
+        bodies' coordinates) as another, so that exudyn's Newton sees the contacts."""
+        v = self.v
+        self.nodes = [v.hull_node, *v.arm_nodes, v.crank_node, *v.link_nodes]
+        self.link0 = 2 + len(v.arm_nodes)  # body index of the first link
+        self.reference = np.array([v.mbs.GetNodeParameter(n, "referenceCoordinates")
+                                   for n in self.nodes], dtype=float)
+        size = 3 * len(self.nodes)
+        v.mbs.AddObject(ObjectGenericODE2(
+            nodeNumbers=self.nodes, massMatrix=np.zeros((size, size)),
+            forceUserFunction=lambda mbs, t, item, q, qd: self._generalized(t, q, qd),
+            jacobianUserFunction=lambda mbs, t, item, q, qd, f, f_t:
+                self._jacobian(t, q, qd, f, f_t)))
+
+    def index(self):
+        """After Assemble: where the object's coordinates sit in the system's vectors."""
+        mbs = self.v.mbs
+        self.system_index = np.concatenate([mbs.GetNodeODE2Index(n) + np.arange(3)
+                                            for n in self.nodes])
+
+    def rebase(self, settled):
+        self.hull_x0 = self.reference[0, 0] + settled[self.system_index[0]]
+        self._key = None
+
+    # --- one evaluation per state ---------------------------------------------------------
+
+    def evaluate(self, t):
+        """The contacts at the host's current state (for the coupling's readers and the
+        records)."""
+        data = self.v.mbs.systemData
+        q = np.asarray(data.GetODE2Coordinates(exu.ConfigurationType.Current))
+        qd = np.asarray(data.GetODE2Coordinates_t(exu.ConfigurationType.Current))
+        self._update(t, q[self.system_index], qd[self.system_index])
+
+    def _update(self, t, q, qd):
+        q, qd = np.asarray(q), np.asarray(qd)
+        key = (t, q.tobytes(), qd.tobytes(), self.v.settling)
+        if key == self._key:
+            return
+        self._key = key
+        state = self.reference + q.reshape(-1, 3)
+        rates = qd.reshape(-1, 3)
+        self._kinematics(state, rates)
+        self._forces(t)
+
+    def _generalized(self, t, q, qd):
+        self._update(t, q, qd)
+        return self.generalized
+
+    def _jacobian(self, t, q, qd, factor, factor_t):
+        self._update(t, q, qd)
+        size = 3 * len(self.nodes)
+        jacobian = np.zeros((size, size))
+        for stiffness, damping, members in self.springs:
+            block = factor * stiffness + factor_t * damping
+            rows = [(3 * b, w * self._g(b, point)) for b, point, w in members]
+            for ia, ga in rows:
+                left = ga.T @ block
+                for ib, gb in rows:
+                    jacobian[ia:ia + 3, ib:ib + 3] += left @ gb
+        return jacobian
+
+    def _g(self, body, point):
+        """d(point)/d(body's x, y, angle)."""
+        r = point - self.body_pos[body]
+        return np.array([[1.0, 0.0, -r[1]], [0.0, 1.0, r[0]]])
+
+    def _kinematics(self, state, rates):
+        half = 0.5 * lay.LINK_PITCH
+        self.body_pos = state[:, :2]
+        self.hull, self.hull_v = state[0], rates[0]
+        links, links_v = state[self.link0:], rates[self.link0:]
+        self.link_pos, self.link_angle, self.link_omega = links[:, :2], links[:, 2], links_v[:, 2]
+        self.link_v = links_v[:, :2]
+        u = np.stack([np.cos(links[:, 2]), np.sin(links[:, 2])], axis=1)
+        self.u, self.n = u, np.stack([-u[:, 1], u[:, 0]], axis=1)
+        seat_v = _cross(links_v[:, 2], half * u)
+        self.seats = np.stack([links[:, :2] - half * u, links[:, :2] + half * u], axis=1)
+        self.seats_v = np.stack([links_v[:, :2] - seat_v, links_v[:, :2] + seat_v], axis=1)
+        # pin j: between link j - 1's front seat and link j's rear seat
+        self.pins = 0.5 * (np.roll(self.seats[:, 1], 1, axis=0) + self.seats[:, 0])
+        self.pins_v = 0.5 * (np.roll(self.seats_v[:, 1], 1, axis=0) + self.seats_v[:, 0])
+        arms, arms_v = state[1:self.link0 - 1], rates[1:self.link0 - 1]
+        offsets = np.array([_rotate(a, o) for a, o in zip(arms[:, 2], self.wheel_offset)])
+        self.wheels = arms[:, :2] + offsets
+        self.wheels_v = arms_v[:, :2] + _cross(arms_v[:, 2], offsets)
+        self.idler, self.idler_v = state[self.link0 - 1][:2], rates[self.link0 - 1][:2]
+        self._tyre_kinematics()
+
+    def _tyre_kinematics(self):
+        """Per wheel: the link beneath, where along it, the compression and its rate."""
+        count = len(self.wheels)
+        self.tyre_link = np.full(count, -1)
+        self.tyre_along = np.zeros(count)
+        self.compression = np.full(count, -np.inf)
+        self.compression_rate = np.zeros(count)
+        half = 0.5 * lay.LINK_PITCH
+        for w in range(count):
+            r = self.wheels[w] - self.link_pos
+            along = np.einsum("ij,ij->i", r, self.u)
+            height = np.einsum("ij,ij->i", r, self.n)
+            beneath = (np.abs(along) <= half) & (height > 0.0) & (height < 2 * lay.WHEEL_RADIUS)
+            if not beneath.any():
+                continue
+            overlap = np.where(beneath, lay.WHEEL_RADIUS - (height - lay.LINK_INNER), -np.inf)
+            k = int(np.argmax(overlap))
+            self.tyre_link[w], self.tyre_along[w] = k, along[k]
+            self.compression[w] = overlap[k]
+            relative = self.wheels_v[w] - self.link_v[k]
+            self.compression_rate[w] = -(relative @ self.n[k] - self.link_omega[k] * along[k])
+
+    def _pin_members(self, j, weight=1.0):
+        """Pin j as (body, point, weight) of the two seats that make it."""
+        n = len(self.pins)
+        behind = (j - 1) % n
+        return [(self.link0 + behind, self.seats[behind, 1], 0.5 * weight),
+                (self.link0 + j, self.seats[j, 0], 0.5 * weight)]
+
+    def tyre_state(self, w):
+        self.evaluate(self.v.mbs.systemData.GetTime())
+        if self.tyre_link[w] < 0:
+            return -HORN_HEIGHT, 0.0
+        return float(self.compression[w]), float(self.compression_rate[w])
+
+    def _forces(self, t):
+        v = self.v
+        count = len(self.pins)
+        pin = np.zeros((count, 2))  # forces on the pins
+        seat = np.zeros((count, 2, 2))  # forces on the links' seats, besides the pins'
+        bodies = np.zeros((len(self.nodes), 3))
+        springs = []
+        hull_pos, hull_theta = self.hull[:2], self.hull[2]
+        hull_vel, hull_omega = self.hull_v[:2], self.hull_v[2]
+
+        def on_body(body, point, force):
+            bodies[body, :2] += force
+            r = point - self.body_pos[body]
+            bodies[body, 2] += r[0] * force[1] - r[1] * force[0]
+
+        def normal_spring(k, c, normal):
+            return k * np.outer(normal, normal), c * np.outer(normal, normal)
+
+        # ground (frictionless, vertical)
+        ground = v.course.height(self.pins[:, 0])
+        depth = ground - (self.pins[:, 1] - lay.LINK_OUTER)
+        load = np.where(depth > 0.0, np.maximum(
+            GROUND_STIFFNESS * depth - GROUND_DAMPING * self.pins_v[:, 1], 0.0), 0.0)
+        pin[:, 1] += load
+        self.ground_load = load
+        vertical = np.array([0.0, 1.0])
+        for j in np.flatnonzero(load > 0.0):
+            springs.append((*normal_spring(GROUND_STIFFNESS, GROUND_DAMPING, vertical),
+                            self._pin_members(j)))
+
+        # sprocket teeth
+        centre = hull_pos + _rotate(hull_theta, self.sprocket_local)
+        centre_v = hull_vel + _cross(hull_omega, centre - hull_pos)
+        turned = (hull_theta + self.tooth_phase
+                  - (hull_pos[0] - self.hull_x0) / lay.SPROCKET_PITCH_RADIUS)
+        rate = hull_omega - hull_vel[0] / lay.SPROCKET_PITCH_RADIUS
+        rel = self.pins - centre
+        angle = np.arctan2(rel[:, 1], rel[:, 0])
+        into = (angle - hull_theta - self.wrap_start) % (2 * math.pi)
+        weight = (np.clip(into / ENGAGEMENT_RAMP, 0, 1)
+                  * np.clip((self.wrap_sweep - into) / ENGAGEMENT_RAMP, 0, 1))
+        weight[np.hypot(rel[:, 0], rel[:, 1]) > lay.SPROCKET_PITCH_RADIUS + 0.08] = 0.0
+        tooth = np.round((angle - turned) / TOOTH_SPACING)
+        slot_angle = turned + tooth * TOOTH_SPACING
+        radial = np.stack([np.cos(slot_angle), np.sin(slot_angle)], axis=1)
+        slot = centre + lay.SPROCKET_PITCH_RADIUS * radial
+        slot_v = centre_v + _cross(rate, lay.SPROCKET_PITCH_RADIUS * radial)
+        tooth_force = weight[:, None] * (SPROCKET_STIFFNESS * (slot - self.pins)
+                                         + SPROCKET_DAMPING * (slot_v - self.pins_v))
+        pin += tooth_force
+        self.tooth_gap = np.where(weight > 0, np.hypot(*(slot - self.pins).T), 0.0)
+        self.drive_torque = 0.0
+        for j in np.flatnonzero(weight > 0.0):
+            on_body(0, slot[j], -tooth_force[j])
+            r = slot[j] - centre
+            self.drive_torque -= r[0] * tooth_force[j, 1] - r[1] * tooth_force[j, 0]
+            springs.append((weight[j] * SPROCKET_STIFFNESS * np.eye(2),
+                            weight[j] * SPROCKET_DAMPING * np.eye(2),
+                            self._pin_members(j) + [(0, slot[j], -1.0)]))
+
+        # idler (on its crank) and support roller (on the hull)
+        roller = hull_pos + _rotate(hull_theta, self.roller_local)
+        roller_v = hull_vel + _cross(hull_omega, roller - hull_pos)
+        for centre, centre_v, radius, body in (
+                (self.idler, self.idler_v, lay.IDLER_PIN_RADIUS, self.link0 - 1),
+                (roller, roller_v, lay.ROLLER_PIN_RADIUS, 0)):
+            rel = self.pins - centre
+            distance = np.hypot(rel[:, 0], rel[:, 1])
+            normal = rel / distance[:, None]
+            closing = np.einsum("ij,ij->i", self.pins_v - centre_v, normal)
+            force = np.where(distance < radius, np.maximum(
+                WHEEL_STIFFNESS * (radius - distance) - WHEEL_DAMPING * closing, 0.0), 0.0)
+            for j in np.flatnonzero(force > 0.0):
+                pin[j] += force[j] * normal[j]
+                on_body(body, centre, -force[j] * normal[j])
+                springs.append((*normal_spring(WHEEL_STIFFNESS, WHEEL_DAMPING, normal[j]),
+                                self._pin_members(j) + [(body, centre, -1.0)]))
+
+        # tyres: both half-wheels at the wheel's compression
+        self.tyre_force = np.zeros(len(self.wheels))
+        for w, pair in enumerate(v.tyres):
+            k = self.tyre_link[w]
+            if k < 0:
+                continue
+            compression, rate_ = self.compression[w], self.compression_rate[w]
+            force = sum(v.load(tyre, compression, rate_) for tyre in pair)
+            self.tyre_force[w] = force
+            push = force * self.n[k]
+            point = self.link_pos[k] + self.tyre_along[w] * self.u[k]
+            on_body(1 + w, self.wheels[w], push)
+            share = self.tyre_along[w] / lay.LINK_PITCH
+            seat[k, 0] -= (0.5 - share) * push
+            seat[k, 1] -= (0.5 + share) * push
+            if compression > 0.0:
+                stiffness = max(force / compression, TYRE_STIFFNESS_FLOOR)
+                springs.append((*normal_spring(stiffness, 0.0, self.n[k]),
+                                [(1 + w, self.wheels[w], 1.0),
+                                 (self.link0 + k, point, -1.0)]))
+
+        # pins onto the seats of the links either side
+        seat[:, 0] += 0.5 * pin
+        seat[:, 1] += 0.5 * np.roll(pin, -1, axis=0)
+
+        if v.settling:  # to rest: damping of every body's velocity
+            seat -= SETTLE_DAMPING["seat"] * self.seats_v
+            self._settle_damping(bodies, springs)
+        links = slice(self.link0, None)
+        r0, r1 = self.seats[:, 0] - self.link_pos, self.seats[:, 1] - self.link_pos
+        bodies[links, :2] += seat[:, 0] + seat[:, 1]
+        bodies[links, 2] += (r0[:, 0] * seat[:, 0, 1] - r0[:, 1] * seat[:, 0, 0]
+                             + r1[:, 0] * seat[:, 1, 1] - r1[:, 1] * seat[:, 1, 0])
+        self.generalized = bodies.reshape(-1)
+        self.springs = springs
+
+    def _settle_damping(self, bodies, springs):
+        c = SETTLE_DAMPING
+        bodies[0, :2] -= c["hull"] * self.hull_v[:2]
+        bodies[0, 2] -= c["hull_pitch"] * self.hull_v[2]
+        zero = np.zeros((2, 2))
+        springs.append((zero, c["hull"] * np.eye(2), [(0, self.body_pos[0], 1.0)]))
+        for w in range(len(self.wheels)):
+            bodies[1 + w, :2] -= c["arm"] * self.wheels_v[w]
+            springs.append((zero, c["arm"] * np.eye(2), [(1 + w, self.wheels[w], 1.0)]))
+        for k in range(len(self.seats)):
+            for side in (0, 1):
+                springs.append((zero, c["seat"] * np.eye(2),
+                                [(self.link0 + k, self.seats[k, side], 1.0)]))
+
+    # --- checks and records ---------------------------------------------------------------
+
+    def check(self, t):
+        """Stop with the part and the time where the model no longer holds."""
+        self.evaluate(t)
+        for w in range(len(self.wheels)):
+            compression = self.compression[w]
+            if compression > lay.TYRE_RUBBER:
+                raise VehicleError(
+                    f"road wheel {w + 1}: a track link has passed through its tyre (compressed "
+                    f"{compression * 1e3:.1f} mm, more than the {lay.TYRE_RUBBER * 1e3:.1f} mm "
+                    f"of rubber, section 5.1.1) at t = {t:.4f} s; lower --speed or choose a "
+                    f"gentler course")
+            if compression < -HORN_HEIGHT:
+                raise VehicleError(
+                    f"road wheel {w + 1} has left the track (more than {HORN_HEIGHT * 1e3:g} mm "
+                    f"above the link beneath, the guide horns' height) at t = {t:.4f} s; "
+                    f"lower --speed or choose a gentler course")
+        if np.max(self.tooth_gap) > 0.3 * lay.LINK_PITCH:
+            j = int(np.argmax(self.tooth_gap))
+            raise VehicleError(f"the track jumped a sprocket tooth at joint {j} at "
+                               f"t = {t:.4f} s; lower --speed or choose a gentler course")
+
+    def tension_joints(self):
+        """The joints nearest the points where the tensions are read."""
+        hull_pos, hull_theta = self.hull[:2], self.hull[2]
+        joints = []
+        for local in self.tension_points:
+            point = hull_pos + _rotate(hull_theta, local)
+            joints.append(int(np.argmin(np.hypot(*(self.pins - point).T))))
+        return joints

@@ -1,0 +1,409 @@
+"""One side of the tracked vehicle in exudyn (2D, the pitch plane), its running-gear parts
+as FMUs coupled by fmu_components.coupling (docs/coupling.md), or as linear Kelvin
+elements.
+
+Bodies: the hull (surge, bounce, pitch); six trailing arms, each carrying its road wheel
+(the wheel's spin is left out: the tyre contact is frictionless); the idler on its crank;
+a closed loop of links. The sprocket is part of the hull and turns with its travel.
+
+Force elements:
+* joints between links: TrackBushRadial (distance between the pin seats, along that line)
+  and TrackBushTorsion (the angle between the links, zero in line, positive bent towards
+  the loop's inside, as round the sprocket) FMU instances, as in examples/track_span.py;
+* arms: a preloaded linear torsion bar, and a RotaryDamper at the damped stations (input
+  the arm's rotation from static, positive in bump, as in examples/road_wheel_station.py);
+* tyres: two RoadWheelTyre instances per wheel, one per half-wheel, both compressed by the
+  wheel's overlap with the face of the link beneath it (the contact: see `Contacts`);
+* contacts computed here (penalty, no FMU): pins on the ground, the sprocket's teeth, the
+  idler and the support roller; the idler's tensioner a preloaded spring at its crank;
+* surge: a speed-holding force on the hull (the tractive effort, not modelled in detail).
+"""
+
+import math
+
+import numpy as np
+
+import exudyn as exu
+from exudyn.itemInterface import (LoadForceVector, LoadTorqueVector, MarkerBodyPosition,
+                                  MarkerNodeCoordinate, NodePointGround, NodeRigidBody2D,
+                                  ObjectConnectorCartesianSpringDamper,
+                                  ObjectConnectorCoordinateSpringDamper, ObjectJointRevolute2D,
+                                  ObjectRigidBody2D)
+
+from fmu_components.coupling import Coupling, FmuComponent
+from fmu_components.coupling.exudyn_host import connector_state, solve
+from fmu_components.coupling.kelvin import KelvinElement, harmonic_kelvin_equivalent
+
+from example_fmus import fmu_path
+
+from . import layout as lay
+from .layout import GRAVITY
+
+# Penalty contacts (assumed; docs/vehicle.md): steel on a hard road, steel teeth.
+GROUND_STIFFNESS, GROUND_DAMPING = 5e6, 4e3  # N/m, N.s/m per pin
+SPROCKET_STIFFNESS, SPROCKET_DAMPING = 5e6, 3e3  # per engaged pin
+WHEEL_STIFFNESS, WHEEL_DAMPING = 5e6, 3e3  # idler and roller, per pin
+ENGAGEMENT_RAMP = math.radians(12.0)  # a tooth takes up / lets go of its pin over this
+TENSIONER_DAMPING = 3e3  # N.m.s/rad (assumed)
+SURGE_FREQUENCY = 0.5  # Hz, the speed hold's (critically damped)
+# Where the run stops: a wheel more than this above the link beneath has left the track
+# (the track's guide horns are about this high; assumed); a compression beyond the tyre's
+# rubber means the link has passed through it (section 5.1.1).
+HORN_HEIGHT = 0.05
+VERBOSE = 0  # exudyn's solver output while settling (1: per step)
+
+
+class VehicleError(RuntimeError):
+    """The run left what the model can represent: names the part and the time."""
+
+
+def static_points(fmu_dir=None):
+    """(tyre compression at the static wheel load, radial bush deflection at the track
+    tension, torsion bush torque in line) from the relaxed FMUs' own outputs."""
+    from scipy.optimize import brentq
+
+    tyre = FmuComponent(fmu_path("RoadWheelTyre", fmu_dir), "tyre_static")
+    radial = FmuComponent(fmu_path("TrackBushRadial", fmu_dir), "radial_static")
+    torsion = FmuComponent(fmu_path("TrackBushTorsion", fmu_dir), "torsion_static")
+    try:
+        load = wheel_load() / lay.TYRES_PER_WHEEL
+        compression = brentq(lambda x: tyre.relaxed_outputs(x)[tyre.load_name] - load,
+                             1e-4, 8e-3, xtol=1e-12)
+        probe = 1e-4
+        stretch = probe * lay.TRACK_TENSION / radial.relaxed_outputs(probe)[radial.load_name]
+        return compression, stretch, torsion.relaxed_outputs(0.0)[torsion.load_name]
+    finally:
+        for component in (tyre, radial, torsion):
+            component.free()
+
+
+TRACK_LINKS = 80  # the loop Layout closes (checked by tests/test_vehicle.py)
+GROUND_SHARE = 0.4  # of the track's weight, carried by the ground directly (about its bottom run)
+
+
+def wheel_load():
+    """Static load of one wheel (both half-wheels): the side's mass less what of the track
+    lies on the ground, over the stations. The static solve refines it."""
+    track = TRACK_LINKS * lay.LINK_MASS
+    return (lay.SIDE_MASS - GROUND_SHARE * track) * GRAVITY / lay.STATIONS
+
+
+class RelaxedTable:
+    """The relaxed component's load against its deflection, tabulated from an FMU's own
+    output before start (a Kelvin element: its static law): the vehicle settles to its
+    static point on these instead of calling 160 FMUs at every iterate."""
+
+    # within what the thesis measured, where the FMUs do not warn (they clamp beyond)
+    RANGES = {"RoadWheelTyre": (-0.005, 0.0099), "TrackBushRadial": (0.0, 3e-3),
+              "TrackBushTorsion": (-0.22, 0.575), "RotaryDamper": (-0.78, 0.78)}
+
+    def __init__(self, component, fmu):
+        low, high = self.RANGES[fmu]
+        self.x = np.linspace(low, high, 1201)
+        self.load = np.array([component.host_load(x) for x in self.x])
+
+    def __call__(self, deflection, rate=0.0):
+        return float(np.interp(deflection, self.x, self.load))
+
+
+class Linear:
+    """Kelvin equivalents (Eqs. 10.1-2, 10.1-3) of the four components about their static
+    points, fitted to each FMU's steady response to a sine (examples/road_wheel_station.py
+    does the same for the tyre and the damper)."""
+
+    SINES = {"RoadWheelTyre": (1e-3, 10.0), "RotaryDamper": (0.06, 2.0),
+             "TrackBushRadial": (1e-4, 10.0), "TrackBushTorsion": (0.1, 2.0)}
+
+    def __init__(self, statics, fmu_dir=None):
+        compression, stretch, _ = statics
+        means = {"RoadWheelTyre": compression, "RotaryDamper": 0.0,
+                 "TrackBushRadial": stretch, "TrackBushTorsion": 0.0}
+        self.coefficients = {}
+        for name, (amplitude, frequency) in self.SINES.items():
+            path = fmu_path(name, fmu_dir)
+            k, c, _ = harmonic_kelvin_equivalent(path, means[name], amplitude, frequency)
+            probe = FmuComponent(path, f"{name}_static_load")
+            try:
+                load = probe.relaxed_outputs(means[name])[probe.load_name]
+                load_name = probe.load_name
+            finally:
+                probe.free()
+            self.coefficients[name] = (k, c, means[name], load, load_name)
+
+    def element(self, fmu, name, unilateral=False):
+        k, c, x0, load, load_name = self.coefficients[fmu]
+        return KelvinElement(name, load_name, k, c, x0, load, unilateral=unilateral)
+
+    def describe(self):
+        units = {"RoadWheelTyre": ("N/m", "N.s/m"), "RotaryDamper": ("N.m/rad", "N.m.s/rad"),
+                 "TrackBushRadial": ("N/m", "N.s/m"), "TrackBushTorsion": ("N.m/rad",
+                                                                            "N.m.s/rad")}
+        return "; ".join(f"{name}: k = {k:.4g} {units[name][0]}, c = {c:.4g} {units[name][1]}"
+                         for name, (k, c, *_rest) in self.coefficients.items())
+
+
+class Vehicle:
+    def __init__(self, course, speed, fmu_dir=None, linear=None, coupling="corrected",
+                 statics=None):
+        self.course, self.speed = course, speed
+        self.statics = statics or static_points(fmu_dir)
+        compression, stretch, _ = self.statics
+        self.layout = geo = lay.Layout(compression, lay.LINK_PITCH + stretch)
+        self.links = geo.links
+        self.hull_mass, self.hull_inertia = lay.side_masses(self.links)
+        SC = exu.SystemContainer()
+        mbs = SC.AddSystem()
+        self.SC, self.mbs = SC, mbs
+        self.coupling = Coupling(coupling, record=self._record)
+        self.records = []
+        self.settling = False
+
+        tables = {}
+
+        def make(fmu, name, unilateral=False):
+            if linear is not None:
+                component = linear.element(fmu, name, unilateral)
+            else:
+                component = FmuComponent(fmu_path(fmu, fmu_dir), name, unilateral=unilateral)
+            if fmu not in tables:
+                tables[fmu] = RelaxedTable(component, fmu)
+            component.relaxed = tables[fmu]
+            return component
+
+        ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
+
+        def coordinate(node, index):
+            return mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=index))
+
+        def at(body, local):
+            return mbs.AddMarker(MarkerBodyPosition(bodyNumber=body,
+                                                    localPosition=[local[0], local[1], 0.0]))
+
+        # --- hull and its speed hold -------------------------------------------------------
+        cg = geo.cg
+        self.hull_node = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[*cg, 0.0],
+                                                     initialVelocities=[speed, 0.0, 0.0]))
+        hull = mbs.AddObject(ObjectRigidBody2D(mass=self.hull_mass, inertia=self.hull_inertia,
+                                               nodeNumber=self.hull_node))
+        self.hull_marker = at(hull, [0.0, 0.0])
+        stiffness = self.hull_mass * (2 * math.pi * SURGE_FREQUENCY) ** 2
+        damping = 2 * math.sqrt(stiffness * self.hull_mass)
+
+        def surge(mbs, t, item, displacement, velocity, *_):
+            if self.settling:
+                return damping * velocity
+            return stiffness * (displacement - speed * t) + damping * (velocity - speed)
+
+        mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
+            markerNumbers=[coordinate(ground, 0), coordinate(self.hull_node, 0)],
+            springForceUserFunction=surge))
+        hull_rotation = coordinate(self.hull_node, 2)
+
+        # --- stations: arm with its wheel, torsion bar, damper, two tyres --------------------
+        self.arm_nodes, self.arm_bodies, self.tyres, self.dampers = [], [], [], {}
+        arm_com = (lay.ARM_MASS * 0.5 + lay.WHEEL_MASS) * lay.ARM_LENGTH / (
+            lay.ARM_MASS + lay.WHEEL_MASS)
+        arm_inertia = (lay.ARM_MASS * lay.ARM_LENGTH ** 2 / 12
+                       + lay.ARM_MASS * (0.5 * lay.ARM_LENGTH - arm_com) ** 2
+                       + lay.WHEEL_MASS * (lay.ARM_LENGTH - arm_com) ** 2)
+        direction = -np.array([math.cos(lay.ARM_STATIC_ANGLE), math.sin(lay.ARM_STATIC_ANGLE)])
+        lever = lay.ARM_LENGTH * math.cos(lay.ARM_STATIC_ANGLE)
+        preload = ((wheel_load() - lay.WHEEL_MASS * GRAVITY) * lever
+                   - lay.ARM_MASS * GRAVITY * 0.5 * lever)
+        self.wheel_offset = []  # wheel centre from the arm body's node, in its frame
+        for i, (pivot, wheel) in enumerate(zip(geo.pivots, geo.wheel_centres), start=1):
+            com = pivot + arm_com * direction
+            node = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[*com, 0.0],
+                                               initialVelocities=[speed, 0.0, 0.0]))
+            arm = mbs.AddObject(ObjectRigidBody2D(mass=lay.ARM_MASS + lay.WHEEL_MASS,
+                                                  inertia=arm_inertia, nodeNumber=node))
+            mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[at(hull, pivot - cg),
+                                                               at(arm, pivot - com)]))
+            arm_rotation = coordinate(node, 2)
+            # bump rotation = q_hull - q_arm; +f turns the arm counter-clockwise (wheel down)
+            mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
+                markerNumbers=[arm_rotation, hull_rotation],
+                stiffness=lay.TORSION_BAR_STIFFNESS,
+                offset=-preload / lay.TORSION_BAR_STIFFNESS))
+            if i in lay.DAMPED_STATIONS:
+                damper = make("RotaryDamper", f"damper_{i}")
+                connector = mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
+                    markerNumbers=[arm_rotation, hull_rotation],
+                    springForceUserFunction=lambda mbs, t, item, x, v, *_, d=damper:
+                        self.load(d, x, v)))
+                self.dampers[i] = damper
+                self.coupling.add(damper, self._connector_reader(connector))
+            pair = [make("RoadWheelTyre", f"tyre_{i}_{side}", unilateral=True)
+                    for side in ("left", "right")]
+            self.tyres.append(pair)
+            for tyre in pair:
+                self.coupling.add(tyre, lambda w=i - 1: self.contacts.tyre_state(w))
+            self.arm_nodes.append(node)
+            self.arm_bodies.append(arm)
+            self.wheel_offset.append(wheel - com)
+
+        # --- idler on its crank, with the tensioner ---------------------------------------
+        crank_com = geo.idler  # the idler wheel's mass dominates: the node at its centre
+        self.crank_node = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[*crank_com, 0.0],
+                                                      initialVelocities=[speed, 0.0, 0.0]))
+        crank = mbs.AddObject(ObjectRigidBody2D(mass=lay.CRANK_MASS, inertia=2.0,
+                                                nodeNumber=self.crank_node))
+        mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[
+            at(hull, geo.crank_pivot - cg), at(crank, geo.crank_pivot - crank_com)]))
+        # preload: the moment of the two spans' pull on the idler about the crank's pivot
+        before, after = geo.idler_pull()
+        pull = lay.TRACK_TENSION * (before + after)
+        arm = geo.idler - geo.crank_pivot
+        moment = arm[0] * pull[1] - arm[1] * pull[0]
+        mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
+            markerNumbers=[coordinate(self.crank_node, 2), hull_rotation],
+            stiffness=lay.TENSIONER_STIFFNESS, damping=TENSIONER_DAMPING,
+            offset=moment / lay.TENSIONER_STIFFNESS))
+
+        # --- the track loop ----------------------------------------------------------------
+        pins = geo.pins
+        n = self.links
+        self.link_nodes, self.link_bodies, self.radial, self.torsion = [], [], [], []
+        self.link_markers = []
+        self.link_angle0 = []
+        ahead = np.roll(pins, -1, axis=0)
+        centres, angles = 0.5 * (pins + ahead), np.arctan2(*(ahead - pins).T[::-1])
+        # track speed relative to the hull: clockwise round the loop (the path runs
+        # counter-clockwise), so the ground run stands still
+        tangents = (ahead - pins) / np.hypot(*(ahead - pins).T)[:, None]
+        turn = np.angle(np.exp(1j * (np.roll(angles, -1) - np.roll(angles, 1))))
+        for k in range(n):
+            velocity = [speed - speed * tangents[k][0], -speed * tangents[k][1],
+                        -speed * turn[k] / (2 * geo.chord)]
+            node = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[*centres[k], angles[k]],
+                                               initialVelocities=velocity))
+            body = mbs.AddObject(ObjectRigidBody2D(mass=lay.LINK_MASS,
+                                                   inertia=lay.LINK_INERTIA, nodeNumber=node))
+            self.link_nodes.append(node)
+            self.link_bodies.append(body)
+            self.link_markers.append((at(body, [-0.5 * lay.LINK_PITCH, 0.0]),
+                                      at(body, [0.5 * lay.LINK_PITCH, 0.0])))
+            self.link_angle0.append(angles[k])
+        self.link_angle0 = np.array(self.link_angle0)
+        self.radial_connectors, self.torsion_connectors = [], []
+        for j in range(n):  # joint j: between link j - 1 (behind) and link j
+            behind, ahead_ = (j - 1) % n, j
+            radial = make("TrackBushRadial", f"radial_{j}")
+            torsion = make("TrackBushTorsion", f"torsion_{j}")
+            offset = float(np.angle(np.exp(1j * (angles[ahead_] - angles[behind]))))
+            rc = mbs.AddObject(ObjectConnectorCartesianSpringDamper(
+                markerNumbers=[self.link_markers[behind][1], self.link_markers[ahead_][0]],
+                springForceUserFunction=lambda mbs, t, item, d, v, *_, b=radial:
+                    self._radial_force(b, d, v)))
+            tc = mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
+                markerNumbers=[coordinate(self.link_nodes[behind], 2),
+                               coordinate(self.link_nodes[ahead_], 2)],
+                springForceUserFunction=lambda mbs, t, item, x, v, *_, b=torsion, o=offset:
+                    self.load(b, x + o, v)))
+            self.radial.append(radial)
+            self.torsion.append(torsion)
+            self.radial_connectors.append(rc)
+            self.torsion_connectors.append((tc, offset))
+            self.coupling.add(radial, lambda c=rc: _seat_deflection(*connector_state(mbs, c)))
+            self.coupling.add(torsion, self._connector_reader(tc, offset))
+
+        from .contacts import Contacts
+        self.contacts = Contacts(self)
+        self.contacts.add_object()
+        mbs.Assemble()
+        self.contacts.index()
+
+    def load(self, component, deflection, rate):
+        """What a force element applies: the component's load law, or while the vehicle
+        settles its relaxed load."""
+        if self.settling:
+            return component.relaxed(deflection)
+        return component.host_load(deflection, rate)
+
+    def _radial_force(self, bush, displacement, velocity):
+        deflection, rate = _seat_deflection(displacement, velocity)
+        if deflection == 0.0:
+            return [0.0, 0.0, 0.0]
+        scale = self.load(bush, deflection, rate) / deflection
+        return [scale * displacement[0], scale * displacement[1], 0.0]
+
+    def _connector_reader(self, connector, offset=0.0):
+        def read():
+            x, v = connector_state(self.mbs, connector)
+            return float(x) + offset, float(v)
+        return read
+
+    @property
+    def instances(self):
+        return len(self.coupling.entries)
+
+    # --- static state, run, records ---------------------------------------------------------
+
+    def settle(self, duration=0.6, step=2e-3):
+        """The static point: the vehicle at rest, every FMU relaxed at its deflection (its
+        output before start), damped to rest by a dynamic solve (the contacts are no part
+        of exudyn's Jacobian, so its static solver sees a mechanism). Becomes the initial
+        state; the run's initial velocities are then set from the speed."""
+        mbs = self.mbs
+        velocities = mbs.systemData.GetODE2Coordinates_t(exu.ConfigurationType.Initial)
+        mbs.systemData.SetODE2Coordinates_t(0 * velocities, exu.ConfigurationType.Initial)
+        settings = exu.SimulationSettings()
+        settings.timeIntegration.verboseMode = VERBOSE
+        settings.solution.file.write = False
+        settings.solution.sensors.active = False
+        settings.timeIntegration.endTime = duration
+        settings.timeIntegration.numberOfSteps = int(round(duration / step))
+        settings.timeIntegration.generalizedAlpha.spectralRadius = 0.0
+        configure(settings)
+        self.settling = True
+        try:
+            if not mbs.SolveDynamic(settings,
+                                    solverType=exu.DynamicSolverType.GeneralizedAlpha):
+                raise VehicleError("the static point: exudyn's solver failed settling the "
+                                   "vehicle at rest")
+        finally:
+            self.settling = False
+        settled = mbs.systemData.GetODE2Coordinates(exu.ConfigurationType.Current)
+        mbs.systemData.SetODE2Coordinates(settled, exu.ConfigurationType.Initial)
+        mbs.systemData.SetODE2Coordinates_t(velocities, exu.ConfigurationType.Initial)
+        self.contacts.rebase(settled)
+
+    def _record(self, t):
+        from .outputs import snapshot
+        self.contacts.check(t)
+        self.records.append(snapshot(self, t))
+
+    def run(self, end_time, step, settle=True):
+        if settle:
+            self.settle()
+        try:
+            self.host = solve(self.mbs, self.coupling, end_time, step, settings=run_settings())
+        except exu.SolverError:
+            raise VehicleError(f"exudyn's solver gave up at t = {self.coupling.time:.4f} s "
+                               f"(its Newton did not converge even on shortened steps; "
+                               f"docs/vehicle.md, What remains)") from None
+        from .outputs import histories
+        return histories(self)
+
+
+def run_settings():
+    """The settings of the coupled run (exudyn_host.solve adds what the coupling needs)."""
+    settings = exu.SimulationSettings()
+    settings.timeIntegration.verboseMode = VERBOSE
+    settings.solution.file.write = False
+    settings.solution.sensors.active = False
+    configure(settings)
+    return settings
+
+
+def configure(settings):
+    """Solver settings every run of the vehicle needs: the contacts are loads computed from
+    the whole state (contacts.py); a sparse linear solver for the loop's banded system."""
+    settings.linearSolver.solverType = exu.LinearSolverType.EigenSparse
+
+
+def _seat_deflection(displacement, velocity):
+    distance = math.hypot(displacement[0], displacement[1])
+    if distance == 0.0:
+        return 0.0, 0.0
+    return distance, (displacement[0] * velocity[0] + displacement[1] * velocity[1]) / distance

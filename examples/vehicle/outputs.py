@@ -1,0 +1,242 @@
+"""What a run records and writes: histories, figures of merit (peaks, damper work, the
+ISO 2631-1 Wk-weighted rms acceleration at the driver's seat), CSV columns, plots of the
+time histories and of the track's shape, and an animation."""
+
+import math
+
+import numpy as np
+from scipy import signal
+from scipy.integrate import cumulative_trapezoid
+
+import exudyn as exu
+
+from . import layout as lay
+
+
+def snapshot(vehicle, t):
+    """Everything recorded after an accepted step."""
+    mbs, contacts = vehicle.mbs, vehicle.contacts
+    contacts.evaluate(t)
+    node = vehicle.hull_node
+    acceleration = mbs.GetNodeOutput(node, exu.OutputVariableType.Acceleration)
+    angular = mbs.GetNodeOutput(node, exu.OutputVariableType.AngularAcceleration)[2]
+    omega = contacts.hull_v[2]
+    theta = contacts.hull[2]
+    seat = np.array([math.cos(theta) * lay.SEAT[0] - math.sin(theta) * lay.SEAT[1],
+                     math.sin(theta) * lay.SEAT[0] + math.cos(theta) * lay.SEAT[1]])
+    seat_vertical = acceleration[1] + angular * seat[0] - omega ** 2 * seat[1]
+    sprocket_joint, idler_joint = contacts.tension_joints()
+    return {
+        "time": t,
+        "hull_vertical_acceleration": acceleration[1],
+        "hull_pitch_acceleration": angular,
+        "hull_surge_acceleration": acceleration[0],
+        "seat_vertical_acceleration": seat_vertical,
+        "hull_x": contacts.hull[0], "hull_y": contacts.hull[1], "hull_pitch": theta,
+        "hull_surge_velocity": contacts.hull_v[0],
+        "tyre_force": np.array([sum(t_.load for t_ in pair) for pair in vehicle.tyres]),
+        "tyre_compression": contacts.compression.copy(),
+        "damper_torque": np.array([d.load for d in vehicle.dampers.values()]),
+        "damper_angle": np.array([d.deflection for d in vehicle.dampers.values()]),
+        "bush_radial_force": np.array([b.load for b in vehicle.radial]),
+        "bush_radial_deflection": np.array([b.deflection for b in vehicle.radial]),
+        "bush_torque": np.array([b.load for b in vehicle.torsion]),
+        "bush_angle": np.array([b.deflection for b in vehicle.torsion]),
+        "track_tension_sprocket": vehicle.radial[sprocket_joint].load,
+        "track_tension_idler": vehicle.radial[idler_joint].load,
+        "drive_torque": contacts.drive_torque,
+        "ground_load": contacts.ground_load.sum(),
+        "pins": contacts.pins.copy(),
+        "wheels": contacts.wheels.copy(),
+        "idler": contacts.idler.copy(),
+    }
+
+
+def histories(vehicle):
+    records = vehicle.records
+    result = {key: np.array([r[key] for r in records]) for key in records[0]}
+    result["damper_stations"] = list(vehicle.dampers)
+    # work done on each damper (J): what it dissipates, and what its gas spring holds
+    result["damper_work"] = np.array([
+        cumulative_trapezoid(result["damper_torque"][:, i], result["damper_angle"][:, i],
+                             initial=0)[-1] for i in range(result["damper_torque"].shape[1])])
+    return result
+
+
+# --- ISO 2631-1 frequency weighting Wk (vertical, seated) ----------------------------------
+
+def _quadratic(f, q):
+    w = 2 * math.pi * f
+    return np.array([1 / w ** 2, 1 / (q * w), 1.0])
+
+
+def wk_weighting():
+    """Wk of ISO 2631-1:1997 (Annex A): band limits 0.4 and 100 Hz, a-v transition
+    (f3 = f4 = 12.5 Hz, Q4 = 0.63) and upward step (f5 = 2.37 Hz, Q5 = 0.91, f6 = 3.35 Hz,
+    Q6 = 0.91), as a continuous transfer function (numerator, denominator)."""
+    w1, w2, w3 = 2 * math.pi * 0.4, 2 * math.pi * 100.0, 2 * math.pi * 12.5
+    q = 1 / math.sqrt(2)
+    high = (np.array([1.0, 0, 0]), np.array([1.0, w1 / q, w1 ** 2]))
+    low = (np.array([w2 ** 2]), np.array([1.0, w2 / q, w2 ** 2]))
+    transition = (np.array([1 / w3, 1.0]), _quadratic(12.5, 0.63))
+    # the step's gain is (f5/f6)^2 below it and 1 above
+    step = (_quadratic(2.37, 0.91) * (2.37 / 3.35) ** 2, _quadratic(3.35, 0.91))
+    num, den = np.array([1.0]), np.array([1.0])
+    for b, a in (high, low, transition, step):
+        num, den = np.polymul(num, b), np.polymul(den, a)
+    return num, den
+
+
+def weighted_rms(time, acceleration, settle=0.0):
+    """Wk-weighted rms (m/s2) of an acceleration history, from `settle` s on; resampled
+    at the history's smallest step first (exudyn shortens a step where it must)."""
+    recorded = np.asarray(time)
+    step = max(np.min(np.diff(recorded)), 1e-6)
+    t = np.arange(recorded[0], recorded[-1] + 0.5 * step, step)
+    a = np.interp(t, recorded, np.asarray(acceleration) - np.asarray(acceleration)[0])
+    if len(t) < 2:
+        return 0.0
+    _, weighted, _ = signal.lsim(wk_weighting(), a, t - t[0])
+    keep = t >= settle
+    return float(np.sqrt(np.mean(weighted[keep] ** 2)))
+
+
+def figures(result):
+    """The figures the summary prints and the linear alternative is compared on."""
+    a = result["hull_vertical_acceleration"]
+    return {
+        "peak_hull_vertical_acceleration": float(np.max(np.abs(a - a[0]))),
+        "peak_hull_pitch_acceleration": float(np.max(np.abs(result["hull_pitch_acceleration"]))),
+        "peak_seat_acceleration": float(np.max(np.abs(result["seat_vertical_acceleration"]
+                                                      - result["seat_vertical_acceleration"][0]))),
+        "seat_wk_rms": weighted_rms(result["time"], result["seat_vertical_acceleration"]),
+        "max_tyre_force": float(result["tyre_force"].max()),
+        "max_tension_sprocket": float(result["track_tension_sprocket"].max()),
+        "max_tension_idler": float(result["track_tension_idler"].max()),
+        "peak_damper_torque": float(np.abs(result["damper_torque"]).max()),
+        "damper_work": float(result["damper_work"].sum()),
+    }
+
+
+FIGURE_LABELS = (
+    ("peak_hull_vertical_acceleration", "peak hull vertical acceleration (CG)", "m/s2", 1.0),
+    ("peak_hull_pitch_acceleration", "peak hull pitch acceleration", "rad/s2", 1.0),
+    ("peak_seat_acceleration", "peak vertical acceleration, driver's seat", "m/s2", 1.0),
+    ("seat_wk_rms", "Wk-weighted rms acceleration, driver's seat (ISO 2631-1)", "m/s2", 1.0),
+    ("max_tyre_force", "max wheel tyre force", "kN", 1e-3),
+    ("max_tension_sprocket", "max track tension at the sprocket", "kN", 1e-3),
+    ("max_tension_idler", "max track tension at the idler", "kN", 1e-3),
+    ("peak_damper_torque", "peak damper torque", "kN.m", 1e-3),
+    ("damper_work", "work done on the dampers", "kJ", 1e-3),
+)
+
+
+def csv_columns(result):
+    stations = result["damper_stations"]
+    columns = {name: result[name] for name in (
+        "time", "hull_vertical_acceleration", "hull_pitch_acceleration",
+        "hull_surge_acceleration", "seat_vertical_acceleration", "hull_x", "hull_y",
+        "hull_pitch", "hull_surge_velocity", "track_tension_sprocket", "track_tension_idler",
+        "drive_torque", "ground_load")}
+    for name in ("tyre_force", "tyre_compression"):
+        columns[name] = [(f"{name}_{w + 1}", result[name][:, w])
+                         for w in range(result[name].shape[1])]
+    for name in ("damper_torque", "damper_angle"):
+        columns[name] = [(f"{name}_{s}", result[name][:, i]) for i, s in enumerate(stations)]
+    for name in ("bush_radial_force", "bush_radial_deflection", "bush_torque", "bush_angle"):
+        columns[name] = [(f"{name}_{j}", result[name][:, j])
+                         for j in range(result[name].shape[1])]
+    return columns
+
+
+# --- plots ---------------------------------------------------------------------------------
+
+def plot_histories(path, result, linear, title):
+    from plotting import plt, save_figure
+
+    panels = (("hull_vertical_acceleration", "hull vertical\nacceleration, CG (m/s2)", 1.0),
+              ("seat_vertical_acceleration", "vertical acceleration,\ndriver's seat (m/s2)", 1.0),
+              ("hull_pitch_acceleration", "hull pitch\nacceleration (rad/s2)", 1.0),
+              ("tyre_force", "wheel tyre\nforce (kN)", 1e-3),
+              ("damper_torque", "damper torque\n(kN.m)", 1e-3),
+              ("track_tension_sprocket", "track tension (kN)\nsprocket -, idler --", 1e-3))
+    figure, axes = plt.subplots(len(panels), 1, figsize=(9, 14), sharex=True)
+    t = result["time"]
+    for axis, (key, label, scale) in zip(axes, panels):
+        values = result[key] * scale
+        if values.ndim == 1:
+            axis.plot(t, values, lw=1.0, label="FMUs")
+            if linear is not None:
+                axis.plot(linear["time"], linear[key] * scale, lw=1.0, ls="--",
+                          label="linear Kelvin")
+        else:
+            names = (result["damper_stations"] if key == "damper_torque"
+                     else range(1, values.shape[1] + 1))
+            for i, name in enumerate(names):
+                axis.plot(t, values[:, i], lw=0.8, label=f"station {name}")
+            axis.legend(fontsize=7, ncol=3, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+        if key == "track_tension_sprocket":
+            axis.plot(t, result["track_tension_idler"] * scale, lw=1.0, ls="--", color="C0")
+        axis.set_ylabel(label)
+        axis.grid(alpha=0.3)
+    if linear is not None:
+        axes[0].legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    axes[0].set_title(title)
+    axes[-1].set_xlabel("time (s)")
+    save_figure(figure, path)
+
+
+def _draw(axis, result, i, course):
+    pins = result["pins"][i]
+    loop = np.vstack([pins, pins[:1]])
+    axis.plot(loop[:, 0], loop[:, 1], "-", color="0.2", lw=1.0)
+    axis.plot(pins[:, 0], pins[:, 1], ".", color="0.2", ms=2)
+    for centre in result["wheels"][i]:
+        axis.add_patch(_circle(centre, lay.WHEEL_RADIUS, "C0"))
+    axis.add_patch(_circle(result["idler"][i], lay.IDLER_PIN_RADIUS - lay.LINK_INNER, "C2"))
+    x = np.linspace(pins[:, 0].min() - 1.0, pins[:, 0].max() + 1.0, 400)
+    axis.fill_between(x, course.height(x), -0.3, color="0.85")
+    axis.set_aspect("equal")
+
+
+def _circle(centre, radius, colour):
+    from matplotlib.patches import Circle
+    return Circle(centre, radius, fill=False, color=colour, lw=1.0)
+
+
+def plot_shapes(path, result, course, count=4):
+    from plotting import plt, save_figure
+
+    t = result["time"]
+    instants = np.linspace(0, len(t) - 1, count).astype(int)
+    figure, axes = plt.subplots(count, 1, figsize=(10, 2.6 * count))
+    for axis, i in zip(axes, instants):
+        _draw(axis, result, i, course)
+        axis.set_title(f"t = {t[i]:.3f} s", fontsize=9)
+        axis.set_ylabel("height (m)")
+    axes[-1].set_xlabel("distance along the course (m)")
+    save_figure(figure, path)
+
+
+def animate(path, result, course, frames=120):
+    """A GIF of the track, the wheels and the ground (matplotlib's PillowWriter)."""
+    from matplotlib.animation import FuncAnimation, PillowWriter
+    from plotting import plt
+
+    t = result["time"]
+    picks = np.unique(np.linspace(0, len(t) - 1, min(frames, len(t))).astype(int))
+    figure, axis = plt.subplots(figsize=(9, 3.2))
+
+    def frame(n):
+        axis.clear()
+        i = picks[n]
+        _draw(axis, result, i, course)
+        centre = result["hull_x"][i]
+        axis.set_xlim(centre - 4.0, centre + 4.0)
+        axis.set_ylim(-0.3, 1.6)
+        axis.set_title(f"t = {t[i]:.3f} s")
+
+    span = t[-1] - t[0]
+    fps = max(1, min(25, round(len(picks) / max(span, 1e-9))))
+    FuncAnimation(figure, frame, frames=len(picks)).save(path, writer=PillowWriter(fps=fps))
+    plt.close(figure)

@@ -1,0 +1,108 @@
+"""The tracked vehicle (examples/tracked_vehicle.py, docs/vehicle.md): its track loop's
+geometry, the course's roughness class, the ISO 2631-1 weighting, the stop on bad input,
+and a run of a few host steps through the command line (summary and CSV). The exudyn
+parts need the `examples` extra; without it they are skipped with that reason."""
+
+import csv
+import math
+import re
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from conftest import ROOT
+
+sys.path.insert(0, str(ROOT / "examples"))  # the example scripts, imported as modules
+
+NO_EXUDYN = 'exudyn is not installed: pip install -e ".[examples]"'
+
+
+def test_track_loop_closes_with_every_joint_one_chord():
+    """80 pins round the wheels, sprocket, roller and idler, every joint (the closing one
+    included) the pitch plus the bush's static stretch apart: the loop is closed."""
+    from vehicle import layout as lay
+
+    chord = lay.LINK_PITCH + 1.6e-4
+    geo = lay.Layout(3.2e-3, chord)
+    joints = np.hypot(*(np.roll(geo.pins, -1, axis=0) - geo.pins).T)
+    assert geo.links == len(geo.pins) == 80
+    assert np.max(np.abs(joints - chord)) < 1e-9
+    # the bottom run lies on the ground from under the last wheel to under the first
+    bottom = geo.pins[geo.pins[:, 1] < lay.LINK_OUTER + 1e-9][:, 0]
+    assert bottom.min() < geo.station_x[-1] + chord and bottom.max() > geo.station_x[0] - chord
+    # sprocket at the front, idler behind the last station (section 1.1)
+    assert geo.sprocket[0] > geo.station_x[0] and geo.idler[0] < geo.station_x[-1]
+
+
+def test_random_road_has_the_variance_of_its_iso_8608_class():
+    """The variance of the class C road over its band is the integral of
+    Gd(n) = Gd(n0) (n / n0)^-2 over it: Gd(n0) n0^2 (1/n_low - 1/n_high)."""
+    from vehicle.course import ISO8608_GD, ISO8608_N0, RandomRoad
+
+    road = RandomRoad(front=0.0, roughness="C")
+    x = np.arange(road.start + road.fade, 5000.0, 0.05)
+    low, high = road.k[0] / (2 * math.pi), road.k[-1] / (2 * math.pi) + 0.01
+    expected = ISO8608_GD["C"] * ISO8608_N0 ** 2 * (1 / (low - 0.005) - 1 / high)
+    assert np.var(road.height(x)) == pytest.approx(expected, rel=0.1)
+
+
+@pytest.mark.parametrize("frequency, weight", [(1.0, 0.482), (4.0, 0.967), (8.0, 1.036),
+                                               (16.0, 0.768)])
+def test_wk_weighting_follows_iso_2631(frequency, weight):
+    """ISO 2631-1:1997 Table 3, Wk (factors x 1000: 482, 967, 1036, 768)."""
+    from scipy import signal
+    from vehicle.outputs import wk_weighting
+
+    _, response = signal.freqs(*wk_weighting(), [2 * math.pi * frequency])
+    assert abs(response[0]) == pytest.approx(weight, rel=0.01)
+
+
+def test_a_link_through_a_wheel_stops_the_run_naming_wheel_and_time(native_fmus):
+    """Road wheel 2 pushed 45 mm into the link beneath (more than its 37.5 mm of rubber):
+    the check names the wheel and the time."""
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle.course import Bump
+    from vehicle.model import Vehicle, VehicleError
+
+    vehicle = Vehicle(Bump(3.0), 5.0, native_fmus["RoadWheelTyre"].parent)
+    try:
+        data = vehicle.mbs.systemData
+        q = np.array(data.GetODE2Coordinates(exu.ConfigurationType.Current))
+        q[vehicle.mbs.GetNodeODE2Index(vehicle.arm_nodes[1]) + 1] -= 0.045
+        data.SetODE2Coordinates(q, exu.ConfigurationType.Current)
+        with pytest.raises(VehicleError, match=r"road wheel 2: a track link has passed "
+                                               r"through its tyre .* at t = 0\.1230 s"):
+            vehicle.contacts.check(0.123)
+    finally:
+        vehicle.coupling.free()
+
+
+def test_a_short_run_prints_its_summary_and_writes_the_csv(native_fmus, tmp_path):
+    """Four host steps of 1 ms after a short settling: the summary counts the 175 FMU
+    instances and the cost, the CSV has SI columns, the track stays closed and every wheel
+    stays on it."""
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    run = subprocess.run(
+        [sys.executable, str(ROOT / "examples" / "tracked_vehicle.py"), "--end-time", "0.004",
+         "--settle-time", "0.004", "--csv", "--out", str(tmp_path),
+         "--fmu-dir", str(native_fmus["RoadWheelTyre"].parent)],
+        capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "175 FMU instances" in run.stdout
+    assert re.search(r"s wall and [0-9.]+ s CPU per simulated second", run.stdout)
+    assert f"wrote {tmp_path}" in run.stdout
+    with open(tmp_path / "bump_5mps.csv") as stream:
+        rows = list(csv.DictReader(stream))
+    for column in ("time", "hull_vertical_acceleration", "hull_pitch_acceleration",
+                   "seat_vertical_acceleration", "track_tension_sprocket",
+                   "track_tension_idler", "tyre_force_1", "tyre_force_6", "damper_torque_1",
+                   "damper_torque_6", "bush_radial_deflection_0", "bush_angle_79"):
+        assert column in rows[0]
+    assert float(rows[-1]["time"]) >= 0.004 - 1e-9
+    # the joints stay within 1 mm of the pitch (closed) and every wheel on its tyre
+    stretch = [float(rows[-1][f"bush_radial_deflection_{j}"]) for j in range(80)]
+    assert max(stretch) < 1e-3
+    for w in range(1, 7):
+        assert 0.0 < float(rows[-1][f"tyre_compression_{w}"]) < 0.0375
