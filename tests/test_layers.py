@@ -126,7 +126,7 @@ C_LEVELS = {
 OUTSIDE_RUNTIME = 8  # the guard (guard/) and the history driver (lab/history.c)
 GUARD_UNITS = {"fmi2_guard", "python_engine", "python_content", "history"}
 STANDARD_HEADERS = re.compile(r"fmi[23](Functions|FunctionTypes|TypesPlatform|PlatformTypes)\.h")
-C_LINE_LIMIT = 600
+LINE_LIMIT = 600
 
 
 def c_sources():
@@ -208,7 +208,7 @@ def c_source_params():
 @pytest.mark.parametrize("path", c_source_params())
 def test_no_c_source_is_over_the_line_limit(path):
     lines = len(path.read_text().splitlines())
-    assert lines <= C_LINE_LIMIT, f"{path.relative_to(PACKAGE)} has {lines} lines"
+    assert lines <= LINE_LIMIT, f"{path.relative_to(PACKAGE)} has {lines} lines"
 
 
 LIBRARIES = ("runtime", "coupling", "export", "lab", "verification")
@@ -228,3 +228,9 @@ def test_the_libraries_never_read_the_command_line():
                     isinstance(node, ast.Attribute) and node.attr == "argv"):
                 readers.append(f"{module} line {node.lineno}")
     assert not readers, f"the command line read below the commands layer: {readers}"
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_no_python_source_is_over_the_line_limit(module):
+    lines = len(MODULES[module].read_text().splitlines())
+    assert lines <= LINE_LIMIT, f"{module} has {lines} lines"

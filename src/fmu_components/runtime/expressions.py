@@ -10,13 +10,10 @@ native flavour) print the same tree, so both flavours compute the same operation
 same order: on the same libm the results agree to the bit.
 
 A construct outside the subset cannot be built (``wrap`` refuses anything but numbers and
-nodes), and a printer meets no node it does not know; a symbol that is read before it is
-assigned, or a function outside ``FUNCTIONS``, is an error when the code is generated,
-never wrong code.
-
-Statements are ``Assign`` (a local or an array element) and ``Require`` (the generated
-function gives up unless a condition holds). ``Message`` is a text with formatted numbers,
-for the messages a model logs.
+nodes), and a printer meets no node it does not know; a symbol read before it is assigned,
+or a function outside ``FUNCTIONS``, is an error when the code is generated, never wrong
+code. Statements are ``Assign`` (a local or an array element) and ``Require`` (the
+generated function gives up unless a condition holds); ``Message`` is a logged text.
 """
 
 import math
