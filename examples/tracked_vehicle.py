@@ -96,7 +96,7 @@ def main(argv=None):
     if args.csv:
         for model, run in runs.items():
             path = args.out / f"{name}{'' if model == 'FMUs' else '_linear'}.csv"
-            write_csv(path, run, outputs.csv_columns(run))
+            write_csv(path, outputs.csv_columns(run), outputs.CSV_UNITS)
             written.append(path)
     if args.animate:
         written.append(args.out / f"{name}.gif")

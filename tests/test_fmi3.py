@@ -378,7 +378,7 @@ def test_verify_and_validate_take_fmi3_fmus_with_the_fmi2_numbers(all_fmus, tmp_
     same results to the bit as the FMI 2.0 FMUs, for a case of each component and the bush
     radial's measured quantities."""
     from fmu_components.export.identity import read_identity
-    from fmu_components.verification import cases, measurements, validate_command, verify
+    from fmu_components.verification import cases, measurements, verify
 
     for name in FMU_NAMES:
         identities = [read_identity(all_fmus[f][name]) for f in ("native", "fmi3")]
@@ -388,7 +388,7 @@ def test_verify_and_validate_take_fmi3_fmus_with_the_fmi2_numbers(all_fmus, tmp_
         native, fmi3 = (verify.run_case(case, all_fmus[f][name]) for f in ("native", "fmi3"))
         assert native.errors and all(math.isfinite(e) for e in native.errors.values())
         assert np.array_equal(native.result, fmi3.result) and native.errors == fmi3.errors
-    chosen = validate_command.select(measurements.read_measurements(), ["TrackBushRadial"])
+    chosen = measurements.select(measurements.read_measurements(), ["TrackBushRadial"])
     compared = {}
     for flavour in ("native", "fmi3"):
         folder = tmp_path / flavour

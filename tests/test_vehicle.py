@@ -95,6 +95,11 @@ def test_a_short_run_prints_its_summary_and_writes_the_csv(native_fmus, tmp_path
     assert f"wrote {tmp_path}" in run.stdout
     with open(tmp_path / "bump_5mps.csv") as stream:
         rows = list(csv.DictReader(stream))
+    # each column headed by its name and SI unit, "time (s)"
+    units = dict(re.fullmatch(r"(\S+) \((\S+)\)", h).groups() for h in rows[0])
+    assert units["time"] == "s" and units["hull_vertical_acceleration"] == "m/s2"
+    assert units["hull_pitch_acceleration"] == "rad/s2" and units["bush_angle_79"] == "rad"
+    rows = [{h.split(" (")[0]: v for h, v in row.items()} for row in rows]
     for column in ("time", "hull_vertical_acceleration", "hull_pitch_acceleration",
                    "seat_vertical_acceleration", "track_tension_sprocket",
                    "track_tension_idler", "tyre_force_1", "tyre_force_6", "damper_torque_1",

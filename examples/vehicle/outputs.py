@@ -131,6 +131,16 @@ FIGURE_LABELS = (
 )
 
 
+CSV_UNITS = {
+    "time": "s", "hull_vertical_acceleration": "m/s2", "hull_pitch_acceleration": "rad/s2",
+    "hull_surge_acceleration": "m/s2", "seat_vertical_acceleration": "m/s2", "hull_x": "m",
+    "hull_y": "m", "hull_pitch": "rad", "hull_surge_velocity": "m/s",
+    "track_tension_sprocket": "N", "track_tension_idler": "N", "drive_torque": "N.m",
+    "ground_load": "N", "tyre_force": "N", "tyre_compression": "m", "damper_torque": "N.m",
+    "damper_angle": "rad", "bush_radial_force": "N", "bush_radial_deflection": "m",
+    "bush_torque": "N.m", "bush_angle": "rad"}
+
+
 def csv_columns(result):
     stations = result["damper_stations"]
     columns = {name: result[name] for name in (
