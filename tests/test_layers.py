@@ -10,7 +10,7 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "src" / "fmu_components"
 # Lower number, lower layer. The package root and errors are below everything.
-LAYERS = {"": 0, "errors": 0, "runtime": 1, "coupling": 1, "export": 2, "lab": 3,
+LAYERS = {"": 0, "errors": 0, "ssv": 0, "runtime": 1, "coupling": 1, "export": 2, "lab": 3,
           "verification": 4, "commands": 5, "cli": 6, "__main__": 6}
 
 

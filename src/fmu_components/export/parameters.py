@@ -1,6 +1,7 @@
 """A part's parameter values: a base set (the thesis's, or those an FMU carries) with those
-of a PARAMS.json (FMU parameter names to SI values, as ``fmu-components fit`` writes them)
-or of NAME=VALUE settings in their place, checked as the FMUs check them.
+of a parameters file (PARAMS.json, FMU parameter names to SI values, as ``fmu-components
+fit`` writes them, or an SSP parameter set, PARAMS.ssv: ssv.py) or of NAME=VALUE settings
+in their place, checked as the FMUs check them.
 
 A value that makes sense but lies far from anything the thesis measured or used (30 times
 its value or more, either way) is most often a unit slip: ``parameter_set`` hands a
@@ -12,6 +13,7 @@ import math
 
 from ..runtime.catalog import component_definition
 from ..runtime.units import UNITS
+from ..ssv import SsvError, si_values, write_ssv
 
 SLIP_FACTOR = 30.0  # this far from the thesis value, either way, is worth a warning (deg: 57)
 
@@ -22,33 +24,44 @@ class ParameterError(ValueError):
 
 def parameter_set(component, structure="final", params=None, base=None, warn=None):
     """The full parameter set: `base` (default: the thesis values), with those of `params`
-    (a dict, or a JSON file name, of FMU parameter names -> SI values) in their place.
+    (a dict of FMU parameter names -> SI values, or a .json or .ssv file of them) in their place.
     warn(message) hears of each given value that looks like a unit slip."""
     definition = component_definition(component, structure)
     values = dict(base or definition.default_parameters())
     if params is None:
         return values
+    source = ""  # a file's values are refused naming the file
     if not isinstance(params, dict):
-        params = read_parameters(params)
+        source = f"{params}: "
+        params = read_parameters(params, definition)
     unknown = sorted(set(params) - set(values))
     if unknown:
-        raise ParameterError(f"{component} ({structure}) has no parameter "
+        raise ParameterError(f"{source}{component} ({structure}) has no parameter "
                              f"{', '.join(map(repr, unknown))}; its parameters are: "
                              f"{', '.join(values)}")
     for name, value in params.items():
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ParameterError(f"parameter {name!r} = {value!r} must be a number (SI units)")
+            raise ParameterError(f"{source}parameter {name!r} = {value!r} must be a number "
+                                 f"(SI units)")
         values[name] = float(value)
     problem = definition.check_parameters(values)
     if problem:
-        raise ParameterError(f"{problem}; correct it in the parameters file")
+        raise ParameterError(f"{source}{problem}; correct it in the parameters file")
     if warn is not None:
         for message in unit_slips(definition, params):
             warn(message)
     return values
 
 
-def read_parameters(path):
+def read_parameters(path, definition):
+    """{name: SI value} of a parameters file: .ssv (SSP, units converted to SI and checked
+    against the definition's) or JSON (SI values)."""
+    if str(path).lower().endswith(".ssv"):
+        try:
+            return si_values(path, {p.name: p.unit for p in definition.parameters},
+                             {unit: exponents for unit, (exponents, _) in UNITS.items()})
+        except SsvError as error:
+            raise ParameterError(str(error)) from None
     try:
         with open(path) as f:
             params = json.load(f)
@@ -61,6 +74,16 @@ def read_parameters(path):
     if not isinstance(params, dict):
         raise ParameterError(f"{path} must hold a JSON object of parameter names to SI values")
     return params
+
+
+def write_parameter_set(path, definition, values, set_name):
+    """An .ssv of `values` ({name: SI value}) for the part `definition` describes, each with
+    its SI unit and description."""
+    described = {p.name: p for p in definition.parameters}
+    write_ssv(path, set_name,
+              [(name, value, described[name].unit, described[name].description)
+               for name, value in values.items()],
+              {unit: exponents for unit, (exponents, _) in UNITS.items()})
 
 
 def settings(texts):

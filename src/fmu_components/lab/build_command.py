@@ -106,5 +106,5 @@ def read_own(path, name, component, structure):
     try:
         values = parameter_set(component, structure, path, warn=warn)
     except ParameterError as error:
-        raise UsageError(f"{path}: {error}") from None
+        raise UsageError(str(error)) from None  # it names the file
     return Own(name, component, structure, values)

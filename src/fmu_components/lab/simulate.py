@@ -55,7 +55,8 @@ class Component:
     def parameters(self, params_file=None, settings_=None):
         """{name: value} of the parameters to set: those of the file, then the NAME=VALUE
         settings, checked against the FMU's own values; unit slips are warned about."""
-        given = dict(read_parameters(params_file)) if params_file else {}
+        given = (dict(read_parameters(params_file, self.identity.definition)) if params_file
+                 else {})
         given.update(settings(settings_))
         if not given:
             return {}
