@@ -432,3 +432,40 @@ def test_the_monolithic_reference_takes_fmi3_fmus_with_the_fmi2_numbers(all_fmus
     (t2, y2, out2, events2), (t3, y3, out3, events3) = runs["native"], runs["fmi3"]
     assert events2 == events3 >= 1  # the mass leaves the tyre and lands again
     assert np.array_equal(t2, t3) and np.array_equal(y2, y3) and out2 == out3
+
+
+@pytest.mark.parametrize("version", ["fmi3", "native"], ids=["fmi3", "fmi2"])
+def test_model_exchange_enters_event_mode_where_its_fmi_version_allows(all_fmus, version):
+    """fmiXEnterEventMode in Event Mode: FMI 3.0 refuses it (sections 3.2 and 3.2.1: from
+    Continuous-Time Mode only, as the Reference FMUs' fmi3Functions.c); FMI 2.0 allows it
+    (table 3.2.3). From Continuous-Time Mode both accept it."""
+    from fmpy.fmi2 import FMU2Model
+    from fmpy.fmi3 import FMU3Model
+
+    path = all_fmus[version]["RoadWheelTyre"]
+    description = read_model_description(path)
+    messages = []
+    if version == "fmi3":
+        fmu = FMU3Model(guid=description.guid, unzipDirectory=extract(str(path)),
+                        modelIdentifier=description.modelExchange.modelIdentifier)
+        fmu.instantiate(logMessage=lambda env, status, category, message:
+                        messages.append(message.decode()))
+    else:
+        fmu = FMU2Model(guid=description.guid, unzipDirectory=extract(str(path)),
+                        modelIdentifier=description.modelExchange.modelIdentifier)
+        fmu.instantiate(loggingOn=True)
+        fmu.fmi2SetDebugLogging(fmu.component, True, 0, None)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    if version == "fmi3":  # Event Mode after initialization
+        with pytest.raises(FMICallException):
+            fmu.enterEventMode()
+        assert "fmi3EnterEventMode is not allowed in state EventMode" in messages[-1]
+        fmu.updateDiscreteStates()
+    else:
+        fmu.enterEventMode()  # FMI 2.0: allowed here, nothing changes
+        fmu.newDiscreteStates()
+    fmu.enterContinuousTimeMode()
+    fmu.enterEventMode()  # from Continuous-Time Mode: both
+    fmu.terminate()
+    fmu.freeInstance()

@@ -12,7 +12,9 @@ static const Face FMI2 = {"fmi2",
                           {"Instantiated", "InitializationMode", "StepComplete", "StepFailed",
                            "Terminated", "EventMode", "ContinuousTimeMode",
                            "IntermediateUpdateMode"},
-                          0};
+                          0,
+                          /* FMI 2.0.4 table 3.2.3: Event Mode again, or Continuous-Time */
+                          EVENT_MODE | CONTINUOUS_TIME_MODE};
 
 /* The core's status as FMI 2.0's (the same numbers). The host's handle is the core's
    Instance, passed on as it is. */

@@ -14,7 +14,10 @@ static const Face FMI3 = {"fmi3",
                           {"Instantiated", "InitializationMode", "StepMode", "StepDiscarded",
                            "Terminated", "EventMode", "ContinuousTimeMode",
                            "IntermediateUpdateMode"},
-                          1};
+                          1,
+                          /* FMI 3.0.2 sections 3.2 and 4.2.5: from Continuous-Time Mode,
+                             or from Step Mode with eventModeUsed; not in Event Mode */
+                          CONTINUOUS_TIME_MODE | STEP_COMPLETE};
 
 /* The core's status as FMI 3.0's (the same numbers). The host's handle is the core's
    Instance, passed on as it is. */

@@ -53,6 +53,7 @@ typedef struct {
     const char *prefix; /* "fmi2", "fmi3" */
     const char *mode_names[MODES];
     int declares_fmi3_variables; /* the event indicator and time are variables */
+    int enters_event_mode_from; /* the modes fmiXEnterEventMode is allowed in */
 } Face;
 
 struct Instance;

@@ -38,7 +38,8 @@ static int counted(Instance *instance, const char *function, size_t given, size_
 /* Model Exchange; and Co-Simulation from Step Mode for a host that asked for event mode
    at instantiation (FMI 3.0: after a step returned early at a tyre's contact). */
 Status core_enter_event_mode(Instance *instance, const char *function) {
-    if (!call_begin(instance, ME_STATES | STEP_COMPLETE, function)) return STATUS_ERROR;
+    if (!call_begin(instance, instance->face->enters_event_mode_from, function))
+        return STATUS_ERROR;
     if (instance->type == CO_SIMULATION && !instance->event_mode_used) {
         log_status(instance, STATUS_ERROR, "%s: this Co-Simulation instance was made without "
                    "eventModeUsed", function);
