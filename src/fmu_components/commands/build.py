@@ -17,6 +17,7 @@ from pathlib import Path
 from ..errors import UsageError
 from ..export.build import FLAVOURS, build
 from ..lab.build_command import build_coupling_bank, check_host, read_own, report_built
+from ..lab.rig_package import write_rig_packages
 from ..runtime.catalog import COMPONENTS, STRUCTURES, structures_of
 
 
@@ -73,6 +74,9 @@ def run_command(args):
         destination = args.dest / structure
     built = build(names, destination, args.flavour, structure)
     build_coupling_bank()
+    if structure == "final" and "native" in built:  # the thesis's parts' rig tests, as SSP
+        for path in write_rig_packages(built["native"], destination / "ssp").values():
+            print(f"built {path}")
     return report_built(built, args.no_run)
 
 
