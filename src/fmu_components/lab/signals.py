@@ -42,8 +42,8 @@ def secant_rates(times, deflection):
 
 
 def sine(times, mean, amplitude, frequency, phase=0.0, sin=None):
-    """mean + amplitude sin(2 pi frequency t + phase) at `times`; with `sin` the expression
-    trees' (runtime.expressions.sin) and symbols for the rest, the tree that the SSP rig
+    """mean + amplitude sin(2 pi frequency t + phase) at `times`; with `sin` a function that
+    makes an expression tree's sine and symbols for the rest, the tree that the SSP rig
     driver's C is printed from (lab/rig_package.py): one definition for both."""
     if sin is None:
         sin, times = np.sin, np.asarray(times)

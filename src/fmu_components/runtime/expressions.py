@@ -18,9 +18,8 @@ generated function gives up unless a condition holds); ``Message`` is a logged t
 
 import math
 
-# Functions an expression may call, with their number of arguments: those of C99's libm
-# that the components (and the SSP rig driver's sine) need, which Python's math module
-# computes with the same libm.
+# Functions an expression may call, with their number of arguments: those of C99's libm that
+# the components and the rig driver need, which Python's math module computes with that libm.
 FUNCTIONS = {"exp": 1, "copysign": 2, "tanh": 1, "sinh": 1, "cosh": 1, "atanh": 1, "sin": 1}
 
 
@@ -248,10 +247,6 @@ def cosh(a):
 
 def atanh(a):
     return Call("atanh", (a,))
-
-
-def sin(a):
-    return Call("sin", (a,))
 
 
 def copysign(a, b):
