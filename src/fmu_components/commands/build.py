@@ -2,7 +2,8 @@
 
 The build itself is ``export.build``; the checks and the run are ``lab.build_command``.
 
-    fmu-components build            # build fmus/*.fmu (native) and fmus/python/*.fmu, then run
+    fmu-components build            # build fmus/*.fmu (native), fmus/python/*.fmu, fmus/fmi3/*.fmu
+                                    # and the SSP rig packages fmus/ssp/*Rig.ssp, then run
     fmu-components build --no-run   # build only
     fmu-components build --only RotaryDamper --flavour native
     fmu-components build --structure four-element   # another of the thesis's model structures
@@ -22,7 +23,8 @@ from ..runtime.catalog import COMPONENTS, STRUCTURES, structures_of
 
 
 EXAMPLES = """examples:
-  fmu-components build                          both flavours of all four FMUs into fmus/, then run each
+  fmu-components build                          both flavours of all four FMUs into fmus/ and their
+                                                SSP rig packages into fmus/ssp/, then run each FMU
   fmu-components build --no-run --only RotaryDamper --flavour native
   fmu-components build --structure four-element  the torsion bush's four-element model (Appendix 4a)
                                                 into fmus/four-element/
