@@ -9,7 +9,6 @@ import pytest
 
 from fmu_components.coupling import CouplingError, FmuComponent
 from fmu_components.coupling.instance import FmuInstance
-from fmu_components.export.build import build
 from fmu_components.export.parameters import read_parameters
 from fmu_components.lab.fit import write_parameters
 from fmu_components.runtime.catalog import component_definition
@@ -20,10 +19,9 @@ STIFFNESS = {"N/m": {"kg": 1, "s": -2}, "N": {"kg": 1, "m": 1, "s": -2}}
 
 
 @pytest.fixture(scope="module")
-def bush_fmus(tmp_path_factory):
-    """The bush's native FMI 2.0 and FMI 3.0 FMUs, {flavour: path}."""
-    built = build([BUSH], tmp_path_factory.mktemp("fmus"), flavours=("native", "fmi3"))
-    return {flavour: paths[BUSH] for flavour, paths in built.items()}
+def bush_fmus(all_fmus):
+    """The bush's native FMI 2.0 and FMI 3.0 FMUs, {flavour: path}, of the session's build."""
+    return {flavour: all_fmus[flavour][BUSH] for flavour in ("native", "fmi3")}
 
 
 def n_per_mm_file(path, name, value):

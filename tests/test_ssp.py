@@ -165,8 +165,14 @@ def test_libcosim_applies_the_parameter_set_the_package_binds(packages, tmp_path
     assert parameters == {"k1": 3e7, "c3": 5e4}
 
 
-def test_the_build_writes_the_rig_packages(tmp_path, monkeypatch):
+def test_the_build_writes_the_rig_packages(native_fmus, tmp_path, monkeypatch):
+    """`fmu-components build` packages what it built (the build itself stubbed: the FMUs
+    the session built stand for it)."""
+    name = "TrackBushRadial"
     monkeypatch.setattr("fmu_components.commands.build.build_coupling_bank", lambda: None)
-    assert main(["build", "--only", "TrackBushRadial", "--flavour", "native", "--no-run",
+    monkeypatch.setattr("fmu_components.commands.build.build",
+                        lambda names, *_: {"native": {name: native_fmus[name]}})
+    assert main(["build", "--only", name, "--flavour", "native", "--no-run",
                  "--dest", str(tmp_path)]) == 0
-    assert zipfile.is_zipfile(tmp_path / "ssp" / "TrackBushRadialRig.ssp")
+    with zipfile.ZipFile(tmp_path / "ssp" / f"{name}Rig.ssp") as archive:
+        assert archive.read(f"resources/{name}.fmu") == native_fmus[name].read_bytes()

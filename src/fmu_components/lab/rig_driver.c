@@ -25,10 +25,10 @@ static const double START[VARIABLES] = {0.0, 0.0, DRIVER_MEAN, DRIVER_AMPLITUDE,
 
 typedef struct {
     HostLog log;
-    char *name;
     double value[VARIABLES];
     double time, step; /* the last communication point and step */
     int initialization; /* parameters may be set */
+    char name[];        /* the instance's name, allocated with it */
 } Driver;
 
 static fmi2Status refuse(Driver *d, const char *message) {
@@ -58,16 +58,13 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                                    functions, DRIVER_NAME, DRIVER_GUID,
                                    1u << fmi2CoSimulation))
         return NULL;
-    Driver *d = calloc(1, sizeof *d);
-    char *name = d ? malloc(strlen(instanceName) + 1) : NULL;
-    if (name == NULL) {
-        free(d);
+    Driver *d = calloc(1, sizeof *d + strlen(instanceName) + 1);
+    if (d == NULL) {
         host_log(&log, STATUS_ERROR, "fmi2Instantiate: out of memory");
         return NULL;
     }
-    d->name = strcpy(name, instanceName);
     d->log = log;
-    d->log.instance_name = d->name;
+    d->log.instance_name = strcpy(d->name, instanceName);
     d->log.debug_logging = loggingOn;
     memcpy(d->value, START, sizeof START);
     d->initialization = 1;
@@ -78,7 +75,6 @@ void fmi2FreeInstance(fmi2Component c) {
     Driver *d = c;
     if (d == NULL) return;
     host_log_forget(&d->log);
-    free(d->name);
     free(d);
 }
 
