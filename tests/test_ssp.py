@@ -176,3 +176,16 @@ def test_the_build_writes_the_rig_packages(native_fmus, tmp_path, monkeypatch):
                  "--dest", str(tmp_path)]) == 0
     with zipfile.ZipFile(tmp_path / "ssp" / f"{name}Rig.ssp") as archive:
         assert archive.read(f"resources/{name}.fmu") == native_fmus[name].read_bytes()
+
+
+def test_the_driver_refuses_a_sine_it_cannot_play(packages, tmp_path):
+    from fmpy import simulate_fmu
+    from fmpy.fmi1 import FMICallException
+
+    with zipfile.ZipFile(packages["TrackBushRadial"]) as archive:
+        driver = archive.extract("resources/TrackBushRadialRigDriver.fmu", tmp_path)
+    messages = []
+    with pytest.raises(FMICallException):
+        simulate_fmu(driver, stop_time=0.01, start_values={"first_step": -1e-3},
+                     logger=lambda *args: messages.append(args[-1].decode()))
+    assert any("first_step = -0.001 s" in m and "positive" in m for m in messages)

@@ -99,9 +99,16 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c) { (void)c; return fmi2OK
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     Driver *d = c;
-    if (!(d->value[FIRST_STEP] > 0.0) || !(d->value[FREQUENCY] >= 0.0))
-        return refuse(d, "fmi2ExitInitializationMode: first_step must be positive (s) and "
-                         "frequency zero or positive (Hz)");
+    const double *p = d->value;
+    if (!(isfinite(p[MEAN]) && isfinite(p[AMPLITUDE]) && p[FREQUENCY] >= 0.0 &&
+          isfinite(p[FREQUENCY]) && p[FIRST_STEP] > 0.0 && isfinite(p[FIRST_STEP]))) {
+        char message[MESSAGE_SIZE];
+        snprintf(message, sizeof message, "fmi2ExitInitializationMode: mean = %g, amplitude "
+                 "= %g, frequency = %g Hz, first_step = %g s: give finite values, the "
+                 "frequency zero or positive and first_step positive", p[MEAN], p[AMPLITUDE],
+                 p[FREQUENCY], p[FIRST_STEP]);
+        return refuse(d, message);
+    }
     d->initialization = 0;
     d->step = d->value[FIRST_STEP];
     update(d);
