@@ -139,6 +139,8 @@ def parameter_values(fmu, parameters):
     exponents = {unit: {k: getattr(base, k) for k in BASE_UNITS} for unit, base in
                  scales.items()}
     exponents["1"] = {}
+    for unit in set(units.values()) - set(exponents):  # declared without a definition:
+        exponents[unit] = {f"undefined unit {unit}": 1}  # taken only by its own name
     values = si_values(path, units, exponents)
     _, given, defined = read_ssv(path)
     given_units = {name: unit for name, _, unit in given}
