@@ -236,6 +236,7 @@ class FmuInstance:
         self.messages = []
         self.on_message = on_message
         self.time = 0.0
+        self.parameters = None  # the values setup set
         self.initialized = False  # left initialization mode: terminate before free
         self.rollback = rollback
         element = fmu.interface(interface)
