@@ -26,7 +26,6 @@ parameter and the value.
 
 import atexit
 import math
-import os
 import shutil
 from ctypes import byref, c_bool, c_double, c_uint, c_void_p, pointer
 from pathlib import Path
@@ -130,7 +129,7 @@ def parameter_values(fmu, parameters):
     the units it declares. Raises SsvError naming the file, the parameter and the value."""
     if parameters is None or isinstance(parameters, dict):
         return parameters
-    path = os.fspath(parameters)
+    path = str(parameters)
     description = fmu.description
     declared = {v.name: v for v in description.modelVariables
                 if v.causality == "parameter" and v.type in ("Real", "Float64")}
@@ -344,7 +343,7 @@ class FmuInstance:
                 if self.parameters is parameters:
                     raise
                 # the FMU refused a value of the file: say which file
-                raise CouplingError(self.name, start_time, f"{os.fspath(parameters)}: "
+                raise CouplingError(self.name, start_time, f"{parameters}: "
                                     f"{str(error).partition(': ')[2]}") from None
 
     def exit_initialization(self):
