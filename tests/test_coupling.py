@@ -276,8 +276,9 @@ def test_matrix_exponential_against_a_closed_form():
 
 
 def test_the_library_imports_fmpy_and_numpy_only():
-    """Nothing else of fmu_components, nothing else outside the standard library (exudyn
-    only in its adapter, and only inside its functions)."""
+    """Of fmu_components only its parameter-set reader (ssv.py) and errors, nothing else
+    outside the standard library (exudyn only in its adapter, and only inside its
+    functions)."""
     package = Path(__file__).resolve().parents[1] / "src" / "fmu_components" / "coupling"
     allowed = {"fmpy", "numpy", "atexit", "ctypes", "math", "pathlib", "shutil", "warnings",
                "dataclasses", "xml", "threading"}
@@ -292,6 +293,9 @@ def test_the_library_imports_fmpy_and_numpy_only():
             for name in names:
                 assert name.split(".")[0] in allowed | allowed_in.get(path.name, set()), \
                     f"{path.name} imports {name}"
+        package_imports = {node.module for node in ast.walk(tree)
+                           if isinstance(node, ast.ImportFrom) and node.level > 1}
+        assert package_imports <= {"ssv", "errors"}, (path.name, package_imports)
         lazy = {a.name for node in ast.walk(tree) if isinstance(node, ast.Import)
                 for a in node.names} - allowed - allowed_in.get(path.name, set())
         adapters = ("exudyn_host.py", "bank_exudyn.py")

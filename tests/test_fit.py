@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from fmu_components import cli
+from fmu_components.export.parameters import read_parameters
 
 from fmu_components.verification import synthetic
 from fmu_components.lab.history import simulate
@@ -49,6 +50,8 @@ def test_round_trip_recovers_the_parameters_and_predicts_a_held_back_test(tmp_pa
 
     fitted = json.loads(out.read_text())
     assert set(fitted) == set(TRUTH)
+    # the same set beside it as SSP, bit for bit
+    assert read_parameters(out.with_suffix(".ssv"), component_definition(COMPONENT)) == fitted
     for name in FIXED + ["geometric.x_ref"]:
         assert fitted[name] == TRUTH[name]
     for name in ("k1", "k3", "c3", "elastic.a1"):

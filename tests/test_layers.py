@@ -101,8 +101,9 @@ def test_no_module_imports_itself_through_others():
 # --- the C sources ---------------------------------------------------------------------------
 # The native runtime (c/: what ships in every native FMU) stands on levels of its own, by
 # unit (a .c and its .h): an #include "..." goes to the file's own level or one below, and no
-# units include each other in a circle. The Python flavour's guard and the fit's history
-# driver stand above the runtime and may include from c/; c/ never includes from them.
+# units include each other in a circle. The Python flavour's guard, the fit's history driver
+# and the SSP rig's driver stand above the runtime and may include from c/; c/ never includes
+# from them.
 
 C_RUNTIME = PACKAGE / "c"
 C_LEVELS = {
@@ -123,8 +124,9 @@ C_LEVELS = {
     # one face per FMI version
     "fmi2_face": 7, "fmi3_face": 7,
 }
-OUTSIDE_RUNTIME = 8  # the guard (guard/) and the history driver (lab/history.c)
-GUARD_UNITS = {"fmi2_guard", "python_engine", "python_content", "history"}
+OUTSIDE_RUNTIME = 8  # the guard (guard/) and the drivers (lab/history.c, lab/rig_driver.c)
+GUARD_UNITS = {"fmi2_guard", "python_engine", "python_content", "history", "rig_driver"}
+GENERATED_HEADERS = ("model_config.h", "driver_signal.h")  # written at build time
 STANDARD_HEADERS = re.compile(r"fmi[23](Functions|FunctionTypes|TypesPlatform|PlatformTypes)\.h")
 LINE_LIMIT = 600
 
@@ -149,7 +151,7 @@ def c_includes(path):
     the generated model sizes and the FMI standard's headers."""
     found = []
     for name in re.findall(r'^\s*#\s*include\s+"([^"]+)"', path.read_text(), re.MULTILINE):
-        if name == "model_config.h" or STANDARD_HEADERS.fullmatch(name):
+        if name in GENERATED_HEADERS or STANDARD_HEADERS.fullmatch(name):
             found.append((name, None))
             continue
         for folder in (path.parent, C_RUNTIME):

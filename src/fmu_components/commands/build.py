@@ -2,7 +2,8 @@
 
 The build itself is ``export.build``; the checks and the run are ``lab.build_command``.
 
-    fmu-components build            # build fmus/*.fmu (native) and fmus/python/*.fmu, then run
+    fmu-components build            # build fmus/*.fmu (native), fmus/python/*.fmu, fmus/fmi3/*.fmu
+                                    # and the SSP rig packages fmus/ssp/*Rig.ssp, then run
     fmu-components build --no-run   # build only
     fmu-components build --only RotaryDamper --flavour native
     fmu-components build --structure four-element   # another of the thesis's model structures
@@ -17,11 +18,13 @@ from pathlib import Path
 from ..errors import UsageError
 from ..export.build import FLAVOURS, build
 from ..lab.build_command import build_coupling_bank, check_host, read_own, report_built
+from ..lab.rig_package import write_rig_packages
 from ..runtime.catalog import COMPONENTS, STRUCTURES, structures_of
 
 
 EXAMPLES = """examples:
-  fmu-components build                          both flavours of all four FMUs into fmus/, then run each
+  fmu-components build                          both flavours of all four FMUs into fmus/ and their
+                                                SSP rig packages into fmus/ssp/, then run each FMU
   fmu-components build --no-run --only RotaryDamper --flavour native
   fmu-components build --structure four-element  the torsion bush's four-element model (Appendix 4a)
                                                 into fmus/four-element/
@@ -73,6 +76,9 @@ def run_command(args):
         destination = args.dest / structure
     built = build(names, destination, args.flavour, structure)
     build_coupling_bank()
+    if structure == "final" and "native" in built:  # the thesis's parts' rig tests, as SSP
+        for path in write_rig_packages(built["native"], destination / "ssp").values():
+            print(f"built {path}")
     return report_built(built, args.no_run)
 
 

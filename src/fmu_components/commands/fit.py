@@ -33,7 +33,8 @@ def configure(parser):
     parser.add_argument("--structure", default="final", choices=list(STRUCTURES),
                         help="the thesis's model structure (default: final)")
     parser.add_argument("--out", required=True, type=Path, metavar="PARAMS.json",
-                        help="the fitted parameters; the report goes beside it")
+                        help="the fitted parameters (JSON); PARAMS.ssv (SSP) and the report go "
+                             "beside it")
     parser.add_argument("--starts", type=int, default=4,
                         help="starting points, fitted in parallel (default: 4)")
     parser.add_argument("--jobs", type=int, default=None,
@@ -73,9 +74,9 @@ def run_command(args):
     except HistoryError as error:
         raise UsageError(str(error)) from None
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    write_parameters(args.out, result.values)
+    ssv = write_parameters(args.out, result.values, definition)
     report = write_report(result, args.out)
-    print(f"wrote {args.out} and {report} (fit in {result.wall_time:.1f} s)")
+    print(f"wrote {args.out}, {ssv} and {report} (fit in {result.wall_time:.1f} s)")
     for note in result.warnings():
         print(f"warning: {note}", file=sys.stderr)
     return 0

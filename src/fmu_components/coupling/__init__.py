@@ -6,8 +6,9 @@ saved state, rollback and errors (fmu.py), the schemes that decide how often a h
 is solved (schemes.py, run by master.py), linear Kelvin stand-ins (kelvin.py) and the
 adapter for exudyn (exudyn_host.py, which imports exudyn only when used).
 
-It imports fmpy and numpy only, and nothing else of fmu_components: copy-free use from
-any host. docs/coupling.md gives the FMI call sequence for hosts in other languages.
+It imports fmpy and numpy, and of fmu_components only ssv.py (parameter sets, an .ssv as a
+component's `parameters`) and errors.py: copy-free use from any host. docs/coupling.md
+gives the FMI call sequence for hosts in other languages.
 """
 
 from .errors import CouplingError, StepDiscarded

@@ -29,7 +29,8 @@ CURVED = 0.01
 class FmuComponent:
     """A co-simulation FMU with a deflection and a rate input, driven by a host.
 
-    Life cycle: construct (instantiated, in initialization mode, parameters set) ->
+    Life cycle: construct (instantiated, in initialization mode, `parameters` set: a dict
+    or an SSP .ssv file, applied to the FMU as built, instance.py) ->
     `relaxed_outputs(x)` for a host's static solve -> `start(t0, x0)` -> per host step
     `begin_step()`, `trial(t, x)` (any number of times), `accept()` or `reject()` ->
     `free()`. In between, the host applies `host_load(x, v)`, the component's current
@@ -83,7 +84,7 @@ class FmuComponent:
         self._outputs = instance.reals(self.output_names)
         self._stiffness_by_deflection = instance.jacobian(["stiffness"], self.input_names[:1])
         instance.setup(parameters, tolerance, start_time=0.0)
-        self._fmu_file, self._parameters = fmu, parameters
+        self._fmu_file, self._parameters = fmu, instance.parameters  # an .ssv file's, read
         self._linearisation = None  # made when first needed
         self._states = None  # the Reals of the states it linearises about
         self._state = instance.new_state()  # NULL until the first save

@@ -4,7 +4,7 @@ the package's errors.
 
     fmu = open_fmu("fmus/fmi3/RoadWheelTyre.fmu")   # read and extracted once per process
     tyre = FmuInstance(fmu, "tyre")                  # instantiated (Co-Simulation)
-    tyre.setup(parameters={"a0": 100.0})             # initialization mode
+    tyre.setup(parameters={"a0": 100.0})             # initialization mode (or "tyre.ssv")
     inputs, force = tyre.reals(fmu.inputs), tyre.reals(["force"])
     tyre.set(inputs, [3e-3, 0.0]); tyre.exit_initialization()
     tyre.set(inputs, [3.1e-3, 0.1]); tyre.do_step(0.0, 1e-3); tyre.get(force)
@@ -16,9 +16,16 @@ value references and value arrays made once per set of variables (`reals`), beca
 coupling makes them several times per host step. Where an FMI 2.0 and an FMI 3.0 call
 differ (fmi2SetReal / fmi3SetFloat64 and their counts, doStep's results, initialization,
 event iteration) the version is settled here, once.
+
+Parameters come as {name: value} or as an SSP parameter set (an .ssv file, SSP 1.0), applied
+at run time to the FMU as built: its names must be the FMU's Real parameters, its units of
+the kinds the modelDescription declares for them (converted: N/mm for N/m), its values
+within their declared min and max and accepted by the FMU; a refusal names the file, the
+parameter and the value.
 """
 
 import atexit
+import math
 import shutil
 from ctypes import byref, c_bool, c_double, c_uint, c_void_p, pointer
 from pathlib import Path
@@ -31,6 +38,7 @@ from fmpy.fmi2 import (FMU2Model, FMU2Slave, fmi2CallbackAllocateMemoryTYPE,
                        fmi2CallbackLoggerTYPE)
 from fmpy.fmi3 import FMU3Model, FMU3Slave
 
+from ..ssv import BASE_UNITS, SsvError, read_ssv, si_values
 from .errors import CouplingError, StepDiscarded
 
 # fmi2Status and fmi3Status: the same values from OK to Fatal (FMI 2.0.4 section 2.1.3,
@@ -115,6 +123,52 @@ class FmuFile:
         return [self.value_references[n] for n in names]
 
 
+def parameter_values(fmu, parameters):
+    """{name: value} to set: `parameters` as given (a dict, or None), or those of an .ssv
+    file (a path) checked against the FmuFile `fmu`'s modelDescription and converted into
+    the units it declares. Raises SsvError naming the file, the parameter and the value."""
+    if parameters is None or isinstance(parameters, dict):
+        return parameters
+    path = str(parameters)
+    description = fmu.description
+    declared = {v.name: v for v in description.modelVariables
+                if v.causality == "parameter" and v.type in ("Real", "Float64")}
+    scales = {u.name: u.baseUnit for u in description.unitDefinitions if u.baseUnit}
+    units = {name: _declared(v, "unit") or "1" for name, v in declared.items()}  # "1": none
+    exponents = {unit: {k: getattr(base, k) for k in BASE_UNITS} for unit, base in
+                 scales.items()}
+    exponents["1"] = {}
+    for unit in set(units.values()) - set(exponents):  # declared without a definition:
+        exponents[unit] = {f"undefined unit {unit}": 1}  # taken only by its own name
+    values = si_values(path, units, exponents)
+    _, given, defined = read_ssv(path)
+    given_units = {name: unit for name, _, unit in given}
+    for name, value in values.items():
+        base = scales.get(units[name])
+        if given_units[name] in defined and base is not None:  # a base-unit value: the FMU's
+            values[name] = value = (value - base.offset) / base.factor
+        low, high = (_bound(declared[name], "min"), _bound(declared[name], "max"))
+        if not low <= value <= high:
+            raise SsvError(f"{path}: parameter {name} = {value!r} {units[name]} is outside "
+                           f"the range the FMU declares, [{low!r}, {high!r}]")
+    return values
+
+
+def _declared(variable, attribute):
+    """A variable's attribute, or its declared type's."""
+    value = getattr(variable, attribute, None)
+    if value is None and variable.declaredType is not None:
+        value = getattr(variable.declaredType, attribute, None)
+    return value
+
+
+def _bound(variable, which):
+    value = _declared(variable, which)
+    if value is None:
+        return -math.inf if which == "min" else math.inf
+    return float(value)
+
+
 _OPENED = {}  # (path, modified, size) -> FmuFile: one extraction per FMU file and process
 _EXTRACTED = []
 
@@ -181,6 +235,7 @@ class FmuInstance:
         self.messages = []
         self.on_message = on_message
         self.time = 0.0
+        self.parameters = None  # the values setup set
         self.initialized = False  # left initialization mode: terminate before free
         self.rollback = rollback
         element = fmu.interface(interface)
@@ -269,15 +324,27 @@ class FmuInstance:
 
     def setup(self, parameters=None, tolerance=None, start_time=0.0):
         """Into initialization mode, the experiment set (the integrator's relative
-        tolerance, default the FMU's own), with `parameters` {name: value} set."""
+        tolerance, default the FMU's own), with `parameters` set: {name: value} or an .ssv
+        file's (parameter_values). The values set are kept in `parameters`."""
         self.time = start_time
+        try:
+            self.parameters = parameter_values(self.fmu, parameters)
+        except SsvError as error:
+            raise CouplingError(self.name, start_time, str(error)) from None
         if self.fmi3:
             self.call(self.fmpy.enterInitializationMode, tolerance, start_time)
         else:
             self.call(self.fmpy.setupExperiment, tolerance, start_time)
             self.call(self.fmpy.enterInitializationMode)
-        if parameters:
-            self.set(self.reals(list(parameters)), list(parameters.values()))
+        if self.parameters:
+            try:
+                self.set(self.reals(list(self.parameters)), list(self.parameters.values()))
+            except CouplingError as error:
+                if self.parameters is parameters:
+                    raise
+                # the FMU refused a value of the file: say which file
+                raise CouplingError(self.name, start_time, f"{parameters}: "
+                                    f"{str(error).partition(': ')[2]}") from None
 
     def exit_initialization(self):
         """Out of initialization mode: Co-Simulation into stepping; Model Exchange through

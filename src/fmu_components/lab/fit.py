@@ -23,8 +23,8 @@ divided by its measured peak-to-peak force and by the square root of its sample 
 that every test weighs the same; a table row gives the relative error of |K*| and the
 error of the loss angle in radians.
 
-The result is PARAMS.json, every parameter of the component by its FMU name (SI), and a
-report beside it (PARAMS_report.md with 200-dpi plots): measured against fitted responses,
+The result is PARAMS.json, every parameter of the component by its FMU name (SI), the same
+set as an SSP parameter file PARAMS.ssv (with units), and a report beside them (PARAMS_report.md with 200-dpi plots): measured against fitted responses,
 residuals, 95 % confidence intervals and correlations from the Jacobian at the solution,
 and a warning for each parameter the data cannot identify.
 """
@@ -38,11 +38,13 @@ import sys
 import threading
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 from scipy.optimize import least_squares
 
 from ..errors import UsageError
+from ..export.parameters import write_parameter_set
 from .files import write_text
 from .history import component_definition, native_history
 from .measured import History, deflection_limit
@@ -398,5 +400,12 @@ def data_scales(tests, definition):
     return float(max(x)) or deflection_limit(definition), float(max(f)) or 1.0
 
 
-def write_parameters(path, values):
+def write_parameters(path, values, definition):
+    """PARAMS.json (FMU names to SI values) and, beside it, PARAMS.ssv: the same values as
+    an SSP parameter set with their units, for the tools that read SSP (ssv.py). Returns
+    the .ssv's path."""
+    path = Path(path)
     write_text(path, json.dumps({n: float(v) for n, v in values.items()}, indent=2) + "\n")
+    ssv = path.with_suffix(".ssv")
+    write_parameter_set(ssv, definition, values, f"{definition.name} fitted ({path.name})")
+    return ssv

@@ -41,8 +41,13 @@ def secant_rates(times, deflection):
     return np.append(rates, rates[-1] if len(rates) else 0.0)
 
 
-def sine(times, mean, amplitude, frequency, phase=0.0):
-    return mean + amplitude * np.sin(2 * math.pi * frequency * np.asarray(times) + phase)
+def sine(times, mean, amplitude, frequency, phase=0.0, sin=None):
+    """mean + amplitude sin(2 pi frequency t + phase) at `times`; with `sin` a function that
+    makes an expression tree's sine and symbols for the rest, the tree that the SSP rig
+    driver's C is printed from (lab/rig_package.py): one definition for both."""
+    if sin is None:
+        sin, times = np.sin, np.asarray(times)
+    return mean + amplitude * sin(2 * math.pi * frequency * times + phase)
 
 
 def thesis_sine(name, stop_time, step, phase=0.0):

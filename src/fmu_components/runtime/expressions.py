@@ -18,9 +18,9 @@ generated function gives up unless a condition holds); ``Message`` is a logged t
 
 import math
 
-# Functions an expression may call, with their number of arguments: those of C99's libm
-# that the components need, which Python's math module computes with the same libm.
-FUNCTIONS = {"exp": 1, "copysign": 2, "tanh": 1, "sinh": 1, "cosh": 1, "atanh": 1}
+# Functions an expression may call, with their number of arguments: those of C99's libm that
+# the components and the rig driver need, which Python's math module computes with that libm.
+FUNCTIONS = {"exp": 1, "copysign": 2, "tanh": 1, "sinh": 1, "cosh": 1, "atanh": 1, "sin": 1}
 
 
 class GenerationError(Exception):
