@@ -38,7 +38,7 @@ EXPERIMENTS_FILE = "verification.exp"
 SOLVED_AT_BUILD = {"RoadWheelTyre": ("IV_relaxation_4mm",),
                    "TrackBushRadial": ("IV_relaxation_0.3mm",),
                    "TrackBushTorsion": ("IV_relaxation_25deg",),
-                   "RotaryDamper": ("high_frequency_8Hz",)}
+                   "RotaryDamper": ("B_0.5Hz",)}
 
 
 def _csv(table):
