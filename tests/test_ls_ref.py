@@ -255,3 +255,18 @@ def test_verify_and_validate_write_junit(native_fmus, tmp_path):
     assert set(cases) == {"damper-rotor-inertia", "damper-friction"}
     assert cases["damper-friction"].find("skipped") is not None  # no metric: not judged
     assert cases["damper-rotor-inertia"].find("skipped") is None
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["verify", "nothere.fmu"], "no such FMU file: nothere.fmu"),
+    (["verify", "{fmu}", "--limit", "0"], "--limit 0.0: give a positive fraction"),
+    (["verify", "{fmu}", "--fmu", NAME], "--fmu picks among the built FMUs of --fmus"),
+    (["verify", "--limit", "0.01"], "--limit goes with FMU files"),
+])
+def test_replay_mistakes_are_one_line(tmp_path, capsys, argv, words):
+    fmu = tmp_path / "X.fmu"
+    fmu.write_bytes(b"")
+    with pytest.raises(SystemExit) as stop:
+        cli.main([a.format(fmu=fmu) for a in argv])
+    assert stop.value.code == 2
+    assert words in capsys.readouterr().err

@@ -55,6 +55,9 @@ def configure(parser):
 def run_command(args):
     if args.fmu_files:
         return replay_command(args)
+    if args.limit is not None:
+        raise UsageError("--limit goes with FMU files (verify X.fmu --limit L); the thesis "
+                         "programme's criteria are fixed (docs/validation.md)")
     from tqdm import tqdm
 
     from ..verification import cases as programme
@@ -114,6 +117,12 @@ def replay_command(args):
     """The reference experiments of FMU files, replayed."""
     from ..verification.replay import replay_files, table
 
+    if args.fmu:
+        raise UsageError("--fmu picks among the built FMUs of --fmus; with FMU files, give "
+                         "only the files (and --case to pick experiments)")
+    if args.limit is not None and not args.limit > 0:  # NaN too
+        raise UsageError(f"--limit {args.limit}: give a positive fraction of the reference's "
+                         f"range, e.g. 0.005")
     missing = [str(p) for p in args.fmu_files if not p.is_file()]
     if missing:
         raise UsageError(f"no such FMU file: {', '.join(missing)}")

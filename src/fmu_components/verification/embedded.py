@@ -22,6 +22,7 @@ import zipfile
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
+from ..errors import UsageError
 from ..export.parameters import write_parameter_set
 from ..lab.signals import write_csv
 from ..runtime.catalog import component_definition
@@ -52,8 +53,13 @@ def case_files(case, spec=None, reference_data=programme.REFERENCE_DATA):
     thesis's values; a fresh independent solve for other values (spec)."""
     if spec is None:
         paths = programme.case_paths(case, reference_data)
-        return (paths["in.csv"].read_bytes(), paths["ref.csv"].read_bytes(),
-                programme.read_options(paths["ref.opt"]))
+        try:
+            return (paths["in.csv"].read_bytes(), paths["ref.csv"].read_bytes(),
+                    programme.read_options(paths["ref.opt"]))
+        except FileNotFoundError as error:
+            raise UsageError(f"{error.filename} not found: the FMUs' reference experiments "
+                             f"come from the repository's reference_data/; build from a "
+                             f"checkout, installed with pip install -e") from None
     inputs, expected, _ = programme.generate(case, spec)
     return _csv(inputs), _csv(expected), case.options()
 
