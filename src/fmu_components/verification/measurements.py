@@ -530,8 +530,6 @@ def junit_checks(comparisons, strict=False):
     """A junit.Check per row: failed where the FMU failed (and, with strict, where a judged
     row lies outside its band or bound, as ``validate --strict`` counts it), skipped where
     the row is not judged; its table row as the output."""
-    from .junit import Check
-
     lines = table(comparisons).splitlines()
     return [Check(c.measurement.component, c.measurement.id,
                   failure=c.problem or (c.verdict if strict and c.inside is False else ""),
