@@ -138,22 +138,13 @@ FOREIGN_MANIFEST = """<?xml version="1.0" encoding="UTF-8"?>
   <Related type="application/x-ma-hs-experiments" source="tests/smoke.exp" role="experiment/smoke-test"/>
 </fmiReferences>
 """
-FOREIGN_EXPERIMENTS = """<?xml version="1.0" encoding="UTF-8"?>
-<Experiments name="Smoke tests">
-  <Experiment name="as_built" tolerance="1e-4">
+FOREIGN_EXPERIMENT = """
+  <Experiment name="{name}" tolerance="1e-4">
     <TransientSimulation startTime="0" stopTime="{stop}" stepSize="{step}"/>
     <Parameters source="../params/stiffness%20in%20mm.ssv"/>
     <Stimuli source="data/in.csv"/>
-    <References source="data/ref.csv"/>
-  </Experiment>
-  <Experiment name="two_percent_off" tolerance="1e-4">
-    <TransientSimulation startTime="0" stopTime="{stop}" stepSize="{step}"/>
-    <Parameters source="../params/stiffness%20in%20mm.ssv"/>
-    <Stimuli source="data/in.csv"/>
-    <References source="data/ref_off.csv"/>
-  </Experiment>
-</Experiments>
-"""
+    <References source="data/{references}"/>
+  </Experiment>"""
 # k1 in N/mm and the elastic slope in N/mm: converted to the FMU's N/m by the units' factors
 FOREIGN_SSV = """<?xml version="1.0" encoding="UTF-8"?>
 <ssv:ParameterSet xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues"
@@ -186,8 +177,12 @@ def test_a_foreign_fmus_failing_reference_is_reported(all_fmus, tmp_path, capsys
     foreign = Path(shutil.copy(all_fmus["native"][NAME], tmp_path / "Foreign.fmu"))
     embedded.add_files(foreign, {
         MANIFEST: FOREIGN_MANIFEST,
-        f"{FOLDER}/tests/smoke.exp": FOREIGN_EXPERIMENTS.format(stop=case.stop_time,
-                                                                 step=case.step),
+        f"{FOLDER}/tests/smoke.exp": '<?xml version="1.0" encoding="UTF-8"?>\n'
+        '<Experiments name="Smoke tests">' + "".join(
+            FOREIGN_EXPERIMENT.format(name=name, references=references, stop=case.stop_time,
+                                      step=case.step)
+            for name, references in (("as_built", "ref.csv"), ("two_percent_off", "ref_off.csv")))
+        + "\n</Experiments>\n",
         f"{FOLDER}/params/stiffness in mm.ssv": FOREIGN_SSV.format(
             k1=values["k1"] / 1000, a1=values["elastic.a1"] / 1000),
         f"{FOLDER}/tests/data/in.csv": committed["in.csv"].read_bytes(),
