@@ -1,6 +1,7 @@
 """Build both flavours of the FMUs and simulate each once through fmpy, printing a summary.
 
-The build itself is ``export.build``; the checks and the run are ``lab.build_command``.
+The build itself is ``export.build``; the checks and the run are ``lab.build_command``; the
+reference experiments every FMU carries (FMI-LS-REF) are ``verification.embedded``.
 
     fmu-components build            # build fmus/*.fmu (native), fmus/python/*.fmu, fmus/fmi3/*.fmu
                                     # and the SSP rig packages fmus/ssp/*Rig.ssp, then run
@@ -74,7 +75,8 @@ def run_command(args):
     destination = args.dest
     if structure != "final" and args.dest == Path("fmus"):
         destination = args.dest / structure
-    built = build(names, destination, args.flavour, structure)
+    built = with_experiments(names, structure, None,
+                             lambda: build(names, destination, args.flavour, structure))
     build_coupling_bank()
     if structure == "final" and "native" in built:  # the thesis's parts' rig tests, as SSP
         for path in write_rig_packages(built["native"], destination / "ssp").values():
@@ -84,5 +86,16 @@ def run_command(args):
 
 def build_own(args):
     own = read_own(args.params, args.name, args.component, args.structure)
-    return report_built(build([own.name], args.dest, args.flavour, args.structure, own),
-                        args.no_run)
+    built = with_experiments([own.name], args.structure, own,
+                             lambda: build([own.name], args.dest, args.flavour, args.structure,
+                                           own))
+    return report_built(built, args.no_run)
+
+
+def with_experiments(names, structure, own, build_them):
+    """build_them()'s FMUs, each with its reference experiments (FMI-LS-REF,
+    verification.embedded), worked out while they build."""
+    from ..verification import embedded
+
+    pending = embedded.start(names, structure, own)  # before the build, to run beside it
+    return embedded.attach(build_them(), pending)

@@ -1,6 +1,7 @@
 """Validate the model against every number the thesis measured on its rigs.
 
     fmu-components validate [--fmu NAME] [--case GLOB] [--fmus DIR] [--report DIR] [--strict]
+                            [--junit FILE]
 
 Runs every selected row of ``reference_data/thesis/measurements.csv`` that names a metric
 through the built FMUs (``verification.measurements``), prints the table of measured and
@@ -39,6 +40,9 @@ def configure(parser):
     parser.add_argument("--strict", action="store_true",
                         help=f"exit 1 also when a measured quantity lies outside +-{BAND:g} %% "
                              f"(or its bound); see docs/validation.md")
+    parser.add_argument("--junit", type=Path, metavar="FILE",
+                        help="also write the results as JUnit XML, for CI (a row fails there "
+                             "as it counts against the exit status)")
 
 
 def run_command(args):
@@ -70,6 +74,11 @@ def run_command(args):
     summary = write_report(comparisons, runs, args.report)
     print(table(comparisons))
     print(f"\n{tally(comparisons)}\nreport: {summary}")
+    if args.junit:
+        from ..verification.junit import write_junit
+        from ..verification.measurements import junit_checks
+        checks = junit_checks(comparisons, args.strict)
+        print(f"JUnit XML: {write_junit(args.junit, 'validate', checks)}")
     failed = any(c.problem for c in comparisons)
     outside = any(c.inside is False for c in comparisons)
     return 1 if failed or (args.strict and outside) else 0

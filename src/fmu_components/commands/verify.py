@@ -3,7 +3,12 @@
 The thesis test programme runs through each FMU and is compared with the solve
 (``verification.verify``; how, and the criteria, are said there).
 
-    fmu-components verify [--fmu NAME] [--case GLOB] [--report DIR]
+    fmu-components verify [--fmu NAME] [--case GLOB] [--report DIR] [--junit FILE]
+
+Given FMU files (any tool's), it replays the FMI-LS-REF reference experiments they carry
+instead (``verification.replay``; every FMU this project builds carries its cases so):
+
+    fmu-components verify path/to/X.fmu [--case GLOB] [--limit L] [--junit FILE]
 """
 
 import sys
@@ -18,6 +23,8 @@ EXAMPLES = """examples:
   fmu-components verify                                   every case, report in reports/verification
   fmu-components verify --fmu TrackBushTorsion --case 'II_*'
   fmu-components verify --fmus fmus/python --report reports/verification-python
+  fmu-components verify fmus/RoadWheelTyre.fmu --junit results.xml
+                                                          the experiments the FMU carries
 """
 
 
@@ -34,9 +41,23 @@ def configure(parser):
                              "any own part (its reference is solved with its own values)")
     parser.add_argument("--reference-data", type=Path, default=REFERENCE_DATA,
                         help="the thesis FMUs' committed references")
+    parser.add_argument("fmu_files", nargs="*", type=Path, metavar="FMU",
+                        help="FMU files, any tool's: replay the FMI-LS-REF reference "
+                             "experiments each carries (docs/references.md)")
+    parser.add_argument("--limit", type=float, metavar="L",
+                        help="with FMU files: hold every experiment's deviation (largest "
+                             "|FMU - reference| over the reference's range) to L, whatever "
+                             "the experiment says")
+    parser.add_argument("--junit", type=Path, metavar="FILE",
+                        help="also write the results as JUnit XML, for CI")
 
 
 def run_command(args):
+    if args.fmu_files:
+        return replay_command(args)
+    if args.limit is not None:
+        raise UsageError("--limit goes with FMU files (verify X.fmu --limit L); the thesis "
+                         "programme's criteria are fixed (docs/validation.md)")
     from tqdm import tqdm
 
     from ..verification import cases as programme
@@ -85,4 +106,31 @@ def run_command(args):
     print(f"\n{len(outcomes) - len(failed)} of {len(outcomes)} cases pass (strict error <= "
           f"{STRICT_LIMIT:g} %, cross-check <= {100 * CROSS_CHECK_LIMIT:g} % outside the band); "
           f"report: {summary}")
+    if args.junit:
+        from ..verification.junit import write_junit
+        from ..verification.outcome import junit_checks
+        print(f"JUnit XML: {write_junit(args.junit, 'verify', junit_checks(outcomes))}")
+    return 1 if failed else 0
+
+
+def replay_command(args):
+    """The reference experiments of FMU files, replayed."""
+    from ..verification.replay import replay_files, table
+
+    if args.fmu:
+        raise UsageError("--fmu picks among the built FMUs of --fmus; with FMU files, give "
+                         "only the files (and --case to pick experiments)")
+    if args.limit is not None and not args.limit > 0:  # NaN too
+        raise UsageError(f"--limit {args.limit}: give a positive fraction of the reference's "
+                         f"range, e.g. 0.005")
+    missing = [str(p) for p in args.fmu_files if not p.is_file()]
+    if missing:
+        raise UsageError(f"no such FMU file: {', '.join(missing)}")
+    replays, checks = replay_files(args.fmu_files, args.case, args.limit)
+    print(table(replays))
+    failed = [c for c in checks if c.failure]
+    print(f"\n{len(checks) - len(failed)} of {len(checks)} experiments pass")
+    if args.junit:
+        from ..verification.junit import write_junit
+        print(f"JUnit XML: {write_junit(args.junit, 'verify', checks)}")
     return 1 if failed else 0

@@ -75,7 +75,7 @@ def model_description(definition, *, guid, model_identifier, native, source_file
     for switch in definition.switches:
         variables.append(_switch_variable(switch, definition.switch_reference(switch.name)))
     root.append(_model_structure(definition, index))
-    return _xml_text(root)
+    return xml_text(root)
 
 
 def _root(definition, version, token_name, token, **extra):
@@ -89,7 +89,7 @@ def _root(definition, version, token_name, token, **extra):
         "variableNamingConvention": "structured", **extra})
 
 
-def _xml_text(root):
+def xml_text(root):
     text = minidom.parseString(tostring(root, encoding="unicode")).toprettyxml(indent="  ")
     return text.replace('<?xml version="1.0" ?>', '<?xml version="1.0" encoding="UTF-8"?>', 1)
 
@@ -224,7 +224,7 @@ def model_description_fmi3(definition, *, guid, model_identifier, source_files=(
                    dependenciesKind="dependent")
     _identity_annotation(SubElement(SubElement(root, "Annotations"), "Annotation", type=TOOL),
                          definition)
-    return _xml_text(root)
+    return xml_text(root)
 
 
 def _scalar_variable(variable, vr, nominal, derivative_of):

@@ -375,11 +375,12 @@ def check(case, root=REFERENCE_DATA):
     return problems
 
 
-def simulate_case(fmu_path, inputs, options, outputs, label=None):
+def simulate_case(fmu_path, inputs, options, outputs, label=None, start_values=None):
     """(fmpy's result, wall time in s) of one case's input table run through an FMU with the
     case's options (StartTime, StopTime, StepSize, RelTol): the output interval is the step.
     What the FMU logs (fmpy prints it) goes to stderr, each line headed by `label` (the
-    case's key), so that a warning says which case it is about."""
+    case's key), so that a warning says which case it is about. start_values: {variable:
+    value} set before the run."""
     started = time.perf_counter()
     said = io.StringIO()
     try:
@@ -388,7 +389,7 @@ def simulate_case(fmu_path, inputs, options, outputs, label=None):
                                   stop_time=options["StopTime"],
                                   output_interval=options["StepSize"],
                                   relative_tolerance=options["RelTol"], input=inputs,
-                                  output=outputs)
+                                  output=outputs, start_values=start_values or {})
     finally:
         for line in said.getvalue().splitlines():
             if line.strip():

@@ -36,6 +36,7 @@ from ..lab.simulate import main_frequency
 from ..runtime.catalog import COMPONENTS
 from ..runtime.units import UNITS
 from . import cases as programme
+from .junit import Check
 from .outcome import aligned
 from .reference import THESIS_DATA
 
@@ -523,3 +524,15 @@ def select(measurements, fmus=None, patterns=None):
     return [m for m in measurements
             if (not fmus or m.component in fmus)
             and (not patterns or any(fnmatch.fnmatchcase(m.id, p) for p in patterns))]
+
+
+def junit_checks(comparisons, strict=False):
+    """A junit.Check per row: failed where the FMU failed (and, with strict, where a judged
+    row lies outside its band or bound, as ``validate --strict`` counts it), skipped where
+    the row is not judged; its table row as the output."""
+    lines = table(comparisons).splitlines()
+    return [Check(c.measurement.component, c.measurement.id,
+                  failure=c.problem or (c.verdict if strict and c.inside is False else ""),
+                  skipped="" if c.inside is not None else c.verdict,
+                  output=f"{lines[0]}\n{line}")
+            for c, line in zip(comparisons, lines[1:])]

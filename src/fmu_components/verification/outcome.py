@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import cases as programme
+from .junit import Check
 
 STRICT_LIMIT = 0.5  # % of the reference's peak-to-peak range
 CROSS_CHECK_LIMIT = 0.1  # share of samples outside the band
@@ -65,3 +66,13 @@ def aligned(lines, right=()):
     return "\n".join("  ".join(cell.rjust(w) if i in right else cell.ljust(w)
                                for i, (cell, w) in enumerate(zip(row, widths))).rstrip()
                      for row in lines)
+
+
+def junit_checks(outcomes):
+    """A junit.Check per outcome, its table row as the output."""
+    lines = table(outcomes).splitlines()
+    return [Check(o.name, o.case.name, failure="" if o.passed else o.problem or (
+        f"strict error {o.strict_error:.4g} % (limit {STRICT_LIMIT:g} %), "
+        f"{100 * o.outliers:.2f} % outside the cross-check band (limit "
+        f"{100 * CROSS_CHECK_LIMIT:g} %)"), time=o.wall_time, output=f"{lines[0]}\n{line}")
+            for o, line in zip(outcomes, lines[1:])]
