@@ -265,3 +265,18 @@ def test_replay_mistakes_are_one_line(tmp_path, capsys, argv, words):
         cli.main([a.format(fmu=fmu) for a in argv])
     assert stop.value.code == 2
     assert words in capsys.readouterr().err
+
+
+def test_an_own_damper_carries_the_first_half_cycle_of_test_b():
+    """The damper's reference solve takes ~7.5 s of CPU per simulated second: an own damper
+    carries test B's first second (the whole stroke once), the same input as test B there."""
+    [case] = embedded.solved_at_build("RotaryDamper")
+    [whole] = programme.select(["RotaryDamper"], ["B_0.5Hz"])
+    assert case.name == "B_0.5Hz_first_1s" and case.options()["StopTime"] == 1.0
+    inputs, whole_inputs = case.inputs(), whole.inputs()
+    assert len(inputs["time"]) == 501
+    for column in ("time", "angle"):
+        assert np.array_equal(inputs[column], whole_inputs[column][:501])
+    # the rate held over each step (the last row's is over no step)
+    assert np.array_equal(inputs["angle_rate"][:500], whole_inputs["angle_rate"][:500])
+    assert inputs["angle"].min() == -0.21 and abs(inputs["angle"].max() - 0.21) < 1e-12
