@@ -20,30 +20,79 @@ step's tangent, in which the rotor's inertia and the dashpot's slope appear). No
 here steps the FMU: no fmi2DoStep, no state of the co-simulation instance touched.
 """
 
+import math
+
 import numpy as np
 
 from .instance import MODEL_EXCHANGE, FmuInstance
 
 
+# The small matrices below are plain Python: each product and sum in the order bank.c's
+# C has them (bank_linearised.c, compiled without fused multiply-add), so that the
+# compiled path's linearised step gives this one's numbers to the bit. numpy's BLAS and
+# LAPACK sum in their own orders, with fused multiply-adds, and differed in the last bits.
+
+def _multiply(a, b):
+    """A B of square matrices (lists of rows)."""
+    columns = list(zip(*b))
+    return [[sum((x * y for x, y in zip(row, column)), 0.0) for column in columns]
+            for row in a]
+
+
+def _solve(a, b):
+    """X with A X = B (square, lists of rows; both overwritten): Gaussian elimination with
+    partial pivoting."""
+    d = len(a)
+    for col in range(d):
+        pivot = col
+        for r in range(col + 1, d):
+            if abs(a[r][col]) > abs(a[pivot][col]):
+                pivot = r
+        if a[pivot][col] == 0.0:
+            raise ZeroDivisionError("singular matrix in the linearised step")
+        a[col], a[pivot] = a[pivot], a[col]
+        b[col], b[pivot] = b[pivot], b[col]
+        for r in range(col + 1, d):
+            f = a[r][col] / a[col][col]
+            if f == 0.0:
+                continue
+            a[r][col:] = [x - f * y for x, y in zip(a[r][col:], a[col][col:])]
+            b[r] = [x - f * y for x, y in zip(b[r], b[col])]
+    for r in range(d - 1, -1, -1):
+        for k in range(d):
+            total = b[r][k]
+            for j in range(r + 1, d):
+                total -= a[r][j] * b[j][k]
+            b[r][k] = total / a[r][r]
+    return b
+
+
 def expm(matrix):
-    """e^M of a small matrix: diagonal Pade (6, 6) after scaling to a norm of 1/2, then
-    squaring (Higham, Functions of Matrices, ch. 10)."""
-    norm = np.linalg.norm(matrix, 1)
-    squarings = max(0, int(np.ceil(np.log2(norm / 0.5)))) if norm > 0.5 else 0
-    scaled = matrix / 2.0 ** squarings
+    """e^M of a small matrix (lists of rows, or a numpy array): diagonal Pade (6, 6) after
+    scaling to a norm of 1/2, then squaring (Higham, Functions of Matrices, ch. 10)."""
+    rows = matrix.tolist() if hasattr(matrix, "tolist") else [list(r) for r in matrix]
+    d = len(rows)
+    norm = max(sum((abs(x) for x in column), 0.0) for column in zip(*rows))
+    squarings = max(0, math.ceil(math.log2(norm / 0.5))) if norm > 0.5 else 0
+    scale = 2.0 ** -squarings
+    scaled = [[x * scale for x in row] for row in rows]
     coefficients = (1.0, 1 / 2, 5 / 44, 1 / 66, 1 / 792, 1 / 15840, 1 / 665280)
-    identity = np.eye(len(matrix))
-    power, even, odd = identity, coefficients[0] * identity, np.zeros_like(matrix)
+    identity = [[1.0 if r == k else 0.0 for k in range(d)] for r in range(d)]
+    power, even, odd = identity, [row[:] for row in identity], [[0.0] * d for _ in range(d)]
     for k in range(1, 7):
-        power = power @ scaled
-        if k % 2:
-            odd = odd + coefficients[k] * power
-        else:
-            even = even + coefficients[k] * power
-    result = np.linalg.solve(even - odd, even + odd)
+        power = _multiply(power, scaled)
+        total = odd if k % 2 else even
+        for row, powers in zip(total, power):
+            row[:] = [x + coefficients[k] * y for x, y in zip(row, powers)]
+    denominator = [[e - o for e, o in zip(re, ro)] for re, ro in zip(even, odd)]
+    result = _solve(denominator, [[e + o for e, o in zip(re, ro)] for re, ro in zip(even, odd)])
     for _ in range(squarings):
-        result = result @ result
+        result = _multiply(result, result)
     return result
+
+
+def _dot(a, b):
+    return sum((x * y for x, y in zip(a, b)), 0.0)
 
 
 class Linearisation:
@@ -94,22 +143,23 @@ class Linearisation:
         latter through the states too: the curvature the step really has)."""
         n = self.n
         jacobian, derivatives, load = self._at(states, deflection, rate)
-        a, b_x, b_v = jacobian[:n, :n], jacobian[:n, n], jacobian[:n, n + 1]
-        c, d_x, d_v = jacobian[n, :n], jacobian[n, n], jacobian[n, n + 1]
-        c_k, dk_x, dk_v = jacobian[n + 1, :n], jacobian[n + 1, n], jacobian[n + 1, n + 1]
+        jacobian, derivatives = jacobian.tolist(), derivatives.tolist()
+        c, d_x, d_v = jacobian[n][:n], jacobian[n][n], jacobian[n][n + 1]
+        c_k, dk_x, dk_v = jacobian[n + 1][:n], jacobian[n + 1][n], jacobian[n + 1][n + 1]
         # Augmented state [Y, P, s, 1]: Y the drift at rate v0, P = dY/dv.
-        m = np.zeros((2 * n + 2, 2 * n + 2))
-        m[:n, :n] = a
-        m[:n, 2 * n] = b_x * rate
-        m[:n, 2 * n + 1] = derivatives
-        m[n:2 * n, n:2 * n] = a
-        m[n:2 * n, 2 * n] = b_x
-        m[n:2 * n, 2 * n + 1] = b_v
-        m[2 * n, 2 * n + 1] = 1.0
-        end = expm(m * step)[:, 2 * n + 1]
-        predicted = load + c @ end[:n] + d_x * rate * step
-        by_rate = c @ end[n:2 * n] + d_x * step + d_v
-        stiffness_by_rate = c_k @ end[n:2 * n] + dk_x * step + dk_v
+        d = 2 * n + 2
+        m = [[0.0] * d for _ in range(d)]
+        for r in range(n):
+            m[r][:n] = m[n + r][n:2 * n] = jacobian[r][:n]
+            m[r][2 * n] = jacobian[r][n] * rate
+            m[r][2 * n + 1] = derivatives[r]
+            m[n + r][2 * n] = jacobian[r][n]
+            m[n + r][2 * n + 1] = jacobian[r][n + 1]
+        m[2 * n][2 * n + 1] = 1.0
+        end = [row[2 * n + 1] for row in expm([[x * step for x in row] for row in m])]
+        predicted = load + _dot(c, end[:n]) + d_x * rate * step
+        by_rate = _dot(c, end[n:2 * n]) + d_x * step + d_v
+        stiffness_by_rate = _dot(c_k, end[n:2 * n]) + dk_x * step + dk_v
         return predicted, by_rate / step, stiffness_by_rate / step
 
     def free(self):
