@@ -261,34 +261,59 @@ def test_the_bank_builds_for_win64(tmp_path):
     assert "python" not in exports.lower()
 
 
+FMI3 = Path(__file__).resolve().parents[1] / "fmus" / "fmi3"
+
+
+def fmi3_fmus():
+    if not (FMI3 / "RotaryDamper.fmu").exists():
+        pytest.skip("no FMI 3.0 FMUs in fmus/fmi3: python build_fmus.py")
+    return {name: FMI3 / f"{name}.fmu" for name in
+            ("RoadWheelTyre", "TrackBushRadial", "TrackBushTorsion", "RotaryDamper")}
+
+
+def corrected_rows(parts, columns):
+    """Every accepted load and every law (at 1.01 times the motion) of a corrected bank
+    over 200 steps of motion()'s `columns`."""
+    bank = Bank(parts, "corrected")
+    bank.start(0.0, motion(0.0)[columns])
+    rows = []
+    try:
+        for k in range(1, 201):
+            t, passes = k * 1e-3, 0
+            bank.begin_step(t)
+            while bank.end_pass(t, motion(t, passes)[columns]).repeat:
+                passes += 1
+            bank.accept(t)
+            rows.append(list(bank.loads) + list(bank.law_loads(1.01 * motion(t)[columns])))
+    finally:
+        bank.free()
+    return np.array(rows)
+
+
 def test_fmi3_instances_in_a_bank_give_the_fmi2_numbers(native_fmus):
     """The bank drives FMI 3.0 instances through their fmi3* functions (save, set, step,
     get, restore, the stiffness's directional derivative): the bushes' loads and laws are
     those of their FMI 2.0 versions, to the bit."""
-    fmi3 = Path(__file__).resolve().parents[1] / "fmus" / "fmi3"
-    if not (fmi3 / "TrackBushTorsion.fmu").exists():
-        pytest.skip("no FMI 3.0 FMUs in fmus/fmi3: python build_fmus.py")
+    fmi3 = fmi3_fmus()
+    names = ("radial", "torsion")
+    assert np.array_equal(corrected_rows(mix(fmi3, names), [1, 2]),
+                          corrected_rows(mix(native_fmus, names), [1, 2]))
 
-    def run(parts):
-        bank = Bank(parts, "corrected")
-        bank.start(0.0, motion(0.0)[1:3])
-        rows = []
-        try:
-            for k in range(1, 201):
-                t, passes = k * 1e-3, 0
-                bank.begin_step(t)
-                while bank.end_pass(t, motion(t, passes)[1:3]).repeat:
-                    passes += 1
-                bank.accept(t)
-                rows.append(list(bank.loads) + list(bank.law_loads(1.01 * motion(t)[1:3])))
-        finally:
-            bank.free()
-        return np.array(rows)
 
-    fmi2 = run(mix(native_fmus, ("radial", "torsion")))
-    parts = [FmuComponent(fmi3 / "TrackBushRadial.fmu", "radial"),
-             FmuComponent(fmi3 / "TrackBushTorsion.fmu", "torsion")]
-    assert np.array_equal(run(parts), fmi2)
+def test_fmi3_dampers_and_tyres_are_linearised_in_c_with_the_fmi2_numbers(native_fmus,
+                                                                          monkeypatch):
+    """The linearised step of FMI 3.0 instances in C too (their Model Exchange instances
+    through fmi3*: states, directional derivatives, the contact's event iteration): the
+    damper's and the tyre's loads and laws are the FMI 2.0 instances', to the bit, and
+    no instance is linearised in Python."""
+    names, columns = ("tyre", "damper"), [0, 3]
+    fmi2 = corrected_rows(mix(native_fmus, names), columns)
+
+    def in_python(*_):
+        raise AssertionError("an instance linearised in Python")
+
+    monkeypatch.setattr(Bank, "_linearised", in_python)
+    assert np.array_equal(corrected_rows(mix(fmi3_fmus(), names), columns), fmi2)
 
 
 @pytest.mark.parametrize("step", [4e-3, 1e-3, 5e-4])

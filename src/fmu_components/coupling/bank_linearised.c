@@ -105,30 +105,49 @@ int linearised_step(Bank *bank, int i, double deflection, double rate, double st
     const double seed = 1.0;
 #define CHECK(call) if ((status = (call)) > STATUS_OK) \
     return fail(bank, i, FAILED_LINEARISED, status, bank->accepted[3 * i], step)
-    CHECK(((Fmi2GetReal)c->functions[GET])(c->instance, c->state_vrs, n, states));
+    int fmi3 = c->fmi_version == 3;
+    CHECK(fmi3 ? ((Fmi3GetFloat64)c->functions[GET])(c->instance, c->state_vrs, n, states, n)
+               : ((Fmi2GetReal)c->functions[GET])(c->instance, c->state_vrs, n, states));
     double inputs[2] = {deflection, rate};
-    CHECK(((Fmi2SetReal)ME(c, ME_SET))(c->model, c->knowns + n, 2, inputs));
+    CHECK(fmi3 ? ((Fmi3SetFloat64)ME(c, ME_SET))(c->model, c->knowns + n, 2, inputs, 2)
+               : ((Fmi2SetReal)ME(c, ME_SET))(c->model, c->knowns + n, 2, inputs));
     int contact = deflection > 0.0;
     if (c->events && contact != c->contact) {
         /* the contact's mode switches in event mode only (docs/model-exchange.md) */
-        Fmi2EventInfo info;
         CHECK(((Fmi2Mode)ME(c, ME_EVENT_MODE))(c->model));
+        int again;
         do {
-            memset(&info, 0, sizeof info);
-            CHECK(((Fmi2NewDiscreteStates)ME(c, ME_NEW_DISCRETE_STATES))(c->model, &info));
-        } while (info.new_discrete_states_needed);
+            if (fmi3) {
+                bool update = false, terminate = false, nominals = false, values = false,
+                     defined = false;
+                double next = 0.0;
+                CHECK(((Fmi3UpdateDiscreteStates)ME(c, ME_NEW_DISCRETE_STATES))(
+                    c->model, &update, &terminate, &nominals, &values, &defined, &next));
+                again = update;
+            } else {
+                Fmi2EventInfo info;
+                memset(&info, 0, sizeof info);
+                CHECK(((Fmi2NewDiscreteStates)ME(c, ME_NEW_DISCRETE_STATES))(c->model, &info));
+                again = info.new_discrete_states_needed;
+            }
+        } while (again);
         CHECK(((Fmi2Mode)ME(c, ME_CONTINUOUS_MODE))(c->model));
         c->contact = contact;
     }
     CHECK(((Fmi2SetStates)ME(c, ME_SET_STATES))(c->model, states, n));
     int m2 = n + 2;
     for (int j = 0; j < m2; j++) {
-        CHECK(((Fmi2Directional)ME(c, ME_DIRECTIONAL))(c->model, c->unknowns, m2,
-                                                        &c->knowns[j], 1, &seed, column));
+        CHECK(fmi3 ? ((Fmi3Directional)ME(c, ME_DIRECTIONAL))(c->model, c->unknowns, m2,
+                                                               &c->knowns[j], 1, &seed, 1,
+                                                               column, m2)
+                   : ((Fmi2Directional)ME(c, ME_DIRECTIONAL))(c->model, c->unknowns, m2,
+                                                               &c->knowns[j], 1, &seed,
+                                                               column));
         for (int r = 0; r < m2; r++) jacobian[r * m2 + j] = column[r];
     }
     CHECK(((Fmi2GetDerivatives)ME(c, ME_DERIVATIVES))(c->model, derivatives, n));
-    CHECK(((Fmi2GetReal)ME(c, ME_GET))(c->model, &c->unknowns[n], 1, &load));
+    CHECK(fmi3 ? ((Fmi3GetFloat64)ME(c, ME_GET))(c->model, &c->unknowns[n], 1, &load, 1)
+               : ((Fmi2GetReal)ME(c, ME_GET))(c->model, &c->unknowns[n], 1, &load));
 #undef CHECK
 #define J(r, k) jacobian[(r) * m2 + (k)]
     /* augmented state [Y, P, s, 1]: Y the drift at rate v0, P = dY/dv */
