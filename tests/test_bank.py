@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from fmu_components.coupling import Coupling, CouplingError, FmuComponent, LoadLaw
-from fmu_components.coupling import bank_build
+from fmu_components.coupling import bank_build, linearised
 from fmu_components.coupling.bank import Bank
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -77,8 +77,35 @@ def bank_run(fmus, scheme, steps, step=1e-3):
     return np.array(rows), bank
 
 
+@pytest.fixture
+def python_exponential(monkeypatch):
+    """The Python path's linearised steps with linearised.py's own exponential, not the
+    bank library's C twin it takes where built."""
+    monkeypatch.setattr(linearised, "USE_COMPILED", False)
+
+
+def test_the_c_exponential_is_linearised_pys_to_the_bit():
+    """bank_linearised.c's expm of augmented matrices, as the damper's step makes them
+    (1 to 3 states, stable A, 0.5 to 4 ms), against linearised.py's: the same bits."""
+    assert linearised.compiled_expm() is not None
+    rng = np.random.default_rng(7)
+    for _ in range(500):
+        n = int(rng.integers(1, 4))
+        d = 2 * n + 2
+        a = -np.diag(rng.uniform(1.0, 5e3, n)) + rng.uniform(-1e3, 1e3, (n, n))
+        a[-1, 0] = -rng.uniform(1e4, 5e5)
+        m = np.zeros((d, d))
+        m[:n, :n] = m[n:2 * n, n:2 * n] = a
+        m[:2 * n, 2 * n:] = rng.uniform(-1e4, 1e4, (2 * n, 2))
+        m[2 * n, 2 * n + 1] = 1.0
+        m = (m * rng.choice([4e-3, 1e-3, 5e-4])).tolist()
+        python = [row[-1] for row in linearised.expm(m, linearised.augmented_pattern(d))]
+        assert all(math.isfinite(x) for x in python)
+        assert [row[-1] for row in linearised.augmented_expm(m)] == python
+
+
 @pytest.mark.parametrize("scheme", ["corrected", "explicit", "converged"])
-def test_the_bank_gives_the_python_paths_numbers(native_fmus, scheme):
+def test_the_bank_gives_the_python_paths_numbers(native_fmus, scheme, python_exponential):
     """A tyre, both bushes and the damper, every pass's law and every accepted load: to
     the bit, the damper's linearised law too (its matrix exponential in C, operation for
     operation as linearised.py's)."""
@@ -317,7 +344,7 @@ def test_fmi3_dampers_and_tyres_are_linearised_in_c_with_the_fmi2_numbers(native
 
 @pytest.mark.parametrize("step", [4e-3, 1e-3, 5e-4])
 def test_the_station_compiled_path_gives_the_python_paths_numbers(native_fmus, monkeypatch,
-                                                                   step):
+                                                                   step, python_exponential):
     """The road-wheel station at 8 m/s: the compiled path gives the Python path's
     histories to the bit, with the damper linearised in C (the default) as with it
     linearised by linearised.py."""
@@ -341,3 +368,17 @@ def test_the_station_compiled_path_gives_the_python_paths_numbers(native_fmus, m
     for key in ("hull_acceleration", "tyre_force", "damper_torque"):
         assert np.array_equal(exact[key], python[key]), key
         assert np.array_equal(compiled[key], python[key]), key
+
+
+def test_the_exudyn_cost_benchmark_runs_both_paths(native_fmus):
+    """benchmarks/coupling_exudyn.py --quick: a row per run and path, each a finite CPU
+    time per simulated second (its figures are the benchmark's, not a test's)."""
+    script = EXAMPLES.parent / "benchmarks" / "coupling_exudyn.py"
+    run = subprocess.run([sys.executable, str(script), "--quick",
+                          "--fmus", str(Path(native_fmus["RotaryDamper"]).parent)],
+                         capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, run.stderr
+    rows = [line.split("|")[1:-1] for line in run.stdout.splitlines()
+            if line.startswith("| ") and not line.startswith("| run")]
+    assert [row[1].strip() for row in rows] == ["python", "compiled"] * 3
+    assert all(math.isfinite(float(row[2])) for row in rows)

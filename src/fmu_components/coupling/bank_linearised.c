@@ -113,6 +113,13 @@ static int expm(int d, double *m) {
     return 0;
 }
 
+/* expm of an augmented matrix for linearised.py, which has it in Python too (the same
+   bits) and calls this where the library is built */
+EXPORT int bank_augmented_expm(int d, double *m) {
+    if (d < 4 || d > MAX_AUGMENTED || d % 2) return -1;
+    return expm(d, m);
+}
+
 #define ME(c, k) ((c)->model_functions[k])
 
 /* linearised.py's Linearisation.step at the co-simulation instance's states: the load

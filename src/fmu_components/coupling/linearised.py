@@ -20,11 +20,19 @@ step's tangent, in which the rotor's inertia and the dashpot's slope appear). No
 here steps the FMU: no fmi2DoStep, no state of the co-simulation instance touched.
 """
 
+import ctypes
 import math
 
 import numpy as np
 
+from .bank_build import built_library
 from .instance import MODEL_EXCHANGE, FmuInstance
+
+# Where the bank's library is built, Linearisation.step takes the exponential from its C
+# twin of expm (bank_linearised.c: the same bits, tests/test_bank.py), 40 times faster;
+# False: always the Python below.
+USE_COMPILED = True
+_compiled = []  # the C function once looked up, or None
 
 
 # The small matrices below are plain Python: each product and sum in the order bank.c's
@@ -32,11 +40,29 @@ from .instance import MODEL_EXCHANGE, FmuInstance
 # compiled path's linearised step gives this one's numbers to the bit. numpy's BLAS and
 # LAPACK sum in their own orders, with fused multiply-adds, and differed in the last bits.
 
-def _multiply(a, b):
-    """A B of square matrices (lists of rows)."""
-    columns = list(zip(*b))
-    return [[sum((x * y for x, y in zip(row, column)), 0.0) for column in columns]
-            for row in a]
+def _multiply(a, b, pattern=None):
+    """A B of square matrices (lists of rows). With a pattern (per row, the columns that
+    can be nonzero in both), the products by its zeros are left out: each sum starts
+    from +0, to which a zero adds nothing, so the bits are those of the full product."""
+    d = len(a)
+    if pattern is None:
+        pattern = [range(d)] * d
+    product = []
+    for row, columns in zip(a, pattern):
+        out = [0.0] * d
+        for k in columns:
+            out[k] = sum((row[j] * b[j][k] for j in columns), 0.0)
+        product.append(out)
+    return product
+
+
+def augmented_pattern(d):
+    """Per row, the columns that can be nonzero in Linearisation.step's augmented matrix
+    (two blocks of A on the diagonal, the last two columns, the 2 x 2 corner), which its
+    powers, their sums and products keep (bank_linearised.c's pattern)."""
+    n = (d - 2) // 2
+    return [list(range(0 if r < n else n, n if r < n else 2 * n)) * (r < 2 * n)
+            + list(range(d - 1 if r == d - 1 else 2 * n, d)) for r in range(d)]
 
 
 def _solve(a, b):
@@ -67,9 +93,10 @@ def _solve(a, b):
     return b
 
 
-def expm(matrix):
+def expm(matrix, pattern=None):
     """e^M of a small matrix (lists of rows, or a numpy array): diagonal Pade (6, 6) after
-    scaling to a norm of 1/2, then squaring (Higham, Functions of Matrices, ch. 10)."""
+    scaling to a norm of 1/2, then squaring (Higham, Functions of Matrices, ch. 10);
+    `pattern`, the matrix's, as _multiply takes it."""
     rows = matrix.tolist() if hasattr(matrix, "tolist") else [list(r) for r in matrix]
     d = len(rows)
     norm = max(sum((abs(x) for x in column), 0.0) for column in zip(*rows))
@@ -80,15 +107,40 @@ def expm(matrix):
     identity = [[1.0 if r == k else 0.0 for k in range(d)] for r in range(d)]
     power, even, odd = identity, [row[:] for row in identity], [[0.0] * d for _ in range(d)]
     for k in range(1, 7):
-        power = _multiply(power, scaled)
+        power = _multiply(power, scaled, pattern)
         total = odd if k % 2 else even
         for row, powers in zip(total, power):
             row[:] = [x + coefficients[k] * y for x, y in zip(row, powers)]
     denominator = [[e - o for e, o in zip(re, ro)] for re, ro in zip(even, odd)]
     result = _solve(denominator, [[e + o for e, o in zip(re, ro)] for re, ro in zip(even, odd)])
     for _ in range(squarings):
-        result = _multiply(result, result)
+        result = _multiply(result, result, pattern)
     return result
+
+
+def compiled_expm():
+    """The bank library's exponential of an augmented matrix, or None where the library
+    is not built (it is not compiled for this)."""
+    if not _compiled:
+        path = built_library()
+        function = None
+        if path is not None:
+            function = ctypes.CDLL(str(path)).bank_augmented_expm
+            function.argtypes = [ctypes.c_int, ctypes.c_void_p]
+        _compiled.append(function)
+    return _compiled[0]
+
+
+def augmented_expm(m):
+    """expm of Linearisation.step's augmented matrix (lists of rows), in C where built."""
+    d = len(m)
+    function = compiled_expm() if USE_COMPILED else None
+    if function is None:
+        return expm(m, augmented_pattern(d))
+    flat = (ctypes.c_double * (d * d))(*[x for row in m for x in row])
+    if function(d, flat) != 0:
+        raise ZeroDivisionError("singular matrix in the linearised step")
+    return [flat[r * d:(r + 1) * d] for r in range(d)]
 
 
 def _dot(a, b):
@@ -156,7 +208,8 @@ class Linearisation:
             m[n + r][2 * n] = jacobian[r][n]
             m[n + r][2 * n + 1] = jacobian[r][n + 1]
         m[2 * n][2 * n + 1] = 1.0
-        end = [row[2 * n + 1] for row in expm([[x * step for x in row] for row in m])]
+        m = [[x * step for x in row] for row in m]
+        end = [row[2 * n + 1] for row in augmented_expm(m)]
         predicted = load + _dot(c, end[:n]) + d_x * rate * step
         by_rate = _dot(c, end[n:2 * n]) + d_x * step + d_v
         stiffness_by_rate = _dot(c_k, end[n:2 * n]) + dk_x * step + dk_v
