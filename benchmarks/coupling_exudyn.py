@@ -24,9 +24,6 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "examples"))
 
-import road_wheel_station as station  # noqa: E402
-import track_span as span  # noqa: E402
-
 from run import ROOT, native_fmus  # noqa: E402
 
 STEP = 1e-3
@@ -44,13 +41,20 @@ def cpu_per_simulated_second(run, start, end):
     return (spent[1] - spent[0]) / (end - start)
 
 
+# Each example is imported only in the process that runs it: importing the station's
+# (scipy's modules with it) made the span's run in the same process half as costly again.
+
 def station_run(fmu_dir, scheme, path):
+    import road_wheel_station as station
+
     profile = station.RoadProfile()
     return lambda end_time: station.simulate(8.0, profile, STEP, fmu_dir, end_time=end_time,
                                              coupling=scheme, path=path)
 
 
 def span_run(fmu_dir, links, path):
+    import track_span as span
+
     return lambda end_time: span.simulate(STEP, links=links, fmu_dir=fmu_dir,
                                           end_time=end_time, coupling="corrected", path=path)
 
