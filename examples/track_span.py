@@ -38,11 +38,11 @@ import numpy as np
 import exudyn as exu
 from exudyn.itemInterface import (CoordinateConstraint, LoadForceVector, MarkerBodyPosition,
                                   MarkerNodeCoordinate, NodePointGround, NodeRigidBody2D,
-                                  ObjectConnectorCartesianSpringDamper,
-                                  ObjectConnectorCoordinateSpringDamper, ObjectGround,
-                                  ObjectRigidBody2D)
+                                  ObjectConnectorCoordinateSpringDamper,
+                                  ObjectConnectorSpringDamper, ObjectGround, ObjectRigidBody2D)
 
 from fmu_components.coupling import DEFAULT_SCHEME, Coupling, FmuComponent
+from fmu_components.coupling.bank_exudyn import symbolic_function
 from fmu_components.coupling.exudyn_host import connector_state, solve
 
 import bank_path
@@ -69,6 +69,7 @@ class TrackSpan:
         coupling's Python path (Coupling, a Python force function per connector)."""
         self.links, self.lift, self.frequency = links, lift, frequency
         self.compiled = bank_path.compiled(path, coupling)
+        self._symbolic = []  # the compiled user functions live as long as the system
         SC = exu.SystemContainer()
         mbs = SC.AddSystem()
         self.SC, self.mbs = SC, mbs
@@ -82,7 +83,6 @@ class TrackSpan:
             self.bank = bank_path.Bank([c for pair in zip(self.radial, self.torsion)
                                         for c in pair], coupling, record=self._record_bank)
             self.laws = bank_path.SymbolicLaws(self.bank)
-            self._symbolic = []  # the compiled user functions live as long as the system
         # The straight span under tension, before gravity: each bush deflected to carry it.
         seat_gap = self._deflection_for(self.radial[0], TENSION)
 
@@ -134,15 +134,20 @@ class TrackSpan:
         node = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[x, 0.0, 0.0]))
         body = mbs.AddObject(ObjectRigidBody2D(mass=WHEEL_MASS, inertia=1.0, nodeNumber=node))
         mbs.AddLoad(LoadForceVector(markerNumber=seat(body, 0.0), loadVector=[TENSION, 0, 0]))
-        mbs.AddObject(CoordinateConstraint(
-            markerNumbers=[coordinate(ground, 1), coordinate(node, 1)],
-            offsetUserFunction=lambda mbs, t, item, offset: self.lift_at(t)))
+        lifting = mbs.AddObject(CoordinateConstraint(
+            markerNumbers=[coordinate(ground, 1), coordinate(node, 1)]))
+        # the lift as a compiled symbolic function (exudyn evaluates it at every Newton
+        # iterate): the same operations as lift_at's, in C++
+        esym = exu.symbolic
+        self._symbolic.append(symbolic_function(
+            mbs, lifting, lambda mbs, t, itemNumber, lOffset: self.lift_at(t, esym.cos),
+            "offsetUserFunction"))
         mbs.AddObject(CoordinateConstraint(markerNumbers=[coordinate(ground, 2),
                                                           coordinate(node, 2)]))
         return seat(body, 0.0), coordinate(node, 2)
 
-    def lift_at(self, t):
-        return 0.5 * self.lift * (1.0 - math.cos(2 * math.pi * self.frequency * t))
+    def lift_at(self, t, cos=math.cos):
+        return 0.5 * self.lift * (1.0 - cos(2 * math.pi * self.frequency * t))
 
     def _add_joint(self, j, left, right):
         """Radial and torsion bush between the body left of joint j and the one right of
@@ -151,18 +156,17 @@ class TrackSpan:
         mbs = self.mbs
         radial, torsion = self.radial[j], self.torsion[j]
 
-        def radial_force(mbs, t, item, displacement, velocity, *_):
-            deflection, rate = seat_deflection(displacement, velocity)
-            if deflection == 0.0:
-                return [0.0, 0.0, 0.0]
-            scale = radial.host_load(deflection, rate) / deflection
-            return [scale * displacement[0], scale * displacement[1], 0.0]
+        def radial_force(mbs, t, item, distance, rate, *_):
+            # the spring's length less its reference length, 0: the seats' distance
+            return radial.host_load(distance, rate)
 
         def torsion_torque(mbs, t, item, rotation, rate, *_):
             # Joint angle = left link's rotation - right link's = -rotation.
             return -torsion.host_load(-rotation, -rate)
 
-        radial_connector = mbs.AddObject(ObjectConnectorCartesianSpringDamper(
+        # a scalar force along the line between the seats, exudyn's own geometry: a
+        # tension pulls them together
+        radial_connector = mbs.AddObject(ObjectConnectorSpringDamper(
             markerNumbers=[left[0], right[0]], springForceUserFunction=radial_force))
         torsion_connector = mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
             markerNumbers=[left[1], right[1]], springForceUserFunction=torsion_torque))
@@ -182,14 +186,11 @@ class TrackSpan:
     def _compile_forces(self):
         """The compiled path: each connector's force the symbolic law of its instance
         (after the static solve, which the relaxed bushes' Python functions make)."""
-        laws, esym = self.laws, self.laws.esym
+        laws = self.laws
+
         def radial(i):
-            def radial_force(mbs, t, itemNumber, displacement, velocity, stiffness, damping,
-                             offset):
-                distance = esym.sqrt(displacement[0] * displacement[0]
-                                     + displacement[1] * displacement[1])
-                scale = laws.when(distance == 0.0, 0.0, laws.load(i, distance) / distance)
-                return [scale * displacement[0], scale * displacement[1], 0.0 * scale]
+            def radial_force(mbs, t, itemNumber, deltaL, deltaL_t, stiffness, damping, force):
+                return laws.load(i, deltaL)
             return radial_force
 
         def torsion(i):
@@ -264,15 +265,27 @@ class TrackSpan:
         if self.compiled:
             self._compile_forces()
             self.host = bank_path.solve(self.mbs, self.bank, self.laws, self._deflections,
-                                        end_time, step)
+                                        end_time, step, settings=solver_settings())
             self.coupling = self.bank
         else:
-            self.host = solve(self.mbs, self.coupling, end_time, step)
+            self.host = solve(self.mbs, self.coupling, end_time, step,
+                              settings=solver_settings())
         t, torques, angles, forces, heights, accelerations = zip(*self.records)
         return {"time": np.array(t), "joint_torque": np.array(torques),
                 "joint_angle": np.array(angles), "radial_force": np.array(forces),
                 "link_height": np.array(heights), "link_acceleration": np.array(accelerations),
                 "lift": np.array([self.lift_at(ti) for ti in t])}
+
+
+def solver_settings():
+    """exudyn's settings for the dynamic solve: quiet, no files, and its sparse linear
+    solver, as a long span's Jacobian is a band (40 links: a fifth less CPU than dense)."""
+    settings = exu.SimulationSettings()
+    settings.timeIntegration.verboseMode = 0
+    settings.solution.file.write = False
+    settings.solution.sensors.active = False
+    settings.linearSolver.solverType = exu.LinearSolverType.EigenSparse
+    return settings
 
 
 def seat_deflection(displacement, velocity):

@@ -48,9 +48,13 @@ typedef struct {
     double next_event_time;
 } Fmi2EventInfo;
 typedef int (*Fmi2NewDiscreteStates)(void *, Fmi2EventInfo *);
+typedef int (*Fmi3UpdateDiscreteStates)(void *, bool *, bool *, bool *, bool *, bool *,
+                                        double *);
 
 enum { SET, GET, DO_STEP, GET_STATE, SET_STATE, DIRECTIONAL, FUNCTIONS };
-/* a Model Exchange instance's calls, for the linearised step (linearised.py) */
+/* a Model Exchange instance's calls, for the linearised step (linearised.py); of the
+   instance's FMI version (setting states, derivatives and the modes have one signature
+   in both) */
 enum { ME_SET, ME_GET, ME_SET_STATES, ME_DIRECTIONAL, ME_DERIVATIVES, ME_EVENT_MODE,
        ME_NEW_DISCRETE_STATES, ME_CONTINUOUS_MODE, ME_FUNCTIONS };
 #define MAX_STATES 8

@@ -7,9 +7,9 @@ the load laws (law.py), through each FMU's own FMI functions. The host hands it 
 deflections of all instances as one array and gets the laws back as one array (a row
 x*, F*, K, Q, K_touch per instance, for its force elements to evaluate: exudyn_bank.py
 gives them to exudyn's compiled symbolic functions). The Python work per host step does
-not grow with the number of instances, except for the instances whose law is a
-linearised step (the damper, and the tyre where its tangent changes over a step: their
-Model Exchange linearisation, linearised.py, stays in Python).
+not grow with the number of instances; the instances whose law is a linearised step (the
+damper, and the tyre where its tangent changes over a step) are linearised in C too
+(bank_linearised.c, linearised.py's operations in its order), FMI 2.0 and 3.0 alike.
 
     bank = Bank([tyre, damper, ...], "corrected")   # FmuComponents, not yet started
     bank.start(t0, deflections)
@@ -50,9 +50,14 @@ FUNCTIONS = {2: ("fmi2SetReal", "fmi2GetReal", "fmi2DoStep", "fmi2GetFMUstate",
 FAILED_CALLS = {1: "{set}", 2: "{get}", 3: "{step}", 4: "{get_state}", 5: "{set_state}",
                 6: "{directional}"}
 STATUS = {2: "Discard", 3: "Error", 4: "Fatal"}
-MODEL_FUNCTIONS = ("fmi2SetReal", "fmi2GetReal", "fmi2SetContinuousStates",
-                   "fmi2GetDirectionalDerivative", "fmi2GetDerivatives", "fmi2EnterEventMode",
-                   "fmi2NewDiscreteStates", "fmi2EnterContinuousTimeMode")
+MODEL_FUNCTIONS = {2: ("fmi2SetReal", "fmi2GetReal", "fmi2SetContinuousStates",
+                       "fmi2GetDirectionalDerivative", "fmi2GetDerivatives",
+                       "fmi2EnterEventMode", "fmi2NewDiscreteStates",
+                       "fmi2EnterContinuousTimeMode"),
+                   3: ("fmi3SetFloat64", "fmi3GetFloat64", "fmi3SetContinuousStates",
+                       "fmi3GetDirectionalDerivative", "fmi3GetContinuousStateDerivatives",
+                       "fmi3EnterEventMode", "fmi3UpdateDiscreteStates",
+                       "fmi3EnterContinuousTimeMode")}
 
 _library = None
 
@@ -99,9 +104,9 @@ class Bank:
 
     def __init__(self, components, scheme="corrected", host_can_retry=True, record=None,
                  linearise="c"):
-        """linearise: "c", the linearised steps in C (equal to the Python path's to
-        round-off: C's matrix exponential is not numpy's), or "python", by linearised.py
-        (the Python path's numbers to the bit, at its cost)."""
+        """linearise: "c", the linearised steps in C (bank_linearised.c, FMI 2.0 and 3.0:
+        the Python path's numbers to the bit, as linearised.py does the same operations
+        in the same order), or "python", by linearised.py itself (at its cost)."""
         if linearise not in ("c", "python"):
             raise ValueError(f"linearise {linearise!r}: 'c' or 'python'")
         self.linearise = linearise
@@ -164,7 +169,7 @@ class Bank:
                                        len(component.output_names), load,
                                        component.output_names.index("stiffness"), flags):
             raise ValueError(f"{component.name}: the bank cannot take this instance")
-        if self.linearise == "c" and version == 2 and component._linearisable and (
+        if self.linearise == "c" and component._linearisable and (
                 component.step_model == "linearised" or component._curvature):
             self._hand_over_model(i, component)
 
@@ -173,9 +178,9 @@ class Bank:
         (linearised.py makes it; the bank calls it)."""
         model = component.linearisation()
         instance = model._instance
-        functions = (ctypes.c_void_p * len(MODEL_FUNCTIONS))(*[
-            ctypes.cast(getattr(instance.fmpy.dll, name), ctypes.c_void_p)
-            for name in MODEL_FUNCTIONS])
+        names = MODEL_FUNCTIONS[3 if instance.fmi3 else 2]
+        functions = (ctypes.c_void_p * len(names))(*[
+            ctypes.cast(getattr(instance.fmpy.dll, name), ctypes.c_void_p) for name in names])
         vrs = (ctypes.c_uint * (2 * model.n + 4))(
             *instance.fmu.references(model.state_names), *model._jacobian.unknowns,
             *model._inputs.references)

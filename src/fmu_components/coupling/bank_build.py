@@ -88,6 +88,19 @@ def cache_directory():
                 or Path.home() / ".cache" / "fmu_components")
 
 
+def built_library():
+    """The bank's library for this platform where it is built already, else None (never
+    compiles)."""
+    platform = platform_name()
+    if platform not in COMPILERS:
+        return None
+    name = library_name(platform)
+    for directory in (HERE, cache_directory()):
+        if (directory / name).exists():
+            return directory / name
+    return None
+
+
 def library_path():
     """The bank's library for this platform: built beside its sources, in the cache, or
     compiled into the cache now."""
@@ -95,8 +108,4 @@ def library_path():
     if platform not in COMPILERS:
         raise NoCompiler(f"no bank for platform {platform}: use the Python path "
                          f"(path='python')")
-    name = library_name(platform)
-    for directory in (HERE, cache_directory()):
-        if (directory / name).exists():
-            return directory / name
-    return compile_bank(platform, cache_directory())
+    return built_library() or compile_bank(platform, cache_directory())

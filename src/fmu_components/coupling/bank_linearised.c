@@ -7,14 +7,37 @@
 
 /* --- the linearised step (linearised.py) ----------------------------------------------- */
 
-/* C = A B for d x d matrices, row-major */
+#define MAX_AUGMENTED (2 * MAX_STATES + 2)
+
+/* The columns of row r that can be nonzero in linearised_step's augmented matrix (d = 2n
+   + 2: two n x n blocks of A on the diagonal, the last two columns, and the 2 x 2 corner),
+   which its powers, their sums and products keep. */
+static int pattern(int d, int r, int *columns) {
+    int n = (d - 2) / 2, count = 0;
+    if (r < 2 * n)
+        for (int j = r < n ? 0 : n, end = j + n; j < end; j++) columns[count++] = j;
+    for (int j = r == d - 1 ? d - 1 : 2 * n; j < d; j++) columns[count++] = j;
+    return count;
+}
+
+/* C = A B for d x d matrices of that pattern, row-major: each entry the sum of its
+   products in the order of j from +0, as in full, without the products by the pattern's
+   zeros (each +0 or -0: adding it to a sum from +0 changes nothing; the entries are
+   finite). A third of a full product's work. */
 static void multiply(int d, const double *a, const double *b, double *c) {
-    for (int r = 0; r < d; r++)
-        for (int k = 0; k < d; k++) {
+    int columns[MAX_AUGMENTED];
+    for (int r = 0; r < d; r++) {
+        int count = pattern(d, r, columns);
+        const double *row = a + r * d;
+        double *out = c + r * d;
+        for (int k = 0; k < d; k++) out[k] = 0.0;
+        for (int p = 0; p < count; p++) {
+            int k = columns[p];
             double sum = 0.0;
-            for (int j = 0; j < d; j++) sum += a[r * d + j] * b[j * d + k];
-            c[r * d + k] = sum;
+            for (int q = 0; q < count; q++) sum += row[columns[q]] * b[columns[q] * d + k];
+            out[k] = sum;
         }
+    }
 }
 
 /* Solve A X = B (d x d, overwritten), Gaussian elimination with partial pivoting. */
@@ -48,8 +71,6 @@ static int solve(int d, double *a, double *b) {
         }
     return 0;
 }
-
-#define MAX_AUGMENTED (2 * MAX_STATES + 2)
 
 /* e^M (d x d, into m): linearised.py's expm, diagonal Pade (6, 6) after scaling to a
    norm of 1/2, then squaring (Higham, Functions of Matrices, ch. 10). */
@@ -92,6 +113,13 @@ static int expm(int d, double *m) {
     return 0;
 }
 
+/* expm of an augmented matrix for linearised.py, which has it in Python too (the same
+   bits) and calls this where the library is built */
+EXPORT int bank_augmented_expm(int d, double *m) {
+    if (d < 4 || d > MAX_AUGMENTED || d % 2) return -1;
+    return expm(d, m);
+}
+
 #define ME(c, k) ((c)->model_functions[k])
 
 /* linearised.py's Linearisation.step at the co-simulation instance's states: the load
@@ -105,30 +133,49 @@ int linearised_step(Bank *bank, int i, double deflection, double rate, double st
     const double seed = 1.0;
 #define CHECK(call) if ((status = (call)) > STATUS_OK) \
     return fail(bank, i, FAILED_LINEARISED, status, bank->accepted[3 * i], step)
-    CHECK(((Fmi2GetReal)c->functions[GET])(c->instance, c->state_vrs, n, states));
+    int fmi3 = c->fmi_version == 3;
+    CHECK(fmi3 ? ((Fmi3GetFloat64)c->functions[GET])(c->instance, c->state_vrs, n, states, n)
+               : ((Fmi2GetReal)c->functions[GET])(c->instance, c->state_vrs, n, states));
     double inputs[2] = {deflection, rate};
-    CHECK(((Fmi2SetReal)ME(c, ME_SET))(c->model, c->knowns + n, 2, inputs));
+    CHECK(fmi3 ? ((Fmi3SetFloat64)ME(c, ME_SET))(c->model, c->knowns + n, 2, inputs, 2)
+               : ((Fmi2SetReal)ME(c, ME_SET))(c->model, c->knowns + n, 2, inputs));
     int contact = deflection > 0.0;
     if (c->events && contact != c->contact) {
         /* the contact's mode switches in event mode only (docs/model-exchange.md) */
-        Fmi2EventInfo info;
         CHECK(((Fmi2Mode)ME(c, ME_EVENT_MODE))(c->model));
+        int again;
         do {
-            memset(&info, 0, sizeof info);
-            CHECK(((Fmi2NewDiscreteStates)ME(c, ME_NEW_DISCRETE_STATES))(c->model, &info));
-        } while (info.new_discrete_states_needed);
+            if (fmi3) {
+                bool update = false, terminate = false, nominals = false, values = false,
+                     defined = false;
+                double next = 0.0;
+                CHECK(((Fmi3UpdateDiscreteStates)ME(c, ME_NEW_DISCRETE_STATES))(
+                    c->model, &update, &terminate, &nominals, &values, &defined, &next));
+                again = update;
+            } else {
+                Fmi2EventInfo info;
+                memset(&info, 0, sizeof info);
+                CHECK(((Fmi2NewDiscreteStates)ME(c, ME_NEW_DISCRETE_STATES))(c->model, &info));
+                again = info.new_discrete_states_needed;
+            }
+        } while (again);
         CHECK(((Fmi2Mode)ME(c, ME_CONTINUOUS_MODE))(c->model));
         c->contact = contact;
     }
     CHECK(((Fmi2SetStates)ME(c, ME_SET_STATES))(c->model, states, n));
     int m2 = n + 2;
     for (int j = 0; j < m2; j++) {
-        CHECK(((Fmi2Directional)ME(c, ME_DIRECTIONAL))(c->model, c->unknowns, m2,
-                                                        &c->knowns[j], 1, &seed, column));
+        CHECK(fmi3 ? ((Fmi3Directional)ME(c, ME_DIRECTIONAL))(c->model, c->unknowns, m2,
+                                                               &c->knowns[j], 1, &seed, 1,
+                                                               column, m2)
+                   : ((Fmi2Directional)ME(c, ME_DIRECTIONAL))(c->model, c->unknowns, m2,
+                                                               &c->knowns[j], 1, &seed,
+                                                               column));
         for (int r = 0; r < m2; r++) jacobian[r * m2 + j] = column[r];
     }
     CHECK(((Fmi2GetDerivatives)ME(c, ME_DERIVATIVES))(c->model, derivatives, n));
-    CHECK(((Fmi2GetReal)ME(c, ME_GET))(c->model, &c->unknowns[n], 1, &load));
+    CHECK(fmi3 ? ((Fmi3GetFloat64)ME(c, ME_GET))(c->model, &c->unknowns[n], 1, &load, 1)
+               : ((Fmi2GetReal)ME(c, ME_GET))(c->model, &c->unknowns[n], 1, &load));
 #undef CHECK
 #define J(r, k) jacobian[(r) * m2 + (k)]
     /* augmented state [Y, P, s, 1]: Y the drift at rate v0, P = dY/dv */

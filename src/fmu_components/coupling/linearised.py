@@ -20,30 +20,131 @@ step's tangent, in which the rotor's inertia and the dashpot's slope appear). No
 here steps the FMU: no fmi2DoStep, no state of the co-simulation instance touched.
 """
 
+import ctypes
+import math
+
 import numpy as np
 
+from .bank_build import built_library
 from .instance import MODEL_EXCHANGE, FmuInstance
 
+# Where the bank's library is built, Linearisation.step takes the exponential from its C
+# twin of expm (bank_linearised.c: the same bits, tests/test_bank.py), 40 times faster;
+# False: always the Python below.
+USE_COMPILED = True
+_compiled = []  # the C function once looked up, or None
 
-def expm(matrix):
-    """e^M of a small matrix: diagonal Pade (6, 6) after scaling to a norm of 1/2, then
-    squaring (Higham, Functions of Matrices, ch. 10)."""
-    norm = np.linalg.norm(matrix, 1)
-    squarings = max(0, int(np.ceil(np.log2(norm / 0.5)))) if norm > 0.5 else 0
-    scaled = matrix / 2.0 ** squarings
+
+# The small matrices below are plain Python: each product and sum in the order bank.c's
+# C has them (bank_linearised.c, compiled without fused multiply-add), so that the
+# compiled path's linearised step gives this one's numbers to the bit. numpy's BLAS and
+# LAPACK sum in their own orders, with fused multiply-adds, and differed in the last bits.
+
+def _multiply(a, b, pattern=None):
+    """A B of square matrices (lists of rows). With a pattern (per row, the columns that
+    can be nonzero in both), the products by its zeros are left out: each sum starts
+    from +0, to which a zero adds nothing, so the bits are those of the full product."""
+    d = len(a)
+    if pattern is None:
+        pattern = [range(d)] * d
+    product = []
+    for row, columns in zip(a, pattern):
+        out = [0.0] * d
+        for k in columns:
+            out[k] = sum((row[j] * b[j][k] for j in columns), 0.0)
+        product.append(out)
+    return product
+
+
+def augmented_pattern(d):
+    """Per row, the columns that can be nonzero in Linearisation.step's augmented matrix
+    (two blocks of A on the diagonal, the last two columns, the 2 x 2 corner), which its
+    powers, their sums and products keep (bank_linearised.c's pattern)."""
+    n = (d - 2) // 2
+    return [list(range(0 if r < n else n, n if r < n else 2 * n)) * (r < 2 * n)
+            + list(range(d - 1 if r == d - 1 else 2 * n, d)) for r in range(d)]
+
+
+def _solve(a, b):
+    """X with A X = B (square, lists of rows; both overwritten): Gaussian elimination with
+    partial pivoting."""
+    d = len(a)
+    for col in range(d):
+        pivot = col
+        for r in range(col + 1, d):
+            if abs(a[r][col]) > abs(a[pivot][col]):
+                pivot = r
+        if a[pivot][col] == 0.0:
+            raise ZeroDivisionError("singular matrix in the linearised step")
+        a[col], a[pivot] = a[pivot], a[col]
+        b[col], b[pivot] = b[pivot], b[col]
+        for r in range(col + 1, d):
+            f = a[r][col] / a[col][col]
+            if f == 0.0:
+                continue
+            a[r][col:] = [x - f * y for x, y in zip(a[r][col:], a[col][col:])]
+            b[r] = [x - f * y for x, y in zip(b[r], b[col])]
+    for r in range(d - 1, -1, -1):
+        for k in range(d):
+            total = b[r][k]
+            for j in range(r + 1, d):
+                total -= a[r][j] * b[j][k]
+            b[r][k] = total / a[r][r]
+    return b
+
+
+def expm(matrix, pattern=None):
+    """e^M of a small matrix (lists of rows, or a numpy array): diagonal Pade (6, 6) after
+    scaling to a norm of 1/2, then squaring (Higham, Functions of Matrices, ch. 10);
+    `pattern`, the matrix's, as _multiply takes it."""
+    rows = matrix.tolist() if hasattr(matrix, "tolist") else [list(r) for r in matrix]
+    d = len(rows)
+    norm = max(sum((abs(x) for x in column), 0.0) for column in zip(*rows))
+    squarings = max(0, math.ceil(math.log2(norm / 0.5))) if norm > 0.5 else 0
+    scale = 2.0 ** -squarings
+    scaled = [[x * scale for x in row] for row in rows]
     coefficients = (1.0, 1 / 2, 5 / 44, 1 / 66, 1 / 792, 1 / 15840, 1 / 665280)
-    identity = np.eye(len(matrix))
-    power, even, odd = identity, coefficients[0] * identity, np.zeros_like(matrix)
+    identity = [[1.0 if r == k else 0.0 for k in range(d)] for r in range(d)]
+    power, even, odd = identity, [row[:] for row in identity], [[0.0] * d for _ in range(d)]
     for k in range(1, 7):
-        power = power @ scaled
-        if k % 2:
-            odd = odd + coefficients[k] * power
-        else:
-            even = even + coefficients[k] * power
-    result = np.linalg.solve(even - odd, even + odd)
+        power = _multiply(power, scaled, pattern)
+        total = odd if k % 2 else even
+        for row, powers in zip(total, power):
+            row[:] = [x + coefficients[k] * y for x, y in zip(row, powers)]
+    denominator = [[e - o for e, o in zip(re, ro)] for re, ro in zip(even, odd)]
+    result = _solve(denominator, [[e + o for e, o in zip(re, ro)] for re, ro in zip(even, odd)])
     for _ in range(squarings):
-        result = result @ result
+        result = _multiply(result, result, pattern)
     return result
+
+
+def compiled_expm():
+    """The bank library's exponential of an augmented matrix, or None where the library
+    is not built (it is not compiled for this)."""
+    if not _compiled:
+        path = built_library()
+        function = None
+        if path is not None:
+            function = ctypes.CDLL(str(path)).bank_augmented_expm
+            function.argtypes = [ctypes.c_int, ctypes.c_void_p]
+        _compiled.append(function)
+    return _compiled[0]
+
+
+def augmented_expm(m):
+    """expm of Linearisation.step's augmented matrix (lists of rows), in C where built."""
+    d = len(m)
+    function = compiled_expm() if USE_COMPILED else None
+    if function is None:
+        return expm(m, augmented_pattern(d))
+    flat = (ctypes.c_double * (d * d))(*[x for row in m for x in row])
+    if function(d, flat) != 0:
+        raise ZeroDivisionError("singular matrix in the linearised step")
+    return [flat[r * d:(r + 1) * d] for r in range(d)]
+
+
+def _dot(a, b):
+    return sum((x * y for x, y in zip(a, b)), 0.0)
 
 
 class Linearisation:
@@ -94,22 +195,24 @@ class Linearisation:
         latter through the states too: the curvature the step really has)."""
         n = self.n
         jacobian, derivatives, load = self._at(states, deflection, rate)
-        a, b_x, b_v = jacobian[:n, :n], jacobian[:n, n], jacobian[:n, n + 1]
-        c, d_x, d_v = jacobian[n, :n], jacobian[n, n], jacobian[n, n + 1]
-        c_k, dk_x, dk_v = jacobian[n + 1, :n], jacobian[n + 1, n], jacobian[n + 1, n + 1]
+        jacobian, derivatives = jacobian.tolist(), derivatives.tolist()
+        c, d_x, d_v = jacobian[n][:n], jacobian[n][n], jacobian[n][n + 1]
+        c_k, dk_x, dk_v = jacobian[n + 1][:n], jacobian[n + 1][n], jacobian[n + 1][n + 1]
         # Augmented state [Y, P, s, 1]: Y the drift at rate v0, P = dY/dv.
-        m = np.zeros((2 * n + 2, 2 * n + 2))
-        m[:n, :n] = a
-        m[:n, 2 * n] = b_x * rate
-        m[:n, 2 * n + 1] = derivatives
-        m[n:2 * n, n:2 * n] = a
-        m[n:2 * n, 2 * n] = b_x
-        m[n:2 * n, 2 * n + 1] = b_v
-        m[2 * n, 2 * n + 1] = 1.0
-        end = expm(m * step)[:, 2 * n + 1]
-        predicted = load + c @ end[:n] + d_x * rate * step
-        by_rate = c @ end[n:2 * n] + d_x * step + d_v
-        stiffness_by_rate = c_k @ end[n:2 * n] + dk_x * step + dk_v
+        d = 2 * n + 2
+        m = [[0.0] * d for _ in range(d)]
+        for r in range(n):
+            m[r][:n] = m[n + r][n:2 * n] = jacobian[r][:n]
+            m[r][2 * n] = jacobian[r][n] * rate
+            m[r][2 * n + 1] = derivatives[r]
+            m[n + r][2 * n] = jacobian[r][n]
+            m[n + r][2 * n + 1] = jacobian[r][n + 1]
+        m[2 * n][2 * n + 1] = 1.0
+        m = [[x * step for x in row] for row in m]
+        end = [row[2 * n + 1] for row in augmented_expm(m)]
+        predicted = load + _dot(c, end[:n]) + d_x * rate * step
+        by_rate = _dot(c, end[n:2 * n]) + d_x * step + d_v
+        stiffness_by_rate = _dot(c_k, end[n:2 * n]) + dk_x * step + dk_v
         return predicted, by_rate / step, stiffness_by_rate / step
 
     def free(self):

@@ -1,0 +1,124 @@
+"""Benchmark: the coupling in exudyn, CPU seconds per simulated second, Python path against
+compiled path (docs/coupling.md, "What it costs").
+
+    python benchmarks/coupling_exudyn.py              # the station and the 40-link span
+    python benchmarks/coupling_exudyn.py --quick      # seconds: checks that it runs
+
+Each run is timed by CPU (process time) over the dynamic solve alone: the same run to two
+end times, and the difference over the difference of the end times, so that building
+the system, its static solve and the FMUs' instantiation drop out; each in a process of
+its own (a process that ran others first ran the span a third slower). The station drives at
+8 m/s over the bump (`explicit` and `corrected`), the span (examples/track_span.py) has
+40 links, 82 instances, `corrected`; 1 ms host steps. The real-time factor by CPU is
+simulated time over CPU time. The machine may be loaded: the load average is printed.
+"""
+
+import argparse
+import os
+import subprocess
+import sys
+import time
+import warnings
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent / "examples"))
+
+from run import ROOT, native_fmus  # noqa: E402
+
+STEP = 1e-3
+
+
+def cpu_per_simulated_second(run, start, end):
+    """CPU seconds of run(end) less run(start), over end - start (after a first run to
+    start, which reads and extracts the FMUs once per process)."""
+    run(start)
+    spent = []
+    for end_time in (start, end):
+        began = time.process_time()
+        run(end_time)
+        spent.append(time.process_time() - began)
+    return (spent[1] - spent[0]) / (end - start)
+
+
+# Each example is imported only in the process that runs it: importing the station's
+# (scipy's modules with it) made the span's run in the same process half as costly again.
+
+def station_run(fmu_dir, scheme, path):
+    import road_wheel_station as station
+
+    profile = station.RoadProfile()
+    return lambda end_time: station.simulate(8.0, profile, STEP, fmu_dir, end_time=end_time,
+                                             coupling=scheme, path=path)
+
+
+def span_run(fmu_dir, links, path):
+    import track_span as span
+
+    return lambda end_time: span.simulate(STEP, links=links, fmu_dir=fmu_dir,
+                                          end_time=end_time, coupling="corrected", path=path)
+
+
+def measure(args, kind, scheme, path):
+    """CPU seconds per simulated second of one run, in a fresh process."""
+    run = subprocess.run([sys.executable, __file__, "--fmus", str(args.fmus), "--links",
+                          str(args.links), *(["--quick"] if args.quick else []),
+                          "--one", kind, scheme, path],
+                         capture_output=True, text=True, timeout=3600)
+    if run.returncode != 0:
+        raise RuntimeError(f"{kind} {scheme} {path}: {run.stderr}")
+    return float(run.stdout.split()[-1])
+
+
+def measure_one(args, kind, scheme, path):
+    fmu_dir = Path(native_fmus(args.fmus)["TrackBushRadial"]).parent
+    # the station from before the bump to its end; the span from its start
+    if kind == "station":
+        run = station_run(fmu_dir, scheme, path)
+        times = (0.05, 0.1) if args.quick else (0.1, 0.6)
+    else:
+        run = span_run(fmu_dir, 3 if args.quick else args.links, path)
+        times = (0.01, 0.03) if args.quick else (0.05, 0.3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the bushes' range warnings, once per instance
+        return cpu_per_simulated_second(run, *times)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--fmus", type=Path, default=ROOT / "fmus")
+    parser.add_argument("--links", type=int, default=40)
+    parser.add_argument("--quick", action="store_true", help="seconds: short runs")
+    parser.add_argument("--one", nargs=3, metavar=("KIND", "SCHEME", "PATH"),
+                        help="one run in this process (what the others spawn)")
+    args = parser.parse_args(argv)
+    if args.one:
+        print(measure_one(args, *args.one))
+        return
+    links = 3 if args.quick else args.links
+    load_before = os.getloadavg()[0]
+    rows = []
+    for scheme in ("explicit", "corrected"):
+        for path in ("python", "compiled"):
+            rows.append((f"station at 8 m/s, `{scheme}`", path,
+                         measure(args, "station", scheme, path)))
+    for path in ("python", "compiled"):
+        rows.append((f"track span, {links} links ({2 * (links + 1)} instances), `corrected`",
+                     path, measure(args, "span", "corrected", path)))
+    print("# The coupling in exudyn: CPU seconds per simulated second (1 ms host steps)\n")
+    print("| run | path | CPU s per simulated s | real-time factor by CPU |")
+    print("|---|---|---|---|")
+    for name, path, cpu in rows:
+        print(f"| {name} | {path} | {cpu:.3f} | {1 / cpu:.2f} |")
+    cost = {(name, path): cpu for name, path, cpu in rows}
+    explicit = cost[("station at 8 m/s, `explicit`", "compiled")]
+    corrected = cost[("station at 8 m/s, `corrected`", "compiled")]
+    print(f"\nstation, compiled path: `corrected` / `explicit` = {corrected / explicit:.2f}; "
+          f"compiled `corrected` / Python `explicit` = "
+          f"{corrected / cost[('station at 8 m/s, `explicit`', 'python')]:.2f}")
+    print(f"load average (1 min) {load_before:.2f} before, {os.getloadavg()[0]:.2f} after, "
+          f"{os.cpu_count()} CPUs")
+
+
+if __name__ == "__main__":
+    main()
