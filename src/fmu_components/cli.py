@@ -1,6 +1,6 @@
 """fmu-components: the project's command-line tool.
 
-    fmu-components build | verify | validate | signal | simulate | rig | fit --help
+    fmu-components build | verify | validate | signal | simulate | rig | fit | campaign --help
 
 Each subcommand lives in its own module of ``commands``, which provides
 ``configure(parser)`` (its arguments, with an example in ``EXAMPLES``) and
@@ -39,6 +39,9 @@ COMMANDS = {
                                            "relaxation"),
     "fit": ("fmu_components.commands.fit",
             "identify a rubber component's parameters from measured data"),
+    "campaign": ("fmu_components.commands.campaign",
+                 "many runs over a grid of parameters (station, vehicle, rig, verify) on a "
+                 "local or remote Dask cluster, into one results table"),
 }
 
 
