@@ -2,8 +2,9 @@
 
 ``Engine(scheduler)`` connects to an existing cluster (``dask scheduler`` on one machine,
 ``dask worker ADDRESS`` on others); ``Engine(jobs=N)`` starts a local cluster of N worker
-processes (default: one per core) and ends it afterwards; ``Engine(jobs=1)`` runs the tasks
-one after another in this process (the serial run, no cluster). Every way gives the same
+processes (default: one per core, never more than there are tasks) and ends it afterwards;
+``Engine(jobs=1)``, or a single task without a scheduler, runs in this process, one task
+after another (the serial run, no cluster). The cluster starts when the first tasks come. Every way gives the same
 numbers: a task is a plain function of its arguments (``payload`` carries the files).
 
 Before any task runs, every worker's installed ``fmu-components`` must be the client's
@@ -14,6 +15,7 @@ but time: the scheduler runs its tasks again on another worker.
 """
 
 import logging
+import math
 import os
 import sys
 import time
@@ -69,10 +71,11 @@ class Engine:
     """A Dask client on an existing or a local cluster, or the serial run (module
     docstring). Use it as a context manager; `stream` and `map` run tasks on it."""
 
-    def __init__(self, scheduler=None, jobs=None):
+    def __init__(self, scheduler=None, jobs=None, say=None):
+        """say(text), if given, hears where the tasks run once a cluster is up."""
         if jobs is not None and jobs < 1:
             raise EngineError(f"--jobs {jobs}: give 1 or more worker processes")
-        self.scheduler, self.jobs = scheduler, jobs
+        self.scheduler, self.jobs, self.say = scheduler, jobs, say
         self.client = self.cluster = None
 
     @property
@@ -86,8 +89,12 @@ class Engine:
     def __exit__(self, *exc):
         self.close()
 
-    def start(self):
+    def start(self, tasks=None):
+        """Connect, or start the local cluster (no more workers than `tasks`, if given;
+        a single task runs in this process). ``stream`` starts it when first needed."""
         if self.serial or self.client is not None:
+            return
+        if self.scheduler is None and tasks is not None and tasks <= 1:
             return
         from distributed import Client, LocalCluster
 
@@ -112,7 +119,8 @@ class Engine:
                                   f"{WORKER_TIMEOUT} s: start one with `dask worker "
                                   f"{self.scheduler}`") from None
         else:
-            self.cluster = LocalCluster(n_workers=self.jobs or cores(), threads_per_worker=1,
+            workers = min(self.jobs or cores(), tasks or math.inf)
+            self.cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
                                         processes=True, dashboard_address=":0",
                                         silence_logs=logging.ERROR)
             self.client = Client(self.cluster, set_as_default=False)
@@ -121,6 +129,8 @@ class Engine:
         except EngineError:
             self.close()
             raise
+        if self.say is not None:
+            self.say(f"running on {self.describe()}")
 
     def check_versions(self):
         """Refuse the cluster if a worker has another version of the package than this
@@ -173,6 +183,7 @@ class Engine:
         arguments) as it finishes; tasks not yet finished are cancelled when the caller
         stops early (Ctrl-C)."""
         tasks = list(tasks)
+        self.start(len(tasks))
         if self.client is None:
             for index, arguments in enumerate(tasks):
                 yield index, _outcome(function, resolve(arguments))

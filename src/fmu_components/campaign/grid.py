@@ -230,7 +230,7 @@ def _replace(setup, **changes):
 
 def verify_grid(spec, folder):
     from ..verification import cases as programme
-    from ..verification.verify import built_fmus, needs_own_reference
+    from ..verification.verify import built_fmus
 
     fmus = _folder(spec, "fmus", folder, REPOSITORY / "fmus")
     found = built_fmus(fmus)
@@ -239,17 +239,28 @@ def verify_grid(spec, folder):
     if unknown or not wanted:
         raise GridError(f"\"fmu\": {unknown or wanted} not built in {fmus} (it has: "
                         f"{', '.join(found) or 'none'})")
-    runs = []
-    for name in wanted:
-        path, identity = found[name]
-        payload = Payload.of(path)
-        for case in programme.select([identity.component], spec.get("cases")):
-            tables = None if needs_own_reference(identity) else programme.read(case)
-            runs.append(Run(f"{name}/{case.name}", {"fmu": name, "case": case.name},
-                            (case, payload, tables, identity)))
+    runs = [(case, *found[name]) for name in wanted
+            for case in programme.select([found[name][1].component], spec.get("cases"))]
     if not runs:
         raise GridError("\"cases\": no case matches; see the case names in reference_data/<FMU>/")
-    return Grid("verify", tasks.verify_case, runs,
+    return verification_grid(runs)
+
+
+def verification_grid(runs, reference_data=None):
+    """The Grid of (case, FMU path, Identity) runs of the test programme: each FMU and
+    each case's reference tables (from `reference_data`, default the committed ones)
+    travel with its tasks."""
+    from ..verification import cases as programme
+    from ..verification.verify import needs_own_reference
+
+    payloads, grid_runs = {}, []
+    for case, path, identity in runs:
+        payload = payloads.setdefault(path, Payload.of(path))
+        tables = None if needs_own_reference(identity) else \
+            programme.read(case, reference_data or programme.REFERENCE_DATA)
+        grid_runs.append(Run(f"{path.stem}/{case.name}", {"fmu": path.stem, "case": case.name},
+                             (case, payload, tables, identity)))
+    return Grid("verify", tasks.verify_case, grid_runs,
                 lambda run, outcome: tasks.verify_row(outcome))
 
 

@@ -25,17 +25,16 @@ def add_arguments(parser, aliases=()):
 
 @contextmanager
 def engine(args):
-    """The started Engine of the parsed options, closed afterwards."""
+    """The Engine of the parsed options (it starts when its first tasks come), closed
+    afterwards; its errors are the user's to fix."""
     from ..campaign.engine import Engine, EngineError
 
     try:
-        started = Engine(args.scheduler, args.jobs)
-        started.start()
+        started = Engine(args.scheduler, args.jobs,
+                         say=lambda text: print(text, file=sys.stderr, flush=True))
+        try:
+            yield started
+        finally:
+            started.close()
     except EngineError as error:
         raise UsageError(str(error)) from None
-    try:
-        if started.client is not None:
-            print(f"running on {started.describe()}", file=sys.stderr)
-        yield started
-    finally:
-        started.close()

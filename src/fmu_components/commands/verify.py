@@ -3,7 +3,10 @@
 The thesis test programme runs through each FMU and is compared with the solve
 (``verification.verify``; how, and the criteria, are said there).
 
-    fmu-components verify [--fmu NAME] [--case GLOB] [--report DIR]
+    fmu-components verify [--fmu NAME] [--case GLOB] [--report DIR] [--scheduler ADDRESS] [--jobs N]
+
+The cases run on a local Dask cluster (one worker per core), or on an existing one with
+--scheduler (docs/campaigns.md); REPORT/results.csv gets each case's row as it finishes.
 """
 
 import sys
@@ -12,6 +15,7 @@ from pathlib import Path
 from ..errors import UsageError
 from ..runtime.catalog import COMPONENTS
 from ..verification.cases import REFERENCE_DATA
+from . import cluster
 
 
 EXAMPLES = """examples:
@@ -34,14 +38,55 @@ def configure(parser):
                              "any own part (its reference is solved with its own values)")
     parser.add_argument("--reference-data", type=Path, default=REFERENCE_DATA,
                         help="the thesis FMUs' committed references")
+    cluster.add_arguments(parser)
+
+
+def _run(runs, args):
+    """Every (case, FMU, identity) run on the engine the options name (commands/cluster.py),
+    each case's row in REPORT/results.csv as it finishes, then the report, its plots drawn
+    on the same engine: (the Outcomes in the runs' order, the summary's path). A case that
+    cannot run is a failed case, not a crash."""
+    from tqdm import tqdm
+
+    from ..campaign.grid import verification_grid
+    from ..campaign.run import run_grid
+    from ..verification.outcome import Outcome
+
+    grid = verification_grid(runs, args.reference_data)
+    with cluster.engine(args) as engine:
+        done = run_grid(grid, args.report, engine, keep=True, what="simulating")
+        failed = {run.key: message for run, message in done.failures}
+        outcomes = [done.results.get(run.key) or
+                    Outcome(case, problem=failed[run.key],
+                            part="" if path.stem == case.fmu else path.stem)
+                    for run, (case, path, _) in zip(grid.runs, runs)]
+
+        from ..verification.report import plot_count, write_report  # matplotlib only once there is something to plot
+        progress = tqdm(total=plot_count(outcomes), desc="plotting", unit="plot",
+                        file=sys.stderr, disable=None)
+        drawn = _drawn(engine) if engine.client is not None else None
+        summary = write_report(outcomes, args.report, progress, drawn)
+        progress.close()
+    return outcomes, summary
+
+
+def _drawn(engine):
+    """The report's plots drawn on the engine's workers (verification.report.plot_png)."""
+    from ..campaign.engine import Failure
+    from ..verification.report import plot_png
+
+    def drawn(jobs):
+        for index, png in engine.stream(plot_png, jobs):
+            if isinstance(png, Failure):
+                raise RuntimeError(f"a plot of the report failed: {png.message}")
+            yield index, png
+    return drawn
 
 
 def run_command(args):
-    from tqdm import tqdm
-
     from ..verification import cases as programme
-    from ..verification.outcome import CROSS_CHECK_LIMIT, STRICT_LIMIT, Outcome, table
-    from ..verification.verify import built_fmus, run_case
+    from ..verification.outcome import CROSS_CHECK_LIMIT, STRICT_LIMIT, table
+    from ..verification.verify import built_fmus
 
     found = built_fmus(args.fmus)
     unknown = [n for n in args.fmu or () if n not in found and n not in COMPONENTS]
@@ -57,29 +102,7 @@ def run_command(args):
     if missing:
         raise UsageError(f"not built: {', '.join(missing)} (run fmu-components build first)")
     runs = [(case, *found[name]) for name in wanted for case in cases[name]]
-    selected = [case for case, _, _ in runs]
-
-    outcomes = []
-    # One bar over the simulations and the plots (the plots take most of the time). It draws
-    # on a terminal; in a CI log (no terminal) it stays out of the way.
-    progress = tqdm(total=len(selected), desc="simulating", unit="step", file=sys.stderr,
-                    disable=None)
-    for case, path, identity in runs:
-        progress.set_postfix_str(f"{path.stem}/{case.name}")
-        try:
-            outcomes.append(run_case(case, path, args.reference_data, identity))
-        except Exception as exc:  # a case that cannot run is a failed case, not a crash
-            outcomes.append(Outcome(case, problem=f"{type(exc).__name__}: {exc}",
-                                    part="" if path.stem == case.fmu else path.stem))
-        progress.update(1)
-
-    from ..verification.report import plot_count, write_report  # matplotlib only once there is something to plot
-    progress.total = len(selected) + plot_count(outcomes)
-    progress.set_description("plotting")
-    progress.set_postfix_str("")
-    progress.refresh()
-    summary = write_report(outcomes, args.report, progress)
-    progress.close()
+    outcomes, summary = _run(runs, args)
     print(table(outcomes))
     failed = [o for o in outcomes if not o.passed]
     print(f"\n{len(outcomes) - len(failed)} of {len(outcomes)} cases pass (strict error <= "
