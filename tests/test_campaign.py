@@ -65,14 +65,16 @@ class Cluster:
         self.processes.append(process)
         return process
 
-    def start_worker(self, environment=ENVIRONMENT):
+    def start_worker(self, environment=ENVIRONMENT, nanny=True):
+        """`dask worker` as an engineer starts one: with its nanny, which restarts the
+        worker process if it dies."""
         index = len(self.processes)
         folder = self.folder / f"worker{index}"
         folder.mkdir()  # empty: the worker finds none of the client's files there
         return self._start(f"worker{index}", [
             "-m", "distributed.cli.dask_worker", self.address, "--nthreads", "1",
-            "--no-nanny", "--no-dashboard", "--local-directory", str(folder)], folder,
-            environment)
+            "--no-dashboard", "--local-directory", str(folder),
+            *([] if nanny else ["--no-nanny"])], folder, environment)
 
     def client(self):
         from distributed import Client
@@ -80,10 +82,16 @@ class Cluster:
         return Client(self.address, timeout=30, set_as_default=False)
 
     def stop(self):
+        """Each process ended by its PID: asked first (a nanny ends its worker), then
+        killed."""
         for process in reversed(self.processes):
             if process.poll() is None:
-                os.kill(process.pid, signal.SIGKILL)
-                process.wait()
+                os.kill(process.pid, signal.SIGTERM)
+                try:
+                    process.wait(timeout=15)
+                except subprocess.TimeoutExpired:
+                    os.kill(process.pid, signal.SIGKILL)
+                    process.wait()
 
 
 @pytest.fixture(scope="module")
@@ -190,7 +198,7 @@ def test_a_worker_of_another_version_is_refused_naming_both(cluster, tmp_path):
                                        "Version: 0.0.1\n")
     environment = {**ENVIRONMENT, "PYTHONPATH": f"{tmp_path / 'site'}{os.pathsep}"
                                                 f"{ENVIRONMENT['PYTHONPATH']}"}
-    stranger = cluster.start_worker(environment)
+    stranger = cluster.start_worker(environment, nanny=False)
     try:
         with cluster.client() as client:
             client.wait_for_workers(3, timeout=60)
@@ -248,12 +256,10 @@ def test_a_worker_killed_mid_campaign_costs_nothing_but_time(cluster, tmp_path):
     try:
         _wait_for(lambda: rows_written(report / FILE) >= 1, 120, "a first row")
         with cluster.client() as client:
-            pids = client.run(os.getpid)
+            pids = client.run(os.getpid)  # the worker processes (their nannies' children)
             busy = [address for address, keys in client.processing().items() if keys]
         assert busy, "no worker was running a task"
-        victim = next(w for w in cluster.workers if w.pid == pids[busy[0]])
-        os.kill(victim.pid, signal.SIGKILL)
-        victim.wait()
+        os.kill(pids[busy[0]], signal.SIGKILL)  # its nanny starts a new worker
         out, err = process.communicate(timeout=180)
     finally:
         if process.poll() is None:
@@ -261,8 +267,6 @@ def test_a_worker_killed_mid_campaign_costs_nothing_but_time(cluster, tmp_path):
     assert process.returncode == 0, err
     assert "8 of 8 runs done" in out
     assert_bitwise_equal(by_run(read(report / FILE)), expected)
-    cluster.workers = [w for w in cluster.workers if w.poll() is None]
-    cluster.workers.append(cluster.start_worker())  # two again, for the tests after
 
 
 @pytest.mark.parametrize("stop", [signal.SIGINT, signal.SIGKILL], ids=["ctrl-c", "killed"])
@@ -308,3 +312,25 @@ def test_a_failure_is_a_value_of_the_stream_not_an_exception():
 
     with Engine(jobs=1) as engine:
         assert engine.map(task, [(1,), (2,), (3,)]) == [10, Failure("ValueError: two"), 30]
+
+
+def test_a_fits_starts_on_the_cluster_give_the_serial_fit(cluster, tmp_path):
+    import numpy as np
+
+    t = np.arange(1001) * 2e-3
+    x = 2e-4 + 1e-4 * np.sin(2 * np.pi * t)
+    data = tmp_path / "sine.csv"
+    np.savetxt(data, np.column_stack([t, x, 81.8e6 * x]), delimiter=",", fmt="%.17g",
+               header="time,deflection,force", comments="")
+    fix = ["xi1", "k2", "c2", "xi2", "k3", "c3", "xi3", "elastic.a2", "elastic.a3",
+           "geometric.h"]
+    fitted = {}
+    for where in (["--jobs", "1"], ["--scheduler", cluster.address]):
+        out = tmp_path / f"{where[0][2:]}.json"
+        result = subprocess.run([sys.executable, "-m", "fmu_components", "fit", "--component",
+                                 "TrackBushRadial", "--starts", "2", "--fix", *fix, "--out",
+                                 out, data, *where], cwd=ROOT, env=ENVIRONMENT,
+                                capture_output=True, text=True, timeout=300)
+        assert result.returncode == 0, result.stderr
+        fitted[where[0]] = json.loads(out.read_text())
+    assert fitted["--scheduler"] == fitted["--jobs"]  # json keeps every float's 17 digits

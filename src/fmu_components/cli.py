@@ -17,6 +17,7 @@ import os
 import sys
 import textwrap
 
+from .campaign.engine import one_thread_per_process
 from .errors import UsageError
 
 PROG = "fmu-components"
@@ -103,6 +104,7 @@ def _run(parser, args):
 
 def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
+    one_thread_per_process()  # before numpy loads: the same numbers as a Dask worker's
     # Configure only the command asked for, so that one command's imports never slow another
     # and the top-level help imports none.
     wanted = [a for a in argv[:1] if a in COMMANDS]

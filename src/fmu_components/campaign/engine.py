@@ -29,6 +29,18 @@ CONNECT_TIMEOUT = 8  # s: within the 10 s an engineer waits to hear of a wrong a
 WORKER_TIMEOUT = 30  # s a reached scheduler gets to show its first worker
 
 
+# A Dask worker runs numpy's BLAS on one thread (its nanny sets these before it starts), and
+# a fit's least squares differs in its last bits with the thread count: the command line
+# sets the same in its own process before numpy loads (``one_thread_per_process``), so
+# that a serial run gives the workers' numbers bit for bit. A user's own setting stands.
+ONE_THREAD = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
+
+
+def one_thread_per_process():
+    for name, value in ONE_THREAD.items():
+        os.environ.setdefault(name, value)
+
+
 class EngineError(Exception):
     """A cluster that cannot be used as asked: said in one line, with what to do."""
 

@@ -38,6 +38,29 @@ def validate_case(case, fmu, outputs):
     return simulate_case(fmu, case.inputs(), case.options(), outputs, label=case.key)[0]
 
 
+# --- the fit (fmu-components fit) ------------------------------------------------------------
+
+def fit_runner(engine):
+    """``lab.fit.fit``'s runner: each start's fit a task on the engine (the measured tests
+    travel inside the problem); a start that fails ends the fit with its message."""
+    from ..lab.fit import solve_start
+    from .engine import Failure, Progress
+
+    def run(problem, points):
+        outcomes = [None] * len(points)
+        progress = Progress(len(points), what="fitting from each start")
+        try:
+            for index, outcome in engine.stream(solve_start, [(problem, p) for p in points]):
+                if isinstance(outcome, Failure):
+                    raise RuntimeError(f"the fit from start {index + 1}: {outcome.message}")
+                outcomes[index] = outcome
+                progress.update(f"start {index + 1}")
+        finally:
+            progress.close()
+        return outcomes
+    return run
+
+
 # --- the virtual test rig (fmu-components rig) -----------------------------------------------
 
 def rig_point(setup, point, options):
@@ -45,6 +68,28 @@ def rig_point(setup, point, options):
     from ..lab.rig import run_point
 
     return run_point(setup, *point, **options)
+
+
+def rig_runner(engine):
+    """``lab.rig.run_rig``'s runner: the points on the engine, the FMU of an FMU engine
+    travelling with them; a point that fails is a RigError naming it, once the others
+    are done."""
+    from ..lab.rig import RigError
+    from .engine import Failure
+    from .payload import Payload
+
+    def run(tasks):
+        travelling = {}
+        tasks = [(dataclasses.replace(setup, fmu=travelling.setdefault(
+            setup.fmu, Payload.of(setup.fmu))) if setup.fmu else setup, point, options)
+            for setup, point, options in tasks]
+        rows = engine.map(rig_point, tasks)
+        for (_, point, _), row in zip(tasks, rows):
+            if isinstance(row, Failure):
+                raise RigError(f"preload {point[0]:g}, amplitude {point[1]:g}, frequency "
+                               f"{point[2]:g} Hz: {row.message}")
+        return rows
+    return run
 
 
 def rig_row(run, row, wall):
