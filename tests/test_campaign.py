@@ -166,6 +166,35 @@ def test_the_table_reads_back_every_number_bit_for_bit_and_resumes_from_ok_rows(
     assert "a" in resumed and "b" not in resumed  # a failed run is tried again
 
 
+# --- the grid file ---------------------------------------------------------------------------
+
+SSV = """<?xml version="1.0" encoding="UTF-8"?>
+<ssv:ParameterSet xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues"
+                  version="1.0" name="stiff">
+  <ssv:Parameters>
+    <ssv:Parameter name="k1"><ssv:Real value="9e7"/></ssv:Parameter>
+    <ssv:Parameter name="elastic.a1"><ssv:Real value="3.1e6"/></ssv:Parameter>
+  </ssv:Parameters>
+</ssv:ParameterSet>
+"""
+
+
+def test_a_parameter_set_in_ssv_or_json_gives_the_same_runs(tmp_path):
+    (tmp_path / "stiff.ssv").write_text(SSV)
+    (tmp_path / "stiff.json").write_text(json.dumps({"k1": 9e7, "elastic.a1": 3.1e6}))
+    small = dict(RIG, preloads=[3e-4], amplitudes=[1e-4], frequencies=[1.0],
+                 samples_per_cycle=40, steady=1e-3)
+    tables = {}
+    for name in ("stiff.ssv", "stiff.json"):
+        grid = write_grid(tmp_path, dict(small, parameter_sets={"thesis": {}, "stiff": name}),
+                          f"{name}.grid.json")
+        tables[name] = serial(grid, tmp_path / f"results_{name}")
+    assert_bitwise_equal(tables["stiff.ssv"], tables["stiff.json"])
+    rows = {row["parameter_set"]: row for row in tables["stiff.ssv"].values()}
+    change = rows["stiff"]["dynamic_stiffness"] / rows["thesis"]["dynamic_stiffness"] - 1
+    assert abs(change) > 0.1  # the set's values reached the runs
+
+
 # --- the engine's errors ----------------------------------------------------------------------
 
 def test_a_scheduler_that_cannot_be_reached_is_named_within_10_s():
@@ -179,10 +208,12 @@ def test_a_scheduler_that_cannot_be_reached_is_named_within_10_s():
 def test_the_command_says_so_in_one_line(tmp_path):
     address = f"tcp://127.0.0.1:{_free_port()}"
     grid = write_grid(tmp_path, RIG)
+    started = time.monotonic()
     result = subprocess.run([sys.executable, "-m", "fmu_components", "campaign", grid,
                              "--scheduler", address, "--report", tmp_path / "r"],
                             cwd=ROOT, env=ENVIRONMENT, capture_output=True, text=True,
                             timeout=60)
+    assert time.monotonic() - started < 10  # the command's start included
     assert result.returncode == 2
     assert "Traceback" not in result.stderr
     assert f"cannot reach the Dask scheduler at {address}" in result.stderr

@@ -25,7 +25,8 @@ from importlib.metadata import PackageNotFoundError, version
 from .payload import resolve
 
 DISTRIBUTION = "fmu-components"
-CONNECT_TIMEOUT = 8  # s: within the 10 s an engineer waits to hear of a wrong address
+# s: with the command's own start, within the 10 s an engineer waits to hear of a wrong address
+CONNECT_TIMEOUT = 5
 WORKER_TIMEOUT = 30  # s a reached scheduler gets to show its first worker
 
 

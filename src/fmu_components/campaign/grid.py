@@ -176,7 +176,8 @@ def station_grid(spec, folder):
     sets = {name: read_parameter_set(value, folder, qualified=True)
             for name, value in _named(spec, "parameter_sets", {"thesis": {}}).items()}
     end_time, step = spec.get("end_time"), spec.get("step", 1e-4)
-    runs = [Run(key, dict(labels), (examples, fmus, speed, course, parameters, end_time, step))
+    runs = [Run(key, dict(labels, speed=speed),
+                (examples, fmus, speed, course, parameters, end_time, step))
             for key, labels, (speed, course, parameters)
             in _product(speed=speeds, course=courses, parameter_set=sets)]
     return Grid("station", tasks.station_run, runs, _results)
@@ -188,7 +189,7 @@ def vehicle_grid(spec, folder):
     speeds = {f"{v:g}": v for v in _numbers(spec, "speeds")}
     courses = _named(spec, "courses", ["bump"])
     end_time, step = spec.get("end_time", 1.0), spec.get("step", 1e-3)
-    runs = [Run(key, dict(labels), (examples, fmus, speed, course, end_time, step))
+    runs = [Run(key, dict(labels, speed=speed), (examples, fmus, speed, course, end_time, step))
             for key, labels, (speed, course) in _product(speed=speeds, course=courses)]
     return Grid("vehicle", tasks.vehicle_run, runs, _results)
 

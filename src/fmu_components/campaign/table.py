@@ -14,7 +14,6 @@ campaigns can leave them out (``TIMING_SUFFIX``); ``status`` is ``ok`` or ``fail
 """
 
 import csv
-import math
 
 from ..lab.files import written_whole
 
@@ -113,10 +112,3 @@ def read(path):
 def without_timings(rows):
     """The rows without their timing columns: what two campaigns of the same runs share."""
     return [{k: v for k, v in row.items() if not k.endswith(TIMING_SUFFIX)} for row in rows]
-
-
-def same(a, b):
-    """Two cells equal bit for bit (NaN equal to NaN)."""
-    if isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b):
-        return True
-    return type(a) is type(b) and a == b
