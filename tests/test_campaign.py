@@ -365,3 +365,33 @@ def test_a_fits_starts_on_the_cluster_give_the_serial_fit(cluster, tmp_path):
         assert result.returncode == 0, result.stderr
         fitted[where[0]] = json.loads(out.read_text())
     assert fitted["--scheduler"] == fitted["--jobs"]  # json keeps every float's 17 digits
+
+
+def test_ctrl_c_at_a_terminal_ends_a_local_cluster_in_one_line(tmp_path):
+    """Ctrl-C reaches the whole process group, the local cluster's workers too: only the
+    command answers, with its one line, and no process of the group stays behind."""
+    grid = write_grid(tmp_path, RIG)
+    report = tmp_path / "report"
+    process = subprocess.Popen([sys.executable, "-m", "fmu_components", "campaign", grid,
+                                "--jobs", "2", "--report", report], cwd=ROOT, env=ENVIRONMENT,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               start_new_session=True)
+    try:
+        _wait_for(lambda: rows_written(report / FILE) >= 1, 120, "a first row")
+        os.killpg(process.pid, signal.SIGINT)
+        _, err = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+    assert process.returncode == 130
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
+    assert err.strip().splitlines()[-1] == "fmu-components: interrupted"
+    _wait_for(lambda: not _group_alive(process.pid), 30, "the workers end")
+
+
+def _group_alive(group):
+    try:
+        os.killpg(group, 0)
+    except ProcessLookupError:
+        return False
+    return True

@@ -17,8 +17,11 @@ but time: the scheduler runs its tasks again on another worker.
 import logging
 import math
 import os
+import signal
 import sys
+import threading
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass
 from importlib.metadata import PackageNotFoundError, version
 
@@ -133,9 +136,10 @@ class Engine:
                                   f"{self.scheduler}`") from None
         else:
             workers = min(self.jobs or cores(), tasks or math.inf)
-            self.cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
-                                        processes=True, dashboard_address=":0",
-                                        silence_logs=logging.ERROR)
+            with _deaf_to_ctrl_c():
+                self.cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
+                                            processes=True, dashboard_address=":0",
+                                            silence_logs=logging.ERROR)
             self.client = Client(self.cluster, set_as_default=False)
         try:
             self.check_versions()
@@ -225,6 +229,21 @@ class Engine:
         for index, result in self.stream(function, tasks):
             results[index] = result
         return results
+
+
+@contextmanager
+def _deaf_to_ctrl_c():
+    """Ctrl-C reaches every process of the terminal's group: the local workers, started
+    in here, inherit SIGINT ignored, so that only this process answers it (it ends them)
+    and no worker prints a traceback of its own."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _has_bokeh():
