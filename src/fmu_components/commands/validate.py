@@ -23,6 +23,7 @@ EXAMPLES = """examples:
   fmu-components validate                    every measured quantity, report in reports/validation
   fmu-components validate --fmu RotaryDamper --case 'damper-A6-1-*'
   fmu-components validate --fmus fmus/python --report reports/validation-python --strict
+  fmu-components validate --scheduler tcp://head:8786     on a Dask cluster (docs/campaigns.md)
 """
 
 

@@ -22,6 +22,7 @@ EXAMPLES = """examples:
   fmu-components verify                                   every case, report in reports/verification
   fmu-components verify --fmu TrackBushTorsion --case 'II_*'
   fmu-components verify --fmus fmus/python --report reports/verification-python
+  fmu-components verify --scheduler tcp://head:8786       on a Dask cluster (docs/campaigns.md)
 """
 
 
