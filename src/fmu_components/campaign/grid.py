@@ -49,6 +49,7 @@ class Run:
     key: str  # the results table's `run`: the run's values
     values: dict  # the run's values, the leading columns of its row
     arguments: tuple  # the task function's
+    cost: float = 0.0  # what it takes, roughly: the costliest go first, so that none ends alone
 
 
 @dataclass
@@ -260,7 +261,7 @@ def verification_grid(runs, reference_data=None):
         tables = None if needs_own_reference(identity) else \
             programme.read(case, reference_data or programme.REFERENCE_DATA)
         grid_runs.append(Run(f"{path.stem}/{case.name}", {"fmu": path.stem, "case": case.name},
-                             (case, payload, tables, identity)))
+                             (case, payload, tables, identity), cost=len(case.times())))
     return Grid("verify", tasks.verify_case, grid_runs,
                 lambda run, outcome: tasks.verify_row(outcome))
 

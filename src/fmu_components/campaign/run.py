@@ -27,7 +27,8 @@ def run_grid(grid, folder, engine, resume=False, keep=False, what=None):
     """Run `grid` (``grid.Grid``) on `engine`, its table in `folder`. keep: also return
     each task's own result (the verification's outcomes, for their report)."""
     table = ResultsTable(folder, resume)
-    todo = [run for run in grid.runs if run.key not in table]
+    # the costliest first: the last runs to finish are short ones, and no worker idles long
+    todo = sorted((run for run in grid.runs if run.key not in table), key=lambda r: -r.cost)
     outcome = Outcome(table, len(todo), len(grid.runs) - len(todo))
     if outcome.skipped:
         print(f"resuming: {outcome.skipped} of {len(grid.runs)} runs done in {table.path}, "
