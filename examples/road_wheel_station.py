@@ -120,15 +120,17 @@ def static_tyre_compression(tyre):
                   xtol=1e-12)
 
 
-def static_tyre_point(fmu_dir=None):
+def static_tyre_point(fmu_dir=None, parameters=None):
     """(compression, load) of one half-wheel's relaxed tyre at the static point, from an
-    instance of its own; computed once per FMU file and process."""
-    return _static_tyre_point(fmu_path("RoadWheelTyre", fmu_dir).resolve())
+    instance of its own (with `parameters`, its own values); computed once per FMU file,
+    values and process."""
+    return _static_tyre_point(fmu_path("RoadWheelTyre", fmu_dir).resolve(),
+                              tuple(sorted((parameters or {}).items())))
 
 
 @functools.lru_cache(maxsize=None)
-def _static_tyre_point(path):
-    tyre = FmuComponent(path, "tyre_static")
+def _static_tyre_point(path, parameters):
+    tyre = FmuComponent(path, "tyre_static", dict(parameters) or None)
     try:
         compression = static_tyre_compression(tyre)
         return compression, tyre.relaxed_outputs(compression)[tyre.load_name]
@@ -167,12 +169,14 @@ class Station:
     """The station in exudyn with its two components; `run` drives it at one speed."""
 
     def __init__(self, speed, profile, fmu_dir=None, linear=None, coupling=DEFAULT_SCHEME,
-                 path=bank_path.DEFAULT_PATH, reached=None):
+                 path=bank_path.DEFAULT_PATH, reached=None, parameters=None):
         """linear: a Linearisation, whose Kelvin elements replace both components; without
         it both components are the FMUs. path: "compiled", the coupling's bank (the FMUs'
         per-step work in C, the load laws in exudyn's compiled symbolic functions), or
         "python", its Python path (the Kelvin elements always take it). reached(t), if
-        given, hears every accepted host step's time (a progress bar)."""
+        given, hears every accepted host step's time (a progress bar). parameters: FMU
+        name -> {parameter: SI value} of the FMUs' own values to change (a part)."""
+        parameters = parameters or {}
         self.reached = reached
         self.speed = speed
         self.profile = profile
@@ -180,7 +184,8 @@ class Station:
         mbs = SC.AddSystem()
         self.SC, self.mbs = SC, mbs
 
-        self.static_compression, static_tyre_load = static_tyre_point(fmu_dir)
+        self.static_compression, static_tyre_load = static_tyre_point(
+            fmu_dir, parameters.get("RoadWheelTyre"))
         if linear:
             stiffness, damping, _ = linear.tyre
             tyre = KelvinElement("tyre", "force", stiffness, damping, self.static_compression,
@@ -188,9 +193,10 @@ class Station:
             stiffness, damping, _ = linear.damper
             damper = KelvinElement("damper", "torque", stiffness, damping, 0.0, 0.0)
         else:
-            tyre = FmuComponent(fmu_path("RoadWheelTyre", fmu_dir), "tyre", unilateral=True)
+            tyre = FmuComponent(fmu_path("RoadWheelTyre", fmu_dir), "tyre",
+                                parameters.get("RoadWheelTyre"), unilateral=True)
             damper = FmuComponent(fmu_path("RotaryDamper", fmu_dir), "damper",
-                                  step_model=DAMPER_STEP_MODEL)
+                                  parameters.get("RotaryDamper"), step_model=DAMPER_STEP_MODEL)
         self.tyre, self.damper = tyre, damper
         self.bar_preload = torsion_bar_preload(TYRES_PER_WHEEL * static_tyre_load)
 
@@ -357,11 +363,13 @@ SETTLE_TIME = 1.0  # s after the bump: the body's bounce dies out
 
 
 def simulate(speed, profile, step, fmu_dir=None, linear=None, end_time=None,
-             coupling=DEFAULT_SCHEME, path=bank_path.DEFAULT_PATH, reached=None):
-    """One drive at `speed` (m/s); histories plus the damper's energy balance."""
+             coupling=DEFAULT_SCHEME, path=bank_path.DEFAULT_PATH, reached=None,
+             parameters=None):
+    """One drive at `speed` (m/s); histories plus the damper's energy balance.
+    parameters: as Station's."""
     if end_time is None:
         end_time = profile.end / speed + SETTLE_TIME
-    station = Station(speed, profile, fmu_dir, linear, coupling, path, reached)
+    station = Station(speed, profile, fmu_dir, linear, coupling, path, reached, parameters)
     result = station.run(end_time, step)
     result["costs"] = station.coupling.costs()
     # Work done on the damper, and what its dashpot dissipated (FMU only): J.

@@ -16,6 +16,8 @@ The layers, each importing only those above it in this list:
   run); it never reads the command line;
 * ``verification``: the FMUs against an independent solve of the same equations, and the
   model against the thesis's measurements; a library too;
+* ``campaign``: many independent runs at once on a local or remote Dask cluster, the
+  files they need travelling with them, into one results table; a library too;
 * ``commands``: the command line's commands, one module each, over the layers above;
 * ``cli``: the command line's registry and entry point.
 

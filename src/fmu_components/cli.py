@@ -1,6 +1,6 @@
 """fmu-components: the project's command-line tool.
 
-    fmu-components build | verify | validate | signal | simulate | rig | fit --help
+    fmu-components build | verify | validate | signal | simulate | rig | fit | campaign --help
 
 Each subcommand lives in its own module of ``commands``, which provides
 ``configure(parser)`` (its arguments, with an example in ``EXAMPLES``) and
@@ -17,6 +17,7 @@ import os
 import sys
 import textwrap
 
+from .campaign.engine import one_thread_per_process
 from .errors import UsageError
 
 PROG = "fmu-components"
@@ -39,6 +40,9 @@ COMMANDS = {
                                            "relaxation"),
     "fit": ("fmu_components.commands.fit",
             "identify a rubber component's parameters from measured data"),
+    "campaign": ("fmu_components.commands.campaign",
+                 "many runs over a grid of parameters (station, vehicle, rig, verify) on a "
+                 "local or remote Dask cluster, into one results table"),
 }
 
 
@@ -100,6 +104,7 @@ def _run(parser, args):
 
 def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
+    one_thread_per_process()  # before numpy loads: the same numbers as a Dask worker's
     # Configure only the command asked for, so that one command's imports never slow another
     # and the top-level help imports none.
     wanted = [a for a in argv[:1] if a in COMMANDS]

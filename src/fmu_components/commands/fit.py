@@ -10,6 +10,7 @@ from pathlib import Path
 
 from ..errors import UsageError
 from ..runtime.catalog import STRUCTURES
+from . import cluster
 
 EXAMPLES = """examples:
   fmu-components fit --component TrackBushRadial --out bush.json test1.csv test2.csv
@@ -36,9 +37,9 @@ def configure(parser):
                         help="the fitted parameters (JSON); PARAMS.ssv (SSP) and the report go "
                              "beside it")
     parser.add_argument("--starts", type=int, default=4,
-                        help="starting points, fitted in parallel (default: 4)")
-    parser.add_argument("--jobs", type=int, default=None,
-                        help="worker processes (default: one per core)")
+                        help="starting points, fitted in parallel (default: 4; each a task "
+                             "on the cluster)")
+    cluster.add_arguments(parser)
     parser.add_argument("data", nargs="+", type=Path, metavar="DATA.csv",
                         help="one measured test (time,deflection,force) or rig table per file")
 
@@ -68,9 +69,12 @@ def run_command(args):
             _, deflection, force = test.columns
             print(f"{test.path}: deflection from column {deflection!r}, load from column "
                   f"{force!r}", file=sys.stderr)
+    from ..campaign.tasks import fit_runner
+
     try:
-        result = fit(args.component, tests, args.fix, args.structure, args.starts, args.jobs,
-                     progress=True)
+        with cluster.engine(args) as engine:  # the starts on a Dask cluster (commands/cluster.py)
+            result = fit(args.component, tests, args.fix, args.structure, args.starts,
+                         runner=fit_runner(engine))
     except HistoryError as error:
         raise UsageError(str(error)) from None
     args.out.parent.mkdir(parents=True, exist_ok=True)

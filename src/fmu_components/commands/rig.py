@@ -2,6 +2,7 @@
 
     fmu-components rig --component NAME [--params PARAMS.json] [--structure S]
                        --preload P... --amplitude A... --frequency F... --out DIR
+                       [--scheduler ADDRESS] [--jobs N]
 
 The engine, the drivers and the rig table are ``lab.rig`` (its docstring says how a point
 runs to periodic steady state); the plots and the structure study ``lab.rig_plots``.
@@ -18,6 +19,7 @@ from ..lab.rig import (DRIVERS, HOLD_TIME, MAX_CYCLES, MAX_STEP, RATES, RIG_RTOL
 from ..lab.signals import check_deflection
 from ..runtime.catalog import COMPONENTS, STRUCTURES
 from ..runtime.integrator import DEFAULT_RTOL
+from . import cluster
 
 
 EXAMPLES = """examples:
@@ -71,8 +73,7 @@ def configure(parser):
     parser.add_argument("--rtol", type=float, default=RIG_RTOL,
                         help=f"the integrator's relative tolerance (default {RIG_RTOL:g}; "
                              f"the FMUs' own default is {DEFAULT_RTOL:g})")
-    parser.add_argument("--processes", type=int, default=None,
-                        help="worker processes (default: one per core)")
+    cluster.add_arguments(parser, aliases=("--processes",))
     parser.add_argument("--compare-structures", action="store_true",
                         help="run the torsion bush's three structures on the dual sine and "
                              "step-and-hold tests instead (structures.png, structures.md)")
@@ -93,7 +94,7 @@ def _run(args):
         from ..lab.rig_plots import compare_structures, structures_table
 
         started = time.perf_counter()
-        table = compare_structures(args.out, args.processes)
+        table = compare_structures(args.out, args.jobs)
         print(structures_table(table))
         print(f"wrote {args.out / 'structures.png'} and {args.out / 'structures.md'} "
               f"({time.perf_counter() - started:.1f} s)")
@@ -101,12 +102,15 @@ def _run(args):
     for option in ("preload", "amplitude", "frequency"):
         if not getattr(args, option):
             raise RigError(f"give --{option} (one or more values, SI units)")
+    from ..campaign.tasks import rig_runner
+
     started = time.perf_counter()
-    rows = run_rig(args.component, args.preload, args.amplitude, args.frequency,
-                   params=args.params, structure=args.structure, engine=args.engine,
-                   fmu=args.fmu, rtol=args.rtol, samples_per_cycle=args.samples_per_cycle,
-                   steady=args.steady, max_cycles=args.max_cycles, processes=args.processes,
-                   rate=args.rate, max_step=args.max_step)
+    with cluster.engine(args) as engine:  # the points on a Dask cluster (commands/cluster.py)
+        rows = run_rig(args.component, args.preload, args.amplitude, args.frequency,
+                       params=args.params, structure=args.structure, engine=args.engine,
+                       fmu=args.fmu, rtol=args.rtol, samples_per_cycle=args.samples_per_cycle,
+                       steady=args.steady, max_cycles=args.max_cycles, rate=args.rate,
+                       max_step=args.max_step, runner=rig_runner(engine))
     sweep_time = time.perf_counter() - started
     setup = make_setup(args.component, args.structure, args.params, args.engine, args.fmu,
                        args.rtol)

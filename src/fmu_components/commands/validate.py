@@ -1,7 +1,7 @@
 """Validate the model against every number the thesis measured on its rigs.
 
     fmu-components validate [--fmu NAME] [--case GLOB] [--fmus DIR] [--report DIR] [--strict]
-                            [--junit FILE]
+                            [--junit FILE] [--scheduler ADDRESS] [--jobs N]
 
 Runs every selected row of ``reference_data/thesis/measurements.csv`` that names a metric
 through the built FMUs (``verification.measurements``), prints the table of measured and
@@ -12,17 +12,18 @@ plots, default reports/validation). Exit status 0 when every row ran, 1 when an 
 same equations.
 """
 
-import sys
 from pathlib import Path
 
 from ..errors import UsageError
 from ..runtime.catalog import COMPONENTS
 from ..verification.measurements import BAND
+from . import cluster
 
 EXAMPLES = """examples:
   fmu-components validate                    every measured quantity, report in reports/validation
   fmu-components validate --fmu RotaryDamper --case 'damper-A6-1-*'
   fmu-components validate --fmus fmus/python --report reports/validation-python --strict
+  fmu-components validate --scheduler tcp://head:8786     on a Dask cluster (docs/campaigns.md)
 """
 
 
@@ -43,11 +44,30 @@ def configure(parser):
     parser.add_argument("--junit", type=Path, metavar="FILE",
                         help="also write the results as JUnit XML, for CI (a row fails there "
                              "as it counts against the exit status)")
+    cluster.add_arguments(parser)
+
+
+def _run_cases(runs, cases, engine):
+    """Each case through its FMU on the engine (the FMU travels with the task), its result
+    kept in `runs`."""
+    from ..campaign.engine import Failure, Progress
+    from ..campaign.payload import Payload
+    from ..campaign.tasks import validate_case
+    from ..verification.measurements import outputs_of
+
+    fmus = {}
+    tasks = [(case, fmus.setdefault(case.fmu, Payload.of(runs.fmu(case.fmu))), outputs_of(case))
+             for case in cases]
+    progress = Progress(len(tasks), what="simulating")
+    try:
+        for index, result in engine.stream(validate_case, tasks):
+            runs.keep(cases[index], result.message if isinstance(result, Failure) else result)
+            progress.update(cases[index].key)
+    finally:
+        progress.close()
 
 
 def run_command(args):
-    from tqdm import tqdm
-
     from ..verification.measurements import (Runs, compare_all, read_measurements, select,
                                              table, tally)
 
@@ -63,12 +83,10 @@ def run_command(args):
     if missing:
         raise UsageError(f"not built: {', '.join(missing)} (run fmu-components build first)")
     runs = Runs(args.fmus)
-    cases = {c.key for m in selected if m.metric for c in runs.select(m)}
-    progress = tqdm(total=len(cases), desc="simulating", unit="case", file=sys.stderr,
-                    disable=None)
-    runs.progress = progress
+    cases = {c.key: c for m in selected if m.metric for c in runs.select(m)}
+    with cluster.engine(args) as engine:  # every case runs once, on the engine
+        _run_cases(runs, list(cases.values()), engine)
     comparisons = compare_all(selected, runs)
-    progress.close()
 
     from ..verification.measurements_report import write_report  # matplotlib only once there is a result
     summary = write_report(comparisons, runs, args.report)

@@ -4,6 +4,10 @@ The thesis test programme runs through each FMU and is compared with the solve
 (``verification.verify``; how, and the criteria, are said there).
 
     fmu-components verify [--fmu NAME] [--case GLOB] [--report DIR] [--junit FILE]
+                          [--scheduler ADDRESS] [--jobs N]
+
+The cases run on a local Dask cluster (one worker per core), or on an existing one with
+--scheduler (docs/campaigns.md); REPORT/results.csv gets each case's row as it finishes.
 
 Given FMU files (any tool's), it replays the FMI-LS-REF reference experiments they carry
 instead (``verification.replay``; every FMU this project builds carries its cases so):
@@ -17,12 +21,14 @@ from pathlib import Path
 from ..errors import UsageError
 from ..runtime.catalog import COMPONENTS
 from ..verification.cases import REFERENCE_DATA
+from . import cluster
 
 
 EXAMPLES = """examples:
   fmu-components verify                                   every case, report in reports/verification
   fmu-components verify --fmu TrackBushTorsion --case 'II_*'
   fmu-components verify --fmus fmus/python --report reports/verification-python
+  fmu-components verify --scheduler tcp://head:8786       on a Dask cluster (docs/campaigns.md)
   fmu-components verify fmus/RoadWheelTyre.fmu --junit results.xml
                                                           the experiments the FMU carries
 """
@@ -51,6 +57,50 @@ def configure(parser):
     parser.add_argument("--junit", type=Path, metavar="FILE",
                         help="also write the results as JUnit XML, for CI")
 
+    cluster.add_arguments(parser)
+
+
+def _run(runs, args):
+    """Every (case, FMU, identity) run on the engine the options name (commands/cluster.py),
+    each case's row in REPORT/results.csv as it finishes, then the report, its plots drawn
+    on the same engine: (the Outcomes in the runs' order, the summary's path). A case that
+    cannot run is a failed case, not a crash."""
+    from tqdm import tqdm
+
+    from ..campaign.grid import verification_grid
+    from ..campaign.run import run_grid
+    from ..verification.outcome import Outcome
+
+    grid = verification_grid(runs, args.reference_data)
+    with cluster.engine(args) as engine:
+        done = run_grid(grid, args.report, engine, keep=True, what="simulating")
+        failed = {run.key: message for run, message in done.failures}
+        outcomes = [done.results.get(run.key) or
+                    Outcome(case, problem=failed[run.key],
+                            part="" if path.stem == case.fmu else path.stem)
+                    for run, (case, path, _) in zip(grid.runs, runs)]
+
+        from ..verification.report import plot_count, write_report  # matplotlib only once there is something to plot
+        progress = tqdm(total=plot_count(outcomes), desc="plotting", unit="plot",
+                        file=sys.stderr, disable=None)
+        drawn = _drawn(engine) if engine.client is not None else None
+        summary = write_report(outcomes, args.report, progress, drawn)
+        progress.close()
+    return outcomes, summary
+
+
+def _drawn(engine):
+    """The report's plots drawn on the engine's workers (verification.report.plot_png)."""
+    from ..campaign.engine import Failure
+    from ..verification.report import plot_png
+
+    def drawn(jobs):
+        for index, png in engine.stream(plot_png, jobs):
+            if isinstance(png, Failure):
+                raise RuntimeError(f"a plot of the report failed: {png.message}")
+            yield index, png
+    return drawn
+
 
 def run_command(args):
     if args.fmu_files:
@@ -58,11 +108,9 @@ def run_command(args):
     if args.limit is not None:
         raise UsageError("--limit goes with FMU files (verify X.fmu --limit L); the thesis "
                          "programme's criteria are fixed (docs/validation.md)")
-    from tqdm import tqdm
-
     from ..verification import cases as programme
-    from ..verification.outcome import CROSS_CHECK_LIMIT, STRICT_LIMIT, Outcome, table
-    from ..verification.verify import built_fmus, run_case
+    from ..verification.outcome import CROSS_CHECK_LIMIT, STRICT_LIMIT, table
+    from ..verification.verify import built_fmus
 
     found = built_fmus(args.fmus)
     unknown = [n for n in args.fmu or () if n not in found and n not in COMPONENTS]
@@ -78,29 +126,7 @@ def run_command(args):
     if missing:
         raise UsageError(f"not built: {', '.join(missing)} (run fmu-components build first)")
     runs = [(case, *found[name]) for name in wanted for case in cases[name]]
-    selected = [case for case, _, _ in runs]
-
-    outcomes = []
-    # One bar over the simulations and the plots (the plots take most of the time). It draws
-    # on a terminal; in a CI log (no terminal) it stays out of the way.
-    progress = tqdm(total=len(selected), desc="simulating", unit="step", file=sys.stderr,
-                    disable=None)
-    for case, path, identity in runs:
-        progress.set_postfix_str(f"{path.stem}/{case.name}")
-        try:
-            outcomes.append(run_case(case, path, args.reference_data, identity))
-        except Exception as exc:  # a case that cannot run is a failed case, not a crash
-            outcomes.append(Outcome(case, problem=f"{type(exc).__name__}: {exc}",
-                                    part="" if path.stem == case.fmu else path.stem))
-        progress.update(1)
-
-    from ..verification.report import plot_count, write_report  # matplotlib only once there is something to plot
-    progress.total = len(selected) + plot_count(outcomes)
-    progress.set_description("plotting")
-    progress.set_postfix_str("")
-    progress.refresh()
-    summary = write_report(outcomes, args.report, progress)
-    progress.close()
+    outcomes, summary = _run(runs, args)
     print(table(outcomes))
     failed = [o for o in outcomes if not o.passed]
     print(f"\n{len(outcomes) - len(failed)} of {len(outcomes)} cases pass (strict error <= "

@@ -211,6 +211,13 @@ def _counted_residuals(u):
     return residuals
 
 
+def solve_start(problem, u0):
+    """One start's fit of `problem` from u0, in this process (a campaign's worker runs
+    it): as a pool worker's."""
+    _adopt(problem)
+    return _solve_from(u0)
+
+
 def _solve_from(u0):
     problem = _PROBLEM
     lower = [s.lower for s in problem.free]
@@ -345,9 +352,11 @@ def _progress(simulations, starts, shown):
 
 
 def fit(component, tests, fix=(), structure="final", starts=4, jobs=None, seed=0,
-        start_values=None, progress=False):
+        start_values=None, progress=False, runner=None):
     """Fit the free parameters to the tests (History or RigTable); a FitResult. progress:
-    a progress bar on stderr (on a terminal)."""
+    a progress bar on stderr (on a terminal). runner(problem, points), if given, fits
+    from every starting point elsewhere (``solve_start`` on a campaign's engine) and
+    returns the outcomes in order; else the starts run on `jobs` local processes."""
     import time
 
     definition = component_definition(component, structure)
@@ -366,7 +375,9 @@ def fit(component, tests, fix=(), structure="final", starts=4, jobs=None, seed=0
     jobs = max(1, min(jobs or os.cpu_count() or 1, len(points)))
     context = multiprocessing.get_context("fork")
     simulations = context.Value("q", 0)
-    if jobs == 1:
+    if runner is not None:
+        outcomes = runner(problem, points)
+    elif jobs == 1:
         _adopt(problem, simulations)
         with _progress(simulations, len(points), progress):
             outcomes = [_solve_from(p) for p in points]

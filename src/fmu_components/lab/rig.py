@@ -403,9 +403,11 @@ def _point_task(arguments):
 def run_rig(component, preloads, amplitudes, frequencies, params=None, structure="final",
             engine="model", fmu=None, rtol=RIG_RTOL, samples_per_cycle=SAMPLES_PER_CYCLE,
             steady=STEADY, max_cycles=MAX_CYCLES, processes=None, rate="secant",
-            max_step=MAX_STEP):
+            max_step=MAX_STEP, runner=None):
     """Every (preload, amplitude, frequency) point to periodic steady state: RigRows in
-    that order (preload, then amplitude, then frequency)."""
+    that order (preload, then amplitude, then frequency). runner(tasks), if given, runs
+    the (setup, point, options) tasks of ``run_point`` elsewhere (a campaign's engine)
+    and returns their rows in order; else they run on `processes` local processes."""
     for label, values in (("amplitude", amplitudes), ("frequency", frequencies)):
         if not values or any(not (v > 0.0 and math.isfinite(v)) for v in values):
             raise RigError(f"each {label} must be a positive number (SI units)")
@@ -418,6 +420,8 @@ def run_rig(component, preloads, amplitudes, frequencies, params=None, structure
     points = [(p, a, f) for p in preloads for a in amplitudes for f in frequencies]
     options = dict(samples_per_cycle=samples_per_cycle, steady=steady, max_cycles=max_cycles)
     tasks = [(setup, point, options) for point in points]
+    if runner is not None:
+        return runner(tasks)
     processes = min(processes or _cores(), len(tasks))
     if processes <= 1:
         return [_point_task(task) for task in tasks]

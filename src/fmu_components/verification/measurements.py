@@ -207,27 +207,38 @@ class Runs:
         return [self.run(case) for case in self.select(measurement)]
 
     def run(self, case):
-        if case.key in self.failures:
-            raise RunFailure(self.failures[case.key])
-        if case.key not in self.records:
+        if case.key not in self.records and case.key not in self.failures:
             if self.progress is not None:
                 self.progress.set_postfix_str(case.key)
-            inputs = case.inputs()
-            outputs = [v.name for v in COMPONENTS[case.fmu].outputs]
             try:
-                result, _ = programme.simulate_case(self.fmu(case.fmu), inputs, case.options(),
-                                                    outputs, label=case.key)
+                result, _ = programme.simulate_case(self.fmu(case.fmu), case.inputs(),
+                                                    case.options(), outputs_of(case),
+                                                    label=case.key)
             except Exception as exc:  # an FMU that fails is reported, not a crash
-                self.failures[case.key] = f"{case.key}: {type(exc).__name__}: {exc}"
-                raise RunFailure(self.failures[case.key]) from None
-            if len(result) != len(inputs):
-                self.failures[case.key] = (f"{case.key}: {len(result)} samples, the input has "
-                                           f"{len(inputs)}")
-                raise RunFailure(self.failures[case.key])
-            self.records[case.key] = Record(case, inputs, result)
+                result = f"{type(exc).__name__}: {exc}"
+            self.keep(case, result)
             if self.progress is not None:
                 self.progress.update(1)
+        if case.key in self.failures:
+            raise RunFailure(self.failures[case.key])
         return self.records[case.key]
+
+    def keep(self, case, result):
+        """The case's result (fmpy's), or the message of its failure, run here or
+        elsewhere (a campaign's worker)."""
+        inputs = case.inputs()
+        if isinstance(result, str):
+            self.failures[case.key] = f"{case.key}: {result}"
+        elif len(result) != len(inputs):
+            self.failures[case.key] = (f"{case.key}: {len(result)} samples, the input has "
+                                       f"{len(inputs)}")
+        else:
+            self.records[case.key] = Record(case, inputs, result)
+
+
+def outputs_of(case):
+    """The outputs a case records: all of its component's."""
+    return [v.name for v in COMPONENTS[case.fmu].outputs]
 
 
 class RunFailure(Exception):

@@ -20,7 +20,7 @@ from . import cases as programme  # noqa: E402
 from . import reference  # noqa: E402
 from ..runtime.catalog import COMPONENTS  # noqa: E402
 from ..lab.display import DISPLAY  # noqa: E402
-from ..lab.files import save_figure, write_text  # noqa: E402
+from ..lab.files import save_figure, write_text, written_whole  # noqa: E402
 from .outcome import STRICT_LIMIT, rows  # noqa: E402
 
 DPI = 200  # print quality
@@ -289,9 +289,22 @@ def plot_count(outcomes):
     return len(ran) + len({(o.name, o.case.test) for o in ran})
 
 
-def write_report(outcomes, folder, progress=None):
+def plot_png(draw, arguments):
+    """The PNG bytes of ``draw(*arguments, path)``, drawn wherever this runs (a campaign's
+    worker, which has none of the report's folder)."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as scratch:
+        path = Path(scratch) / "plot.png"
+        draw(*arguments, path)
+        return path.read_bytes()
+
+
+def write_report(outcomes, folder, progress=None, drawn=None):
     """Plots and summary.md in folder; returns the summary's path. progress (a tqdm bar, or
-    None) advances by one per plot."""
+    None) advances by one per plot. drawn(jobs), if given, draws the plots elsewhere: it
+    yields (index, PNG bytes) of each ``plot_png`` job (draw, arguments) as it is done
+    (a campaign's engine); else they are drawn here, one after another."""
     advance = progress.update if progress is not None else (lambda n: None)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -307,10 +320,10 @@ def write_report(outcomes, folder, progress=None):
              f"inside the band of `fmpy.util.validate_result` for the worst output (the FMI "
              f"cross-check rule fails a case with more than 10 % outside).", "",
              "## Figures", ""]
+    plots = []  # (file name, draw, arguments)
     for (fmu, test), members in groups.items():
         name = f"test_{fmu}_{test.replace(' ', '_')}.png"
-        plot_test(members, folder / name)
-        advance(1)
+        plots.append((name, plot_test, (members,)))
         lines += [f"### {fmu}: {programme.TESTS[test].title}", "",
                   f"Thesis {members[0].case.figure}.", "", f"![{fmu} {test}]({name})", ""]
     header, *table = rows(outcomes)
@@ -320,10 +333,18 @@ def write_report(outcomes, folder, progress=None):
     for outcome, row in zip(outcomes, table):
         name = f"case_{outcome.name}_{outcome.case.name}.png"
         if outcome.reference is not None:
-            plot_case(outcome, folder / name)
-            advance(1)
+            plots.append((name, plot_case, (outcome,)))
         lines.append("| " + " | ".join(row) + (f" | [plot]({name}) |" if outcome.reference
                                                is not None else " |  |"))
+    if drawn is None:
+        for name, draw, arguments in plots:
+            draw(*arguments, folder / name)
+            advance(1)
+    else:
+        for index, png in drawn([(draw, arguments) for _, draw, arguments in plots]):
+            with written_whole(folder / plots[index][0]) as whole:
+                whole.write_bytes(png)
+            advance(1)
     summary = folder / "summary.md"
     write_text(summary, "\n".join(lines) + "\n")
     return summary

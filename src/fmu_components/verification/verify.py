@@ -56,18 +56,26 @@ def compare(result, reference, stop_time):
     return errors, outliers, ""
 
 
-def run_case(case, fmu_path, reference_data=programme.REFERENCE_DATA, identity=None):
-    """One case through one FMU. An engineer's own part, or another of the thesis's model
-    structures, is compared with the independent solve under its own parameter values,
-    made here; the thesis's FMUs with the committed references."""
-    if identity is not None and (identity.own or identity.structure != "final"):
+def needs_own_reference(identity):
+    """An engineer's own part, or another of the thesis's model structures: compared with
+    the independent solve under its own parameter values, not the committed references."""
+    return identity is not None and (identity.own or identity.structure != "final")
+
+
+def run_case(case, fmu_path, reference_data=programme.REFERENCE_DATA, identity=None,
+             tables=None):
+    """One case through one FMU. An own part (``needs_own_reference``) is compared with
+    the independent solve under its own values, made here; the thesis's FMUs with the
+    committed references, read from `reference_data` unless given as `tables` (the
+    (inputs, reference, options) of ``cases.read``: a campaign's worker gets them so)."""
+    if needs_own_reference(identity):
         spec = reference.spec_from_parameters(identity.component, identity.values,
                                               identity.structure)
         inputs, expected, options = programme.generate(case, spec)
         options = case.options()
         part = Path(fmu_path).stem
     else:
-        inputs, expected, options = programme.read(case, reference_data)
+        inputs, expected, options = tables or programme.read(case, reference_data)
         part = ""
     result, wall = programme.simulate_case(fmu_path, inputs, options,
                                            list(expected.dtype.names[1:]),

@@ -1,0 +1,121 @@
+"""Campaigns on Dask (docs/campaigns.md): what two workers gain, what a task costs, and a
+ride map's 60 station runs, each as ratios or times within one run of this script.
+
+    python benchmarks/campaign.py [--case GLOB] [--end-time S] [--tasks N] [--skip-verify]
+
+* verify: ``fmu-components verify`` over every case (or --case), simulations and plots, on
+  a local cluster of 2 workers against one of 1 worker (the target: 1.8 times faster or
+  better on 2 cores), and in this process without a cluster (``--jobs 1``);
+* overhead: N tasks that do nothing but carry an FMU (260 kB, as every campaign task
+  does) through a 1-worker local cluster, end to end per task (the target: at most 50 ms);
+* station: a ride map of 5 speeds x 3 courses x 4 parts = 60 runs of the road-wheel station
+  example on a local cluster of one worker per core, --end-time seconds each (0.5 s by
+  default: the bump, met at 0.5 m, within it at every speed; the example's own end, the bump
+  passed + 1 s, takes four to ten times longer per run).
+
+Figures are measurements, not pass/fail. Run it on an otherwise idle machine.
+"""
+
+import argparse
+import json
+import tempfile
+import time
+from pathlib import Path
+
+from fmu_components.campaign.engine import Engine, one_thread_per_process
+
+one_thread_per_process()  # before numpy loads, as the command line does
+
+from fmu_components import cli  # noqa: E402
+from fmu_components.campaign.grid import read_grid  # noqa: E402
+from fmu_components.campaign.payload import Payload  # noqa: E402
+from fmu_components.campaign.run import run_grid  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+RIDE_MAP = {
+    "run": "station", "speeds": [3, 5, 8, 11, 15],
+    "courses": {"bump30": {"bump_start": 0.5},
+                "bump60": {"bump_start": 0.5, "bump_height": 0.06},
+                "ripple": {"bump_height": 0.0, "ripple_depth": 2e-3}},
+    "parameter_sets": {"thesis": {},
+                       "soft_tyre": {"RoadWheelTyre": {"k1": 1.05e6}},
+                       "stiff_tyre": {"RoadWheelTyre": {"k1": 1.95e6}},
+                       "stiff_gas_spring": {"RotaryDamper": {"C1": 1200.0}}},
+}
+
+
+def local_cluster(workers):
+    from distributed import LocalCluster
+
+    return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                        dashboard_address=":0")
+
+
+def time_verify(cases, workers, folder):
+    """Wall seconds of the verify command on a local cluster of `workers` (None: in this
+    process, --jobs 1)."""
+    arguments = ["verify", "--report", str(folder)] + [f"--case={c}" for c in cases]
+    if workers is None:
+        started = time.perf_counter()
+        cli.main(arguments + ["--jobs", "1"])
+        return time.perf_counter() - started
+    with local_cluster(workers) as cluster:
+        started = time.perf_counter()
+        cli.main(arguments + ["--scheduler", cluster.scheduler_address])
+        return time.perf_counter() - started
+
+
+def carry(fmu):
+    return len(fmu)
+
+
+def overhead(tasks):
+    """Seconds per task of `tasks` tasks that only carry an FMU, on one local worker."""
+    fmu = Payload.of(ROOT / "fmus" / "TrackBushRadial.fmu")
+    with local_cluster(1) as cluster, Engine(cluster.scheduler_address) as engine:
+        engine.map(carry, [(fmu,)] * 4)  # the worker's first imports, not counted
+        started = time.perf_counter()
+        engine.map(carry, [(fmu,)] * tasks)
+        return (time.perf_counter() - started) / tasks
+
+
+def station(end_time, folder):
+    grid_file = folder / "ride_map.json"
+    grid_file.write_text(json.dumps(dict(RIDE_MAP, end_time=end_time)))
+    grid = read_grid(grid_file)
+    with Engine() as engine:  # one worker per core
+        started = time.perf_counter()
+        outcome = run_grid(grid, folder / "ride_map", engine)
+        wall = time.perf_counter() - started
+        workers = engine.workers
+    return len(grid.runs), len(outcome.failures), wall, workers, outcome.table
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--case", action="append", default=[],
+                        help="only these verify cases (default: every case)")
+    parser.add_argument("--end-time", type=float, default=0.5,
+                        help="s simulated by each station run (default 0.5)")
+    parser.add_argument("--tasks", type=int, default=200, help="tasks of the overhead test")
+    parser.add_argument("--skip-verify", action="store_true")
+    args = parser.parse_args(argv)
+    with tempfile.TemporaryDirectory() as scratch:
+        scratch = Path(scratch)
+        if not args.skip_verify:
+            walls = {n: time_verify(args.case, n, scratch / f"verify{n}") for n in (1, 2, None)}
+            print(f"verify{' ' + ' '.join(args.case) if args.case else ', every case'}: "
+                  f"2 workers {walls[2]:.1f} s, 1 worker {walls[1]:.1f} s, in this process "
+                  f"{walls[None]:.1f} s: 2 workers {walls[1] / walls[2]:.2f} times as fast as 1")
+        per_task = overhead(args.tasks)
+        print(f"overhead: {per_task * 1e3:.1f} ms per task carrying an FMU "
+              f"({args.tasks} tasks, 1 worker)")
+        runs, failed, wall, workers, table = station(args.end_time, scratch)
+        walls = [row["wall_s"] for row in table.rows.values() if "wall_s" in row]
+        print(f"station ride map: {runs} runs of {args.end_time:g} s on {workers} local workers "
+              f"in {wall:.1f} s ({failed} failed); one run {min(walls):.1f} to "
+              f"{max(walls):.1f} s, {sum(walls):.1f} s in all")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,145 @@
+"""The tasks a campaign's workers run: each a plain function of its arguments, which carry
+the FMUs and any example code as payloads (``payload``), so that a worker needs none of
+the client's files. Each returns what the client turns into one row of the results table.
+"""
+
+import dataclasses
+import importlib
+import sys
+import time
+from pathlib import Path
+
+
+# --- the thesis test programme (fmu-components verify) --------------------------------------
+
+def verify_case(case, fmu, tables, identity):
+    """One case through one FMU against its reference (``verification.verify.run_case``):
+    an Outcome. tables: the case's (inputs, reference, options), None for an own part."""
+    from ..verification.verify import run_case
+
+    return run_case(case, fmu, identity=identity, tables=tables)
+
+
+def verify_row(outcome):
+    return {"run": f"{outcome.name}/{outcome.case.name}", "fmu": outcome.name,
+            "case": outcome.case.name, "passed": outcome.passed,
+            "strict_error_percent": outcome.strict_error if outcome.errors else None,
+            "worst_output": outcome.worst_output,
+            "outside_band": outcome.outliers, "problem": outcome.problem,
+            "wall_s": outcome.wall_time}
+
+
+# --- the measurements (fmu-components validate) ---------------------------------------------
+
+def validate_case(case, fmu, outputs):
+    """One case of the validation through its component's FMU: fmpy's result."""
+    from ..verification.cases import simulate_case
+
+    return simulate_case(fmu, case.inputs(), case.options(), outputs, label=case.key)[0]
+
+
+# --- the fit (fmu-components fit) ------------------------------------------------------------
+
+def fit_runner(engine):
+    """``lab.fit.fit``'s runner: each start's fit a task on the engine (the measured tests
+    travel inside the problem); a start that fails ends the fit with its message."""
+    from ..lab.fit import solve_start
+    from .engine import Failure, Progress
+
+    def run(problem, points):
+        outcomes = [None] * len(points)
+        progress = Progress(len(points), what="fitting from each start")
+        try:
+            for index, outcome in engine.stream(solve_start, [(problem, p) for p in points]):
+                if isinstance(outcome, Failure):
+                    raise RuntimeError(f"the fit from start {index + 1}: {outcome.message}")
+                outcomes[index] = outcome
+                progress.update(f"start {index + 1}")
+        finally:
+            progress.close()
+        return outcomes
+    return run
+
+
+# --- the virtual test rig (fmu-components rig) -----------------------------------------------
+
+def rig_point(setup, point, options):
+    """One rig point to periodic steady state (``lab.rig.run_point``): a RigRow."""
+    from ..lab.rig import run_point
+
+    return run_point(setup, *point, **options)
+
+
+def rig_runner(engine):
+    """``lab.rig.run_rig``'s runner: the points on the engine, the FMU of an FMU engine
+    travelling with them; a point that fails is a RigError naming it, once the others
+    are done."""
+    from ..lab.rig import RigError
+    from .engine import Failure
+    from .payload import Payload
+
+    def run(tasks):
+        travelling = {}
+        tasks = [(dataclasses.replace(setup, fmu=travelling.setdefault(
+            setup.fmu, Payload.of(setup.fmu))) if setup.fmu else setup, point, options)
+            for setup, point, options in tasks]
+        rows = engine.map(rig_point, tasks)
+        for (_, point, _), row in zip(tasks, rows):
+            if isinstance(row, Failure):
+                raise RigError(f"preload {point[0]:g}, amplitude {point[1]:g}, frequency "
+                               f"{point[2]:g} Hz: {row.message}")
+        return rows
+    return run
+
+
+def rig_row(run, row, wall):
+    values = dataclasses.asdict(row)
+    return {"run": run, **values, "wall_s": wall}
+
+
+def timed(function, *arguments):
+    """(function's result, wall seconds)."""
+    started = time.perf_counter()
+    result = function(*arguments)
+    return result, time.perf_counter() - started
+
+
+def timed_rig_point(setup, point, options):
+    return timed(rig_point, setup, point, options)
+
+
+# --- the multibody examples (examples/) -----------------------------------------------------
+
+def _example(folder, module):
+    """A module of the examples folder the task carried (its local copy)."""
+    if folder not in sys.path:
+        sys.path.insert(0, folder)
+    return importlib.import_module(module)
+
+
+def station_run(examples, fmus, speed, course, parameters, end_time, step):
+    """The road-wheel station (examples/road_wheel_station.py) at `speed` (m/s) over
+    `course` (RoadProfile's arguments), its FMUs with `parameters` (by FMU name): its
+    figures (peaks) and the wall time."""
+    station = _example(examples, "road_wheel_station")
+    started = time.perf_counter()
+    profile = station.RoadProfile(**course)
+    result = station.simulate(speed, profile, step, Path(fmus), end_time=end_time,
+                              parameters=parameters)
+    found = station.peaks(result, ripple_from=profile.end / speed + station.RIPPLE_DELAY)
+    found["simulated_time"] = float(result["time"][-1])
+    found["wall_s"] = time.perf_counter() - started
+    return found
+
+
+def vehicle_run(examples, fmus, speed, course, end_time, step):
+    """The tracked vehicle (examples/tracked_vehicle.py) at `speed` (m/s) on the course
+    named `course`: its figures and the wall time."""
+    vehicle = _example(examples, "tracked_vehicle")
+    outputs = _example(examples, "vehicle.outputs")
+    started = time.perf_counter()
+    _, result, _, _ = vehicle.simulate(course, speed, end_time, step, fmu_dir=Path(fmus))
+    found = outputs.figures(result)
+    found["simulated_time"] = float(result["time"][-1] - result["time"][0])
+    found["wall_s"] = time.perf_counter() - started
+    return found
