@@ -169,20 +169,10 @@ class Contacts:
         return jacobian
 
     def _tyre_jacobian(self, w, force, slope):
-        """d(generalized tyre force)/dq of wheel w: the blend's gradient D (a row per link
-        beneath: that link's overlap by the coordinates) and its second derivative,
-        F' (p.D)^T (p.D) + F/b D^T (diag(p) - p p^T) D (p the weights, b TYRE_BLEND; the
-        links' turning under the contact left out)."""
-        links, weights, along = self.tyre_share[w]
-        size = 3 * len(self.nodes)
-        gradient = np.zeros((len(links), size))
-        wheel = 3 * (1 + w)
-        for row, (k, a) in enumerate(zip(links, along)):
-            normal = self.n[k]
-            point = self.link_pos[k] + a * self.u[k]
-            gradient[row, wheel:wheel + 3] = normal @ self._g(1 + w, self.wheels[w])[1]
-            body = 3 * (self.link0 + k)
-            gradient[row, body:body + 3] = -normal @ self._g(self.link0 + k, point)[1]
+        """d(generalized tyre force)/dq of wheel w from the blend's gradient D (a row per
+        link beneath) and weights p: F' (p.D)^T (p.D) + F/b D^T (diag(p) - p p^T) D
+        (b TYRE_BLEND; the second derivatives of each link's own term left out)."""
+        weights, gradient = self.tyre_share[w]
         mean = weights @ gradient
         spread = gradient.T @ (weights[:, None] * gradient) - np.outer(mean, mean)
         return slope * np.outer(mean, mean) + force / TYRE_BLEND * spread
@@ -227,7 +217,7 @@ class Contacts:
         count = len(self.wheels)
         self.compression = np.full(count, -np.inf)
         self.compression_rate = np.zeros(count)
-        self.tyre_share = []  # per wheel: (links, their weights, where along, overlaps)
+        self.tyre_share = []  # per wheel: (weights, the blend's gradient), or None
         half = 0.5 * lay.LINK_PITCH
         for w in range(count):
             r = self.wheels[w] - self.link_pos
@@ -252,7 +242,27 @@ class Contacts:
             rates = -(np.einsum("ij,ij->i", relative, self.n[beneath])
                       - self.link_omega[beneath] * along[beneath])
             self.compression_rate[w] = weights @ rates
-            self.tyre_share.append((beneath, weights, along[beneath]))
+            self.tyre_share.append((weights, self._blend_gradient(
+                w, beneath, along[beneath], height[beneath], window)))
+
+    def _blend_gradient(self, w, links, along, height, window):
+        """A row per link beneath wheel w: the gradient, by the object's coordinates, of
+        that link's term in the blend, its overlap plus TYRE_BLEND ln(its window)."""
+        rows = np.zeros((len(links), 3 * len(self.nodes)))
+        wheel_g = self._g(1 + w, self.wheels[w])[1]
+        x = (0.5 * lay.LINK_PITCH + 0.5 * HANDOVER - np.abs(along)) / HANDOVER
+        # d ln(window) / d along: the smoothstep's slope over its value, zero once full
+        slope = np.where(x < 1.0, 6 * x * (1 - x) / np.maximum(window, 1e-300), 0.0)
+        log_window = -TYRE_BLEND * slope * np.sign(along) / HANDOVER
+        for row, k in enumerate(links):
+            n, u = self.n[k], self.u[k]
+            # overlap R + inner - (wheel - link) . n; along (wheel - link) . u
+            by_wheel = -n + log_window[row] * u
+            rows[row, 3 * (1 + w):3 * (2 + w)] = by_wheel @ wheel_g
+            body = 3 * (self.link0 + k)
+            rows[row, body:body + 2] = -by_wheel
+            rows[row, body + 2] = along[row] + log_window[row] * height[row]
+        return rows
 
     def _pin_members(self, j, weight=1.0):
         """Pin j as (body, point, weight) of the two seats that make it."""
@@ -349,23 +359,21 @@ class Contacts:
                 springs.append((*normal_spring(stiffness[j], damping[j], normal[j]),
                                 self._pin_members(j) + [(body, centre, -1.0)]))
 
-        # tyres: both half-wheels at the wheel's compression, the force shared among the
-        # links beneath by their weights in the blend, each along its own normal
+        # tyres: both half-wheels at the wheel's compression, the generalized force minus
+        # the load times the compression's gradient (shared among the links beneath by
+        # their weights in the blend, each along its own normal)
         self.tyre_force = np.zeros(len(self.wheels))
         self.tyre_terms = []
+        tyres = np.zeros(3 * len(self.nodes))
         for w, pair in enumerate(v.tyres):
             share = self.tyre_share[w]
             if share is None:
                 continue
-            links, weights, along = share
+            weights, gradient = share
             compression = self.compression[w]
             force = sum(v.load(tyre, compression, self.compression_rate[w]) for tyre in pair)
             self.tyre_force[w] = force
-            for k, weight, a in zip(links, weights, along):
-                push = weight * force * self.n[k]
-                on_body(1 + w, self.wheels[w], push)
-                seat[k, 0] -= (0.5 - a / lay.LINK_PITCH) * push
-                seat[k, 1] -= (0.5 + a / lay.LINK_PITCH) * push
+            tyres -= force * (weights @ gradient)  # pushes the compression back
             if force > 0.0:
                 slope = sum(v.tangent(tyre, compression) for tyre in pair)
                 self.tyre_terms.append((w, force, slope))
@@ -382,7 +390,7 @@ class Contacts:
         bodies[links, :2] += seat[:, 0] + seat[:, 1]
         bodies[links, 2] += (r0[:, 0] * seat[:, 0, 1] - r0[:, 1] * seat[:, 0, 0]
                              + r1[:, 0] * seat[:, 1, 1] - r1[:, 1] * seat[:, 1, 0])
-        self.generalized = bodies.reshape(-1)
+        self.generalized = bodies.reshape(-1) + tyres
         self.springs = springs
 
     def _settle_damping(self, bodies, springs):

@@ -375,6 +375,15 @@ class Vehicle:
         from .outputs import histories
         return histories(self)
 
+    def solver_statistics(self):
+        """exudyn's Newton iterations per solve of a step, solves (coupling passes) per
+        accepted step, and its steps against the host steps asked for."""
+        it = self.mbs.sys["dynamicSolver"].it
+        passes = max(self.coupling.total_passes, 1)
+        return {"newton_per_pass": it.newtonStepsCount / passes,
+                "passes_per_step": passes / max(self.coupling.steps, 1),
+                "steps": it.currentStepIndex, "host_steps": self.coupling.steps}
+
 
 def run_settings():
     """The settings of the coupled run (exudyn_host.solve adds what the coupling needs)."""

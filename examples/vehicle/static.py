@@ -34,13 +34,16 @@ def _constants(module):
 
 
 def static_key(vehicle, step):
-    """A digest of what decides the static point: the model's values (every constant of
-    layout, model and contacts), the FMUs' files, the linear elements if any, the static
-    values the layout was made from, and the settling's own step and rest."""
+    """A digest of what decides the static point: the model's values and code (every
+    constant and the source of layout, model and contacts), the FMUs' files, the linear
+    elements if any, the static values the layout was made from, and the settling's own
+    step and rest."""
     files = {name: hashlib.sha256(Path(fmu_path(name, vehicle.fmu_dir)).read_bytes())
              .hexdigest() for name in FMUS}
     linear = vehicle.linear.coefficients if vehicle.linear is not None else None
-    content = json.dumps([_constants(layout), _constants(model), _constants(contacts),
+    sources = [hashlib.sha256(Path(m.__file__).read_bytes()).hexdigest()
+               for m in (layout, model, contacts)]
+    content = json.dumps([_constants(layout), _constants(model), _constants(contacts), sources,
                           files, repr(linear), repr(vehicle.statics), step, REST, CHUNK],
                          sort_keys=True)
     return hashlib.sha256(content.encode()).hexdigest()[:16]
