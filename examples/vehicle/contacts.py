@@ -1,15 +1,15 @@
-"""The vehicle's contacts, all computed at once from the host's current state and applied
-as loads on the bodies (exudyn calls one load function per body; they share one
-evaluation per state):
+"""The vehicle's contacts, all computed at once from the host's current state, with their
+Jacobian, as one exudyn object over the bodies they touch (one evaluation per state):
 
-* tyres: a road wheel overlaps the inner face of the link beneath it (the face
-  LINK_INNER inside the pin line) by the tyre's compression R - d, d the wheel centre's
-  distance from that face, over the link whose face the wheel overlaps most. Both
-  half-wheels' RoadWheelTyre instances get this compression and its rate; their forces
-  push the wheel away from the face and the link the other way, split between the link's
-  pin seats by where the contact lies along it.
-* pins on the ground: a vertical penalty contact of the link's ground face (frictionless:
-  the sprocket, turning with the hull's travel, holds the ground run still);
+* tyres: a road wheel overlaps the inner face of each link beneath it (the face
+  LINK_INNER inside the pin line) by R - d, d the wheel centre's distance from that face;
+  the tyre's compression is a smooth maximum of these overlaps (TYRE_BLEND wide, each
+  link's term faded in and out over HANDOVER about its ends). Both half-wheels'
+  RoadWheelTyre instances get this compression and its rate; their load pushes the
+  compression back (minus the load times its gradient), each link beneath taking its
+  weight's share along its own normal.
+* pins on the ground: a vertical penalty contact of the link's ground face (smooth onset,
+  frictionless: the sprocket, turning with the hull's travel, holds the ground run still);
 * the sprocket's teeth: each pin within the sprocket's wrap is pulled to the tooth space
   nearest it, the pull taken up and let go over ENGAGEMENT_RAMP at the wrap's ends;
 * idler and support roller: pins on a circle, radial penalty contact.
@@ -165,17 +165,21 @@ class Contacts:
                 for ib, _, motion_g in rows:
                     jacobian[ia:ia + 3, ib:ib + 3] += left @ motion_g
         for w, force, slope in self.tyre_terms:
-            jacobian += factor * self._tyre_jacobian(w, force, slope)
+            self._add_tyre_jacobian(jacobian, factor, w, force, slope)
         return jacobian
 
-    def _tyre_jacobian(self, w, force, slope):
-        """d(generalized tyre force)/dq of wheel w from the blend's gradient D (a row per
-        link beneath) and weights p: F' (p.D)^T (p.D) + F/b D^T (diag(p) - p p^T) D
-        (b TYRE_BLEND; the second derivatives of each link's own term left out)."""
+    def _add_tyre_jacobian(self, jacobian, factor, w, force, slope):
+        """Adds d(generalized tyre force)/dq of wheel w, from the blend's gradient D (a row
+        per link beneath) and weights p: F' (p.D)^T (p.D) + F/b D^T (diag(p) - p p^T) D
+        (b TYRE_BLEND; the second derivatives of each link's own term left out), on the
+        few coordinates D touches."""
         weights, gradient = self.tyre_share[w]
+        used = np.flatnonzero(np.any(gradient != 0.0, axis=0))
+        gradient = gradient[:, used]
         mean = weights @ gradient
         spread = gradient.T @ (weights[:, None] * gradient) - np.outer(mean, mean)
-        return slope * np.outer(mean, mean) + force / TYRE_BLEND * spread
+        jacobian[np.ix_(used, used)] += factor * (slope * np.outer(mean, mean)
+                                                  + force / TYRE_BLEND * spread)
 
     def _g(self, body, point):
         """(how a force at the point loads the body, how the point moves with it): both
