@@ -89,7 +89,8 @@ def main(argv=None):
     solver = vehicle.solver_statistics()
     print(f"exudyn: {solver['newton_per_pass']:.1f} Newton iterations per solve, "
           f"{solver['passes_per_step']:.2f} solves per host step, "
-          f"{solver['steps'] - solver['host_steps']} steps shortened")
+          f"{solver['steps']} steps for the {solver['host_steps']} asked (more where "
+          f"shortened)")
     for key, label, unit, scale in outputs.FIGURE_LABELS:
         values = "  ".join(f"{model}: {outputs.figures(r)[key] * scale:.3g} {unit}"
                            for model, r in runs.items())

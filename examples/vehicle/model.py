@@ -366,6 +366,7 @@ class Vehicle:
     def run(self, end_time, step, settle=True):
         if settle:
             self.settle()
+        self.host_steps = math.ceil(end_time / step - 1e-9)
         try:
             self.host = solve(self.mbs, self.coupling, end_time, step, settings=run_settings())
         except exu.SolverError:
@@ -377,12 +378,13 @@ class Vehicle:
 
     def solver_statistics(self):
         """exudyn's Newton iterations per solve of a step, solves (coupling passes) per
-        accepted step, and its steps against the host steps asked for."""
+        accepted step, and the steps accepted against the host steps asked for (more
+        where steps were shortened)."""
         it = self.mbs.sys["dynamicSolver"].it
         passes = max(self.coupling.total_passes, 1)
         return {"newton_per_pass": it.newtonStepsCount / passes,
                 "passes_per_step": passes / max(self.coupling.steps, 1),
-                "steps": it.currentStepIndex, "host_steps": self.coupling.steps}
+                "steps": self.coupling.steps, "host_steps": self.host_steps}
 
 
 def run_settings():
