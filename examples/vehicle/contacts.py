@@ -123,7 +123,11 @@ class Contacts:
                                             for n in self.nodes])
 
     def rebase(self, settled):
-        self.hull_x0 = self.reference[0, 0] + settled[self.system_index[0]]
+        """The settled state becomes the start: the sprocket's tooth spaces stay where the
+        settling left them while the hull's travel is counted from there."""
+        hull_x = self.reference[0, 0] + settled[self.system_index[0]]
+        self.tooth_phase -= (hull_x - self.hull_x0) / lay.SPROCKET_PITCH_RADIUS
+        self.hull_x0 = hull_x
         self._key = None
 
     # --- one evaluation per state ---------------------------------------------------------
