@@ -106,8 +106,10 @@ def test_every_wheel_starts_on_the_track_at_its_static_compression(native_fmus):
         mbs = vehicle.mbs
         velocities = mbs.systemData.GetODE2Coordinates_t(exu.ConfigurationType.Initial)
         mbs.systemData.SetODE2Coordinates_t(0 * velocities, exu.ConfigurationType.Initial)
+        settings = exu.SimulationSettings()
+        settings.solution.file.write = False  # no solution file in the working directory
         solver = exu.MainSolverImplicitSecondOrder()
-        solver.InitializeSolver(mbs, exu.SimulationSettings())
+        solver.InitializeSolver(mbs, settings)
         solver.ComputeODE2RHS(mbs)
         loads = np.array(solver.GetSystemResidual())
         contacts.evaluate(0.0)
