@@ -79,19 +79,107 @@ def test_a_link_through_a_wheel_stops_the_run_naming_wheel_and_time(native_fmus)
         vehicle.coupling.free()
 
 
+def _laid_out(native_fmus, settling=False):
+    from vehicle.course import Bump
+    from vehicle.model import Vehicle
+
+    vehicle = Vehicle(Bump(3.0), 5.0, native_fmus["RoadWheelTyre"].parent)
+    vehicle.settling = settling
+    return vehicle
+
+
+def test_every_wheel_starts_on_the_track_at_its_static_compression(native_fmus):
+    """At the laid-out geometry each tyre is compressed by the static compression (the
+    track leaves the ground run clear of the end wheels instead of wrapping a link into
+    them), and gravity acts on every body."""
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle import layout
+
+    vehicle = _laid_out(native_fmus, settling=True)
+    try:
+        contacts = vehicle.contacts
+        contacts.evaluate(0.0)
+        static = vehicle.statics[0]
+        assert np.max(np.abs(contacts.compression - static)) < 1e-4, contacts.compression
+        # at rest the vertical loads on all bodies (joint reactions aside) sum to what
+        # comes from outside: gravity on every body and the ground's reaction
+        mbs = vehicle.mbs
+        velocities = mbs.systemData.GetODE2Coordinates_t(exu.ConfigurationType.Initial)
+        mbs.systemData.SetODE2Coordinates_t(0 * velocities, exu.ConfigurationType.Initial)
+        settings = exu.SimulationSettings()
+        settings.solution.file.write = False  # no solution file in the working directory
+        solver = exu.MainSolverImplicitSecondOrder()
+        solver.InitializeSolver(mbs, settings)
+        solver.ComputeODE2RHS(mbs)
+        loads = np.array(solver.GetSystemResidual())
+        contacts.evaluate(0.0)
+        vertical = [mbs.GetNodeODE2Index(node) + 1 for node in contacts.nodes]
+        weight = layout.SIDE_MASS * layout.GRAVITY
+        outside = contacts.ground_load.sum() - weight
+        assert loads[vertical].sum() == pytest.approx(outside, rel=1e-6)
+    finally:
+        vehicle.coupling.free()
+
+
+@pytest.mark.parametrize("settling", [True, False])
+def test_the_contacts_jacobian_is_the_derivative_of_their_forces(native_fmus, settling):
+    """The Jacobian the contacts give exudyn's Newton (tyres with the tangent of their load
+    law and the blend over the links beneath, the sprocket turning with the hull's travel,
+    the penalty contacts) against central differences of their generalized forces, at the
+    laid-out state: within 1 % of the largest entry."""
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    vehicle = _laid_out(native_fmus, settling)
+    try:
+        contacts = vehicle.contacts
+        if not settling:
+            vehicle.coupling.start(0.0)  # the FMUs' load laws
+        data = vehicle.mbs.systemData
+        q = np.asarray(data.GetODE2Coordinates(exu.ConfigurationType.Current))
+        q = q[contacts.system_index]
+        qd = np.zeros_like(q)
+        analytic = contacts._jacobian(0.0, q, qd, 1.0, 0.0)
+        numeric = np.zeros_like(analytic)
+        h = 1e-8
+        for i in range(len(q)):
+            dq = np.zeros_like(q)
+            dq[i] = h
+            numeric[:, i] = -(contacts._generalized(0.0, q + dq, qd)
+                              - contacts._generalized(0.0, q - dq, qd)) / (2 * h)
+        assert np.max(np.abs(analytic - numeric)) < 0.01 * np.max(np.abs(numeric))
+    finally:
+        vehicle.coupling.free()
+
+
+def test_the_stored_static_point_is_keyed_by_the_models_values(native_fmus, monkeypatch):
+    """Same model, same key; a changed value (the torsion-bar rate) or FMU set, a new one."""
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle import layout, static
+
+    vehicle = _laid_out(native_fmus)
+    try:
+        key = static.static_key(vehicle, 2e-3)
+        assert static.static_key(vehicle, 2e-3) == key
+        assert static.static_key(vehicle, 1e-3) != key
+        monkeypatch.setattr(layout, "TORSION_BAR_STIFFNESS", 16000.0)
+        assert static.static_key(vehicle, 2e-3) != key
+    finally:
+        vehicle.coupling.free()
+
+
 def test_a_short_run_prints_its_summary_and_writes_the_csv(native_fmus, tmp_path):
-    """Four host steps of 1 ms after a short settling: the summary counts the 175 FMU
-    instances and the cost, the CSV has SI columns, the track stays closed and every wheel
-    stays on it."""
+    """Four host steps of 1 ms from the laid-out geometry: the summary counts the 175 FMU
+    instances, the cost and exudyn's iterations, the CSV has SI columns, the track stays
+    closed and every wheel stays on it."""
     pytest.importorskip("exudyn", reason=NO_EXUDYN)
     run = subprocess.run(
         [sys.executable, str(ROOT / "examples" / "tracked_vehicle.py"), "--end-time", "0.004",
-         "--settle-time", "0.004", "--csv", "--out", str(tmp_path),
+         "--settle-time", "0", "--csv", "--out", str(tmp_path),
          "--fmu-dir", str(native_fmus["RoadWheelTyre"].parent)],
         capture_output=True, text=True, timeout=900)
     assert run.returncode == 0, run.stderr[-2000:]
     assert "175 FMU instances" in run.stdout
     assert re.search(r"s wall and [0-9.]+ s CPU per simulated second", run.stdout)
+    assert re.search(r"exudyn: [0-9.]+ Newton iterations per solve", run.stdout)
     assert f"wrote {tmp_path}" in run.stdout
     with open(tmp_path / "bump_5mps.csv") as stream:
         rows = list(csv.DictReader(stream))

@@ -1,15 +1,15 @@
-"""The vehicle's contacts, all computed at once from the host's current state and applied
-as loads on the bodies (exudyn calls one load function per body; they share one
-evaluation per state):
+"""The vehicle's contacts, all computed at once from the host's current state, with their
+Jacobian, as one exudyn object over the bodies they touch (one evaluation per state):
 
-* tyres: a road wheel overlaps the inner face of the link beneath it (the face
-  LINK_INNER inside the pin line) by the tyre's compression R - d, d the wheel centre's
-  distance from that face, over the link whose face the wheel overlaps most. Both
-  half-wheels' RoadWheelTyre instances get this compression and its rate; their forces
-  push the wheel away from the face and the link the other way, split between the link's
-  pin seats by where the contact lies along it.
-* pins on the ground: a vertical penalty contact of the link's ground face (frictionless:
-  the sprocket, turning with the hull's travel, holds the ground run still);
+* tyres: a road wheel overlaps the inner face of each link beneath it (the face
+  LINK_INNER inside the pin line) by R - d, d the wheel centre's distance from that face;
+  the tyre's compression is a smooth maximum of these overlaps (TYRE_BLEND wide, each
+  link's term faded in and out over HANDOVER about its ends). Both half-wheels'
+  RoadWheelTyre instances get this compression and its rate; their load pushes the
+  compression back (minus the load times its gradient), each link beneath taking its
+  weight's share along its own normal.
+* pins on the ground: a vertical penalty contact of the link's ground face (smooth onset,
+  frictionless: the sprocket, turning with the hull's travel, holds the ground run still);
 * the sprocket's teeth: each pin within the sprocket's wrap is pulled to the tooth space
   nearest it, the pull taken up and let go over ENGAGEMENT_RAMP at the wrap's ends;
 * idler and support roller: pins on a circle, radial penalty contact.
@@ -28,14 +28,48 @@ from .model import (ENGAGEMENT_RAMP, GROUND_DAMPING, GROUND_STIFFNESS, HORN_HEIG
                     WHEEL_STIFFNESS)
 
 # Damping that brings the vehicle to rest while it settles (not in the run).
-SETTLE_DAMPING = {"seat": 300.0, "arm": 5e3, "hull": 2e5, "hull_pitch": 6e5}
-TYRE_STIFFNESS_FLOOR = 2e6  # N/m: the Jacobian's tyre stiffness near first touch
+# About critical for the hull's bounce and pitch on its suspension (its surge has the speed
+# hold's own); the track's and the arms' light.
+SETTLE_DAMPING = {"seat": 300.0, "arm": 5e3, "hull": (0.0, 1.8e5), "hull_pitch": 4e5}
 TOOTH_SPACING = 2 * math.pi / lay.SPROCKET_TEETH
+# The tyre's compression blends the overlaps of the links beneath a wheel: a smooth maximum
+# TYRE_BLEND wide (2 mm), each link's term faded in and out over HANDOVER (30 mm) about
+# its ends, so that the contact passes from link to link without a jump (assumed;
+# docs/vehicle.md, Contacts).
+TYRE_BLEND = 2e-3
+HANDOVER = 0.03
+CONTACT_ONSET = 5e-4  # m: the penalty contacts' force grows smoothly over this depth
 
 
 def _cross(omega, r):
     """omega (scalar, about z) x r (n x 2)."""
     return np.stack([-omega * r[..., 1], omega * r[..., 0]], axis=-1)
+
+
+def _law_key(component):
+    """What decides the component's present load law (its values; None for none)."""
+    law = getattr(component, "law", None)
+    if law is None or not hasattr(law, "__slots__"):
+        return id(law)  # none, or a law that never changes (a Kelvin element)
+    return tuple(getattr(law, name) for name in law.__slots__)
+
+
+def _penalty(depth, closing, stiffness, damping):
+    """A penalty contact with a smooth onset: the spring's force k d^2 / (2 e) over the
+    first CONTACT_ONSET e of depth d, then k (d - e / 2), and the damper's taken up over the
+    same depth, never pulling. Returns (force, its slope by depth, by closing rate)."""
+    d = np.maximum(depth, 0.0)
+    ramp = np.minimum(d / CONTACT_ONSET, 1.0)
+    spring = stiffness * np.where(d < CONTACT_ONSET, 0.5 * d * ramp, d - 0.5 * CONTACT_ONSET)
+    force = spring + damping * ramp * closing
+    touching = force > 0.0
+    return (np.where(touching, force, 0.0), np.where(touching, stiffness * ramp, 0.0),
+            np.where(touching, damping * ramp, 0.0))
+
+
+def _smoothstep(x):
+    x = np.clip(x, 0.0, 1.0)
+    return x * x * (3.0 - 2.0 * x)
 
 
 def _rotate(angle, r):
@@ -89,7 +123,11 @@ class Contacts:
                                             for n in self.nodes])
 
     def rebase(self, settled):
-        self.hull_x0 = self.reference[0, 0] + settled[self.system_index[0]]
+        """The settled state becomes the start: the sprocket's tooth spaces stay where the
+        settling left them while the hull's travel is counted from there."""
+        hull_x = self.reference[0, 0] + settled[self.system_index[0]]
+        self.tooth_phase -= (hull_x - self.hull_x0) / lay.SPROCKET_PITCH_RADIUS
+        self.hull_x0 = hull_x
         self._key = None
 
     # --- one evaluation per state ---------------------------------------------------------
@@ -104,7 +142,9 @@ class Contacts:
 
     def _update(self, t, q, qd):
         q, qd = np.asarray(q), np.asarray(qd)
-        key = (t, q.tobytes(), qd.tobytes(), self.v.settling)
+        # the tyres' load laws change between the coupling's passes at the same state
+        laws = tuple(_law_key(tyre) for pair in self.v.tyres for tyre in pair)
+        key = (t, q.tobytes(), qd.tobytes(), self.v.settling, laws)
         if key == self._key:
             return
         self._key = key
@@ -123,17 +163,37 @@ class Contacts:
         jacobian = np.zeros((size, size))
         for stiffness, damping, members in self.springs:
             block = factor * stiffness + factor_t * damping
-            rows = [(3 * b, w * self._g(b, point)) for b, point, w in members]
-            for ia, ga in rows:
-                left = ga.T @ block
-                for ib, gb in rows:
-                    jacobian[ia:ia + 3, ib:ib + 3] += left @ gb
+            rows = [(3 * b, *[w * g for g in self._g(b, point)]) for b, point, w in members]
+            for ia, force_g, _ in rows:
+                left = force_g.T @ block
+                for ib, _, motion_g in rows:
+                    jacobian[ia:ia + 3, ib:ib + 3] += left @ motion_g
+        for w, force, slope in self.tyre_terms:
+            self._add_tyre_jacobian(jacobian, factor, w, force, slope)
         return jacobian
 
+    def _add_tyre_jacobian(self, jacobian, factor, w, force, slope):
+        """Adds d(generalized tyre force)/dq of wheel w, from the blend's gradient D (a row
+        per link beneath) and weights p: F' (p.D)^T (p.D) + F/b D^T (diag(p) - p p^T) D
+        (b TYRE_BLEND; the second derivatives of each link's own term left out), on the
+        few coordinates D touches."""
+        weights, gradient = self.tyre_share[w]
+        used = np.flatnonzero(np.any(gradient != 0.0, axis=0))
+        gradient = gradient[:, used]
+        mean = weights @ gradient
+        spread = gradient.T @ (weights[:, None] * gradient) - np.outer(mean, mean)
+        jacobian[np.ix_(used, used)] += factor * (slope * np.outer(mean, mean)
+                                                  + force / TYRE_BLEND * spread)
+
     def _g(self, body, point):
-        """d(point)/d(body's x, y, angle)."""
+        """(how a force at the point loads the body, how the point moves with it): both
+        d(point)/d(body's x, y, angle) for a point fixed on the body; `point` may give the
+        pair of 2 x 3 matrices instead."""
+        if isinstance(point, tuple):
+            return point
         r = point - self.body_pos[body]
-        return np.array([[1.0, 0.0, -r[1]], [0.0, 1.0, r[0]]])
+        g = np.array([[1.0, 0.0, -r[1]], [0.0, 1.0, r[0]]])
+        return g, g
 
     def _kinematics(self, state, rates):
         half = 0.5 * lay.LINK_PITCH
@@ -158,26 +218,59 @@ class Contacts:
         self._tyre_kinematics()
 
     def _tyre_kinematics(self):
-        """Per wheel: the link beneath, where along it, the compression and its rate."""
+        """Per wheel: the tyre's compression, blended smoothly over the links beneath it
+        (a smooth maximum of their overlaps, TYRE_BLEND wide, each link's term faded in and
+        out over HANDOVER of its ends), its rate, each link's share of the contact and
+        the compression's gradient (Contacts._tyre_jacobian)."""
         count = len(self.wheels)
-        self.tyre_link = np.full(count, -1)
-        self.tyre_along = np.zeros(count)
         self.compression = np.full(count, -np.inf)
         self.compression_rate = np.zeros(count)
+        self.tyre_share = []  # per wheel: (weights, the blend's gradient), or None
         half = 0.5 * lay.LINK_PITCH
         for w in range(count):
             r = self.wheels[w] - self.link_pos
             along = np.einsum("ij,ij->i", r, self.u)
             height = np.einsum("ij,ij->i", r, self.n)
-            beneath = (np.abs(along) <= half) & (height > 0.0) & (height < 2 * lay.WHEEL_RADIUS)
-            if not beneath.any():
+            beneath = np.flatnonzero((np.abs(along) < half + 0.5 * HANDOVER) & (height > 0.0)
+                                     & (height < 2 * lay.WHEEL_RADIUS))
+            if not len(beneath):
+                self.tyre_share.append(None)
                 continue
-            overlap = np.where(beneath, lay.WHEEL_RADIUS - (height - lay.LINK_INNER), -np.inf)
-            k = int(np.argmax(overlap))
-            self.tyre_link[w], self.tyre_along[w] = k, along[k]
-            self.compression[w] = overlap[k]
-            relative = self.wheels_v[w] - self.link_v[k]
-            self.compression_rate[w] = -(relative @ self.n[k] - self.link_omega[k] * along[k])
+            overlap = lay.WHEEL_RADIUS - (height[beneath] - lay.LINK_INNER)
+            window = _smoothstep((half + 0.5 * HANDOVER - np.abs(along[beneath])) / HANDOVER)
+            top = overlap.max()
+            terms = window * np.exp((overlap - top) / TYRE_BLEND)
+            total = terms.sum()
+            if total <= 0.0:
+                self.tyre_share.append(None)
+                continue
+            weights = terms / total
+            self.compression[w] = top + TYRE_BLEND * math.log(total)
+            relative = self.wheels_v[w] - self.link_v[beneath]
+            rates = -(np.einsum("ij,ij->i", relative, self.n[beneath])
+                      - self.link_omega[beneath] * along[beneath])
+            self.compression_rate[w] = weights @ rates
+            self.tyre_share.append((weights, self._blend_gradient(
+                w, beneath, along[beneath], height[beneath], window)))
+
+    def _blend_gradient(self, w, links, along, height, window):
+        """A row per link beneath wheel w: the gradient, by the object's coordinates, of
+        that link's term in the blend, its overlap plus TYRE_BLEND ln(its window)."""
+        rows = np.zeros((len(links), 3 * len(self.nodes)))
+        wheel_g = self._g(1 + w, self.wheels[w])[1]
+        x = (0.5 * lay.LINK_PITCH + 0.5 * HANDOVER - np.abs(along)) / HANDOVER
+        # d ln(window) / d along: the smoothstep's slope over its value, zero once full
+        slope = np.where(x < 1.0, 6 * x * (1 - x) / np.maximum(window, 1e-300), 0.0)
+        log_window = -TYRE_BLEND * slope * np.sign(along) / HANDOVER
+        for row, k in enumerate(links):
+            n, u = self.n[k], self.u[k]
+            # overlap R + inner - (wheel - link) . n; along (wheel - link) . u
+            by_wheel = -n + log_window[row] * u
+            rows[row, 3 * (1 + w):3 * (2 + w)] = by_wheel @ wheel_g
+            body = 3 * (self.link0 + k)
+            rows[row, body:body + 2] = -by_wheel
+            rows[row, body + 2] = along[row] + log_window[row] * height[row]
+        return rows
 
     def _pin_members(self, j, weight=1.0):
         """Pin j as (body, point, weight) of the two seats that make it."""
@@ -188,7 +281,7 @@ class Contacts:
 
     def tyre_state(self, w):
         self.evaluate(self.v.mbs.systemData.GetTime())
-        if self.tyre_link[w] < 0:
+        if self.tyre_share[w] is None:
             return -HORN_HEIGHT, 0.0
         return float(self.compression[w]), float(self.compression_rate[w])
 
@@ -213,13 +306,13 @@ class Contacts:
         # ground (frictionless, vertical)
         ground = v.course.height(self.pins[:, 0])
         depth = ground - (self.pins[:, 1] - lay.LINK_OUTER)
-        load = np.where(depth > 0.0, np.maximum(
-            GROUND_STIFFNESS * depth - GROUND_DAMPING * self.pins_v[:, 1], 0.0), 0.0)
+        load, stiffness, damping = _penalty(depth, -self.pins_v[:, 1], GROUND_STIFFNESS,
+                                            GROUND_DAMPING)
         pin[:, 1] += load
         self.ground_load = load
         vertical = np.array([0.0, 1.0])
         for j in np.flatnonzero(load > 0.0):
-            springs.append((*normal_spring(GROUND_STIFFNESS, GROUND_DAMPING, vertical),
+            springs.append((*normal_spring(stiffness[j], damping[j], vertical),
                             self._pin_members(j)))
 
         # sprocket teeth
@@ -248,9 +341,13 @@ class Contacts:
             on_body(0, slot[j], -tooth_force[j])
             r = slot[j] - centre
             self.drive_torque -= r[0] * tooth_force[j, 1] - r[1] * tooth_force[j, 0]
+            # the tooth space turns back as the hull travels forward
+            slot_g = self._g(0, slot[j])[0]
+            motion_g = slot_g.copy()
+            motion_g[:, 0] += [math.sin(slot_angle[j]), -math.cos(slot_angle[j])]
             springs.append((weight[j] * SPROCKET_STIFFNESS * np.eye(2),
                             weight[j] * SPROCKET_DAMPING * np.eye(2),
-                            self._pin_members(j) + [(0, slot[j], -1.0)]))
+                            self._pin_members(j) + [(0, (slot_g, motion_g), -1.0)]))
 
         # idler (on its crank) and support roller (on the hull)
         roller = hull_pos + _rotate(hull_theta, self.roller_local)
@@ -261,35 +358,33 @@ class Contacts:
             rel = self.pins - centre
             distance = np.hypot(rel[:, 0], rel[:, 1])
             normal = rel / distance[:, None]
-            closing = np.einsum("ij,ij->i", self.pins_v - centre_v, normal)
-            force = np.where(distance < radius, np.maximum(
-                WHEEL_STIFFNESS * (radius - distance) - WHEEL_DAMPING * closing, 0.0), 0.0)
+            closing = -np.einsum("ij,ij->i", self.pins_v - centre_v, normal)
+            force, stiffness, damping = _penalty(radius - distance, closing, WHEEL_STIFFNESS,
+                                                 WHEEL_DAMPING)
             for j in np.flatnonzero(force > 0.0):
                 pin[j] += force[j] * normal[j]
                 on_body(body, centre, -force[j] * normal[j])
-                springs.append((*normal_spring(WHEEL_STIFFNESS, WHEEL_DAMPING, normal[j]),
+                springs.append((*normal_spring(stiffness[j], damping[j], normal[j]),
                                 self._pin_members(j) + [(body, centre, -1.0)]))
 
-        # tyres: both half-wheels at the wheel's compression
+        # tyres: both half-wheels at the wheel's compression, the generalized force minus
+        # the load times the compression's gradient (shared among the links beneath by
+        # their weights in the blend, each along its own normal)
         self.tyre_force = np.zeros(len(self.wheels))
+        self.tyre_terms = []
+        tyres = np.zeros(3 * len(self.nodes))
         for w, pair in enumerate(v.tyres):
-            k = self.tyre_link[w]
-            if k < 0:
+            share = self.tyre_share[w]
+            if share is None:
                 continue
-            compression, rate_ = self.compression[w], self.compression_rate[w]
-            force = sum(v.load(tyre, compression, rate_) for tyre in pair)
+            weights, gradient = share
+            compression = self.compression[w]
+            force = sum(v.load(tyre, compression, self.compression_rate[w]) for tyre in pair)
             self.tyre_force[w] = force
-            push = force * self.n[k]
-            point = self.link_pos[k] + self.tyre_along[w] * self.u[k]
-            on_body(1 + w, self.wheels[w], push)
-            share = self.tyre_along[w] / lay.LINK_PITCH
-            seat[k, 0] -= (0.5 - share) * push
-            seat[k, 1] -= (0.5 + share) * push
-            if compression > 0.0:
-                stiffness = max(force / compression, TYRE_STIFFNESS_FLOOR)
-                springs.append((*normal_spring(stiffness, 0.0, self.n[k]),
-                                [(1 + w, self.wheels[w], 1.0),
-                                 (self.link0 + k, point, -1.0)]))
+            tyres -= force * (weights @ gradient)  # pushes the compression back
+            if force > 0.0:
+                slope = sum(v.tangent(tyre, compression) for tyre in pair)
+                self.tyre_terms.append((w, force, slope))
 
         # pins onto the seats of the links either side
         seat[:, 0] += 0.5 * pin
@@ -303,15 +398,15 @@ class Contacts:
         bodies[links, :2] += seat[:, 0] + seat[:, 1]
         bodies[links, 2] += (r0[:, 0] * seat[:, 0, 1] - r0[:, 1] * seat[:, 0, 0]
                              + r1[:, 0] * seat[:, 1, 1] - r1[:, 1] * seat[:, 1, 0])
-        self.generalized = bodies.reshape(-1)
+        self.generalized = bodies.reshape(-1) + tyres
         self.springs = springs
 
     def _settle_damping(self, bodies, springs):
         c = SETTLE_DAMPING
-        bodies[0, :2] -= c["hull"] * self.hull_v[:2]
+        bodies[0, :2] -= np.array(c["hull"]) * self.hull_v[:2]
         bodies[0, 2] -= c["hull_pitch"] * self.hull_v[2]
         zero = np.zeros((2, 2))
-        springs.append((zero, c["hull"] * np.eye(2), [(0, self.body_pos[0], 1.0)]))
+        springs.append((zero, np.diag(c["hull"]), [(0, self.body_pos[0], 1.0)]))
         for w in range(len(self.wheels)):
             bodies[1 + w, :2] -= c["arm"] * self.wheels_v[w]
             springs.append((zero, c["arm"] * np.eye(2), [(1 + w, self.wheels[w], 1.0)]))

@@ -41,6 +41,8 @@ SPROCKET_AHEAD = 0.80  # m, sprocket centre ahead of station 1 (assumed)
 SPROCKET_HEIGHT = 0.80  # m above the ground (assumed)
 IDLER_BEHIND = 0.70  # m, idler centre behind station 6 (first guess; closes the loop)
 IDLER_HEIGHT = 0.62  # m (assumed)
+BEND_RADIUS = 0.01  # m, the path's turn where the track leaves the ground run (a sharp bend)
+BEND_CLEARANCE = 0.06  # m, beyond where the rising link would touch the end wheels' tyres
 ROLLER_LIFT = 0.01  # m, the roller's top above the straight top run (assumed)
 CRANK_LENGTH = 0.25  # m, idler crank, pivot ahead of and above the idler (assumed)
 CRANK_ANGLE = math.radians(30.0)  # the crank's angle above horizontal (assumed)
@@ -178,25 +180,36 @@ class Layout:
         return a / np.hypot(*a), b / np.hypot(*b)
 
     def arc(self, index):
-        """The loop's arc round circle `index` (0 last wheel, 1 first wheel, 2 sprocket,
-        3 roller, 4 idler)."""
+        """The loop's arc round circle `index` (0 the bend behind the last wheel, 1 the bend
+        ahead of the first, 2 sprocket, 3 roller, 4 idler)."""
         return self.path.pieces[2 * ((index - 1) % 5) + 1]
 
     def _loop(self, idler_x):
         idler = np.array([idler_x, IDLER_HEIGHT])
-        wheel_path_radius = self.wheel_centres[0][1] - LINK_OUTER  # bottom run on y = LINK_OUTER
         top = loop_path([(self.sprocket, SPROCKET_PITCH_RADIUS), (idler, IDLER_PIN_RADIUS)])
         a, b = top.pieces[0].start, top.pieces[0].end  # the top run, sprocket to idler
         roller_x = 0.5 * (self.station_x[2] + self.station_x[3])
         line_y = a[1] + (b[1] - a[1]) * (roller_x - a[0]) / (b[0] - a[0])
         roller = np.array([roller_x, line_y + ROLLER_LIFT - ROLLER_PIN_RADIUS])
-        circles = [(self.wheel_centres[-1], wheel_path_radius),
-                   (self.wheel_centres[0], wheel_path_radius),
-                   (self.sprocket, SPROCKET_PITCH_RADIUS),
-                   (roller, ROLLER_PIN_RADIUS),
-                   (idler, IDLER_PIN_RADIUS)]
+        # The track leaves the ground run at a bend ahead of the first wheel and behind the
+        # last (it does not wrap them): far enough out that the rising link clears the tyre
+        # (a bend of angle b at x from the wheel's centre clears it for x > rho tan(b / 2),
+        # rho the wheel centre's height above the pin line).
+        rho = self.wheel_centres[0][1] - LINK_OUTER
+        offsets = [0.15, 0.15]
+        for _ in range(3):
+            bends = [np.array([self.station_x[-1] - offsets[1], LINK_OUTER + BEND_RADIUS]),
+                     np.array([self.station_x[0] + offsets[0], LINK_OUTER + BEND_RADIUS])]
+            circles = [(bends[0], BEND_RADIUS), (bends[1], BEND_RADIUS),
+                       (self.sprocket, SPROCKET_PITCH_RADIUS), (roller, ROLLER_PIN_RADIUS),
+                       (idler, IDLER_PIN_RADIUS)]
+            path = loop_path(circles)
+            rising = [path.pieces[8], path.pieces[2]]  # down from the idler, up to the sprocket
+            angles = [abs(math.atan2(*(line.end - line.start)[::-1])) for line in rising]
+            offsets = [rho * math.tan(0.5 * min(angles[1], math.pi - angles[1])) + BEND_CLEARANCE,
+                       rho * math.tan(0.5 * min(angles[0], math.pi - angles[0])) + BEND_CLEARANCE]
+        self.bends = bends
         # start the pins mid-way along the bottom run
-        path = loop_path(circles)
         return _Shifted(path, path.pieces[0].length / 2), idler, roller
 
 

@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 import exudyn as exu
-from exudyn.itemInterface import (LoadForceVector, LoadTorqueVector, MarkerBodyPosition,
+from exudyn.itemInterface import (LoadMassProportional, MarkerBodyMass, MarkerBodyPosition,
                                   MarkerNodeCoordinate, NodePointGround, NodeRigidBody2D,
                                   ObjectConnectorCartesianSpringDamper,
                                   ObjectConnectorCoordinateSpringDamper, ObjectJointRevolute2D,
@@ -146,6 +146,7 @@ class Vehicle:
     def __init__(self, course, speed, fmu_dir=None, linear=None, coupling="corrected",
                  statics=None):
         self.course, self.speed = course, speed
+        self.fmu_dir, self.linear = fmu_dir, linear
         self.statics = statics or static_points(fmu_dir)
         compression, stretch, _ = self.statics
         self.layout = geo = lay.Layout(compression, lay.LINK_PITCH + stretch)
@@ -190,8 +191,8 @@ class Vehicle:
         damping = 2 * math.sqrt(stiffness * self.hull_mass)
 
         def surge(mbs, t, item, displacement, velocity, *_):
-            if self.settling:
-                return damping * velocity
+            if self.settling:  # held where it stands (the ground is frictionless)
+                return stiffness * displacement + damping * velocity
             return stiffness * (displacement - speed * t) + damping * (velocity - speed)
 
         mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
@@ -307,6 +308,12 @@ class Vehicle:
             self.coupling.add(radial, lambda c=rc: _seat_deflection(*connector_state(mbs, c)))
             self.coupling.add(torsion, self._connector_reader(tc, offset))
 
+        # gravity on every body
+        for body in [hull, *self.arm_bodies, crank, *self.link_bodies]:
+            mbs.AddLoad(LoadMassProportional(
+                markerNumber=mbs.AddMarker(MarkerBodyMass(bodyNumber=body)),
+                loadVector=[0.0, -GRAVITY, 0.0]))
+
         from .contacts import Contacts
         self.contacts = Contacts(self)
         self.contacts.add_object()
@@ -319,6 +326,12 @@ class Vehicle:
         if self.settling:
             return component.relaxed(deflection)
         return component.host_load(deflection, rate)
+
+    def tangent(self, component, deflection, step=1e-7):
+        """The slope of what `load` applies at the deflection (for the contacts' Jacobian):
+        the load law's tangent, not its secant."""
+        return (self.load(component, deflection + step, 0.0)
+                - self.load(component, deflection - step, 0.0)) / (2 * step)
 
     def _radial_force(self, bush, displacement, velocity):
         deflection, rate = _seat_deflection(displacement, velocity)
@@ -339,34 +352,11 @@ class Vehicle:
 
     # --- static state, run, records ---------------------------------------------------------
 
-    def settle(self, duration=0.6, step=2e-3):
-        """The static point: the vehicle at rest, every FMU relaxed at its deflection (its
-        output before start), damped to rest by a dynamic solve (the contacts are no part
-        of exudyn's Jacobian, so its static solver sees a mechanism). Becomes the initial
-        state; the run's initial velocities are then set from the speed."""
-        mbs = self.mbs
-        velocities = mbs.systemData.GetODE2Coordinates_t(exu.ConfigurationType.Initial)
-        mbs.systemData.SetODE2Coordinates_t(0 * velocities, exu.ConfigurationType.Initial)
-        settings = exu.SimulationSettings()
-        settings.timeIntegration.verboseMode = VERBOSE
-        settings.solution.file.write = False
-        settings.solution.sensors.active = False
-        settings.timeIntegration.endTime = duration
-        settings.timeIntegration.numberOfSteps = int(round(duration / step))
-        settings.timeIntegration.generalizedAlpha.spectralRadius = 0.0
-        configure(settings)
-        self.settling = True
-        try:
-            if not mbs.SolveDynamic(settings,
-                                    solverType=exu.DynamicSolverType.GeneralizedAlpha):
-                raise VehicleError("the static point: exudyn's solver failed settling the "
-                                   "vehicle at rest")
-        finally:
-            self.settling = False
-        settled = mbs.systemData.GetODE2Coordinates(exu.ConfigurationType.Current)
-        mbs.systemData.SetODE2Coordinates(settled, exu.ConfigurationType.Initial)
-        mbs.systemData.SetODE2Coordinates_t(velocities, exu.ConfigurationType.Initial)
-        self.contacts.rebase(settled)
+    def settle(self, longest=2.0, step=2e-3, store=True):
+        """To the static point, solved once and stored (static.py); returns the settling
+        time it took (0.0 from the store)."""
+        from .static import settle
+        return settle(self, longest, step, store)
 
     def _record(self, t):
         from .outputs import snapshot
@@ -376,6 +366,7 @@ class Vehicle:
     def run(self, end_time, step, settle=True):
         if settle:
             self.settle()
+        self.host_steps = math.ceil(end_time / step - 1e-9)
         try:
             self.host = solve(self.mbs, self.coupling, end_time, step, settings=run_settings())
         except exu.SolverError:
@@ -385,6 +376,16 @@ class Vehicle:
         from .outputs import histories
         return histories(self)
 
+    def solver_statistics(self):
+        """exudyn's Newton iterations per solve of a step, solves (coupling passes) per
+        accepted step, and the steps accepted against the host steps asked for (more
+        where steps were shortened)."""
+        it = self.mbs.sys["dynamicSolver"].it
+        passes = max(self.coupling.total_passes, 1)
+        return {"newton_per_pass": it.newtonStepsCount / passes,
+                "passes_per_step": passes / max(self.coupling.steps, 1),
+                "steps": self.coupling.steps, "host_steps": self.host_steps}
+
 
 def run_settings():
     """The settings of the coupled run (exudyn_host.solve adds what the coupling needs)."""
@@ -392,6 +393,9 @@ def run_settings():
     settings.timeIntegration.verboseMode = VERBOSE
     settings.solution.file.write = False
     settings.solution.sensors.active = False
+    # a Jacobian per iteration: the contacts change from step to step (the modified
+    # Newton's kept Jacobian took 14 iterations a pass against 8)
+    settings.timeIntegration.newton.useModifiedNewton = False
     configure(settings)
     return settings
 
