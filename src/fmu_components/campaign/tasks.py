@@ -48,7 +48,8 @@ def fit_runner(engine):
 
     def run(problem, points):
         outcomes = [None] * len(points)
-        progress = Progress(len(points), what="fitting from each start")
+        starts = len(points)
+        progress = Progress(starts, what=f"fitting from {starts} start{'s' if starts > 1 else ''}")
         try:
             for index, outcome in engine.stream(solve_start, [(problem, p) for p in points]):
                 if isinstance(outcome, Failure):
