@@ -20,16 +20,13 @@ static const Face FMI2 = {"fmi2",
    Instance, passed on as it is. */
 static inline fmi2Status fmi2_status(Status status) { return (fmi2Status)status; }
 
-const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
-const char *fmi2GetVersion(void) { return fmi2Version; }
-
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation,
                               const fmi2CallbackFunctions *functions, fmi2Boolean visible,
                               fmi2Boolean loggingOn) {
     (void)visible;
-    HostLog log = fmi2_host_log(instanceName, functions);
-    if (fmi2_instantiation_problem(&log, instanceName, fmuType, fmuGUID, fmuResourceLocation,
+    HostLog log;
+    if (fmi2_instantiation_refused(&log, instanceName, fmuType, fmuGUID, fmuResourceLocation,
                                    functions, MODEL_INFO.name, MODEL_INFO.guid,
                                    1u << fmi2CoSimulation | 1u << fmi2ModelExchange))
         return NULL;

@@ -23,7 +23,9 @@ static void send_fmi2(const HostLog *log, Status status, const char *category,
     logger(log->environment, name, (fmi2Status)status, category, escaped);
 }
 
-HostLog fmi2_host_log(fmi2String instance_name, const fmi2CallbackFunctions *functions) {
+/* The host's logger (may be NULL) for the instance being made. */
+static HostLog fmi2_host_log(fmi2String instance_name,
+                             const fmi2CallbackFunctions *functions) {
     HostLog log = {0};
     if (functions != NULL) {
         log.logger = (HostLogger)functions->logger;
@@ -34,10 +36,14 @@ HostLog fmi2_host_log(fmi2String instance_name, const fmi2CallbackFunctions *fun
     return log;
 }
 
-int fmi2_instantiation_problem(const HostLog *log, fmi2String instance_name, fmi2Type type,
+const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
+const char *fmi2GetVersion(void) { return fmi2Version; }
+
+int fmi2_instantiation_refused(HostLog *log, fmi2String instance_name, fmi2Type type,
                                fmi2String guid, fmi2String resource_location,
                                const fmi2CallbackFunctions *functions, const char *name,
                                const char *expected_guid, unsigned types) {
+    *log = fmi2_host_log(instance_name, functions);
     char interface_problem[160];
     int offered = (unsigned)type <= fmi2CoSimulation && (types & (1u << type));
     if (!offered)

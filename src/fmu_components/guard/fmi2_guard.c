@@ -247,15 +247,12 @@ static fmi2Status forward(fmi2Component c, const char *function,
     return guard ? close_call(guard, call(guard->engine)) : refused;
 }
 
-const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
-const char *fmi2GetVersion(void) { return fmi2Version; }
-
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation,
                               const fmi2CallbackFunctions *functions, fmi2Boolean visible,
                               fmi2Boolean loggingOn) {
-    HostLog log = fmi2_host_log(instanceName, functions);
-    if (fmi2_instantiation_problem(&log, instanceName, fmuType, fmuGUID, fmuResourceLocation,
+    HostLog log;
+    if (fmi2_instantiation_refused(&log, instanceName, fmuType, fmuGUID, fmuResourceLocation,
                                    functions, FMU_NAME, FMU_GUID, 1u << fmi2CoSimulation))
         return NULL;
     const char *engine_problem = engine_load();

@@ -45,16 +45,13 @@ static void update(Driver *d) {
     d->value[RATE] = (next - x) / d->step;
 }
 
-const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
-const char *fmi2GetVersion(void) { return fmi2Version; }
-
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation,
                               const fmi2CallbackFunctions *functions, fmi2Boolean visible,
                               fmi2Boolean loggingOn) {
     (void)visible;
-    HostLog log = fmi2_host_log(instanceName, functions);
-    if (fmi2_instantiation_problem(&log, instanceName, fmuType, fmuGUID, fmuResourceLocation,
+    HostLog log;
+    if (fmi2_instantiation_refused(&log, instanceName, fmuType, fmuGUID, fmuResourceLocation,
                                    functions, DRIVER_NAME, DRIVER_GUID,
                                    1u << fmi2CoSimulation))
         return NULL;
