@@ -1,5 +1,5 @@
-"""A hostile host written in C (tests/c_host/fuzz_host.c) drives each flavour's binary
-through its raw FMI interface, in a subprocess so a crash or a hang shows as a signal:
+"""A hostile host written in C (tests/c_host/fuzz_host.c, fuzz_lifecycle.c) drives each
+flavour's binary through its raw FMI interface, in a subprocess so a crash or a hang shows as a signal:
 random call sequences with random arguments, malformed fmi2Instantiate arguments, broken
 and forged serialized states, a logger calling back into the instance, instantiate/free
 cycles and logged messages with the RSS measured, instances in threads, threads calling one
@@ -33,13 +33,18 @@ RSS_BYTES_PER_CYCLE = 64  # spec section 8: no growth; a page per 64 cycles at m
 CYCLES = 5000  # instantiate/free cycles measured, after a fifth as many to warm up
 
 
+def fuzz_host_sources():
+    hosts = ROOT / "tests" / "c_host"
+    return [str(hosts / "fuzz_host.c"), str(hosts / "fuzz_lifecycle.c"),
+            str(hosts / "fmi3_as_fmi2.c"),
+            str(ROOT / "src" / "fmu_components" / "c" / "state_envelope.c")]
+
+
 def compile_fuzz_host(destination):
     runtime = ROOT / "src" / "fmu_components" / "c"
     subprocess.run(["gcc", "-O2", "-Wall", "-Wextra", "-Werror",
                     f"-I{Path(fmpy.__file__).parent / 'c-code'}", f"-I{runtime}",
-                    str(ROOT / "tests" / "c_host" / "fuzz_host.c"),
-                    str(ROOT / "tests" / "c_host" / "fmi3_as_fmi2.c"),
-                    str(runtime / "state_envelope.c"), "-o", str(destination),
+                    *fuzz_host_sources(), "-o", str(destination),
                     "-ldl", "-lm", "-lpthread"], check=True)
     return destination
 
@@ -212,9 +217,7 @@ def test_random_calls_and_broken_states_give_no_sanitizer_report(all_fmus, tmp_p
     host = tmp_path / "fuzz_host_sanitized"
     subprocess.run(["gcc", *SANITIZE, "-Wall", "-Werror",
                     f"-I{Path(fmpy.__file__).parent / 'c-code'}", f"-I{runtime}",
-                    str(ROOT / "tests" / "c_host" / "fuzz_host.c"),
-                    str(ROOT / "tests" / "c_host" / "fmi3_as_fmi2.c"),
-                    str(runtime / "state_envelope.c"), "-o", str(host),
+                    *fuzz_host_sources(), "-o", str(host),
                     "-ldl", "-lm", "-lpthread"], check=True)
     fmus = all_fmus[flavour]
     torsion = sanitized_target(fmus["TrackBushTorsion"], tmp_path / "torsion", host)
