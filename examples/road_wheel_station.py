@@ -373,6 +373,7 @@ def simulate(speed, profile, step, fmu_dir=None, linear=None, end_time=None,
     station = Station(speed, profile, fmu_dir, linear, coupling, path, reached, parameters)
     result = station.run(end_time, step)
     result["costs"] = station.coupling.costs()
+    result["solve_cpu"] = station.host.solve_cpu  # s, the dynamic solve's CPU time
     # Work done on the damper, and what its dashpot dissipated (FMU only): J.
     result["damper_work"] = cumulative_trapezoid(result["damper_torque"], result["arm_angle"],
                                                  initial=0)
