@@ -28,13 +28,12 @@ path). A bank is used by the thread that made it: another thread's call is refus
 
 import ctypes
 import threading
-import warnings
 
 import numpy as np
 
 from .bank_build import library_path
 from .errors import CouplingError, StepDiscarded
-from .master import Verdict
+from .master import Verdict, count_unconverged
 from .schemes import scheme_named
 
 MAX_OUTPUTS = 8
@@ -257,7 +256,7 @@ class Bank:
         if verdict == ACCEPT:
             self.last_mismatch = mismatch = call.mismatch
             if mismatch > self.scheme.tolerance and self.scheme.warn_unconverged:
-                self._unconverged(time, mismatch)
+                count_unconverged(self, time, mismatch)
             return Verdict(mismatch=mismatch)
         if verdict in (FAILED, BUSY):
             self._raise(busy=verdict == BUSY)
@@ -271,14 +270,6 @@ class Bank:
             for i in self._flagged[:call.n_flagged]:
                 self._corrected_law(i, time)
         return Verdict(repeat=True, mismatch=call.mismatch)
-
-    def _unconverged(self, time, mismatch):
-        self.unconverged_steps += 1
-        if self.unconverged_steps == 1:
-            warnings.warn(f"{self.scheme.name} coupling: at t = {time:.6g} s the loads still "
-                          f"differ by {mismatch:.2g} of their scale after {self.passes} "
-                          f"passes (the limit); further steps like it are counted in "
-                          f"unconverged_steps", stacklevel=3)
 
     def accept(self, time):
         """The host accepted its step to `time` (at the time reached: only records)."""
