@@ -272,6 +272,13 @@ def test_the_symbolic_laws_are_the_load_laws_to_the_bit():
             law = LoadLaw(*Laws.laws[i, :4], unilateral=bool(Laws.unilateral[i]),
                           touch_stiffness=Laws.laws[i, 4])
             assert expression.Evaluate() == law(value)
+    # a contact's law about a point with no number (x* NaN) out of touch: max(x*, 0) is
+    # NaN in Python, so the touch gives no load; so in exudyn
+    Laws.laws[1] = [math.nan, -1.0, 1e7, 0.0, 1e7, 0.0, 5e6, 2e7]
+    laws.update()
+    x.SetValue(1e-3)
+    law = LoadLaw(math.nan, -1.0, 1e7, 0.0, unilateral=True, touch_stiffness=1e7)
+    assert expressions[1].Evaluate() == law(1e-3) == 0.0
 
 
 def test_without_a_compiler_the_bank_says_so(monkeypatch, tmp_path):
