@@ -13,8 +13,9 @@ second solve is), so every step saves, steps, restores and steps each FMU again,
 makes every law. Per count and path: microseconds per host step and per instance step,
 the real-time factor (simulated time over wall time), and the ratio of the per-instance
 cost to the C host's corrected cycle (c_host/bench_host.c `rollback`, as
-rollback_cost.py measures it), mix-weighted, measured in this run. Wall times on a
-machine that may be loaded: the load average is printed with them.
+rollback_cost.py measures it), mix-weighted, measured in this run, wall time to wall time
+and CPU time to CPU time (on a loaded machine the wall times of both stretch unevenly:
+compare CPU times there). The load average is printed with them.
 """
 
 import argparse
@@ -110,8 +111,9 @@ def run_bank(fmus, names, x, second, steps):
 
 
 def c_host_cycles(fmus, repeats, steps):
-    """{FMU: median microseconds of the C host's corrected cycle} (rollback_cost.py's)."""
-    return {name: statistics.median(r["corrected"])
+    """{FMU: (median microseconds of the C host's corrected cycle, wall and CPU)}
+    (rollback_cost.py's)."""
+    return {name: (statistics.median(r["corrected"]), statistics.median(r["corrected_cpu"]))
             for name, r in measure(fmus, repeats, steps).items()}
 
 
@@ -155,23 +157,26 @@ def main(argv=None):
     load_before = os.getloadavg()[0]
     cycles = c_host_cycles(fmus, 3 if args.quick else 5, 2000 if args.quick else 10000)
     print("# The coupling at vehicle scale: Python path, compiled path (bank), C host\n")
-    print("C host's corrected cycle (us, median): "
-          + ", ".join(f"{n} {c:.3f}" for n, c in cycles.items()) + "\n")
+    print("C host's corrected cycle (us, median, wall / CPU): "
+          + ", ".join(f"{n} {c:.3f} / {u:.3f}" for n, (c, u) in cycles.items()) + "\n")
     print("| instances | path | us per host step (wall) | us per instance step (wall) | "
-          "CPU us per host step | real-time factor (wall) | per instance / C host |")
-    print("|---|---|---|---|---|---|---|")
+          "CPU us per host step | real-time factor (wall) | per instance / C host (wall) | "
+          "per instance / C host (CPU) |")
+    print("|---|---|---|---|---|---|---|---|")
     for count in args.counts:
         counts = mix(count)
         n = sum(counts.values())
-        c_host = sum(cycles[name] * k for name, k in counts.items()) / n  # us per instance
+        # us per instance, mix-weighted: wall, CPU
+        c_host, c_host_cpu = (sum(cycles[name][j] * k for name, k in counts.items()) / n
+                              for j in (0, 1))
         steps = max(args.steps, args.python_steps)
         names, x, second = inputs(counts, steps)
         for path, run, k in (("Python", run_python, args.python_steps),
                              ("compiled", run_bank, args.steps)):
             wall, cpu = run(fmus, names, x, second, k)
             print(f"| {n} | {path} | {wall * 1e6:.1f} | {wall * 1e6 / n:.3f} | "
-                  f"{cpu * 1e6:.1f} | {STEP / wall:.3g} | {wall * 1e6 / n / c_host:.2f} |",
-                  flush=True)
+                  f"{cpu * 1e6:.1f} | {STEP / wall:.3g} | {wall * 1e6 / n / c_host:.2f} | "
+                  f"{cpu * 1e6 / n / c_host_cpu:.2f} |", flush=True)
     print(f"\nload average (1 min) {load_before:.2f} before, {os.getloadavg()[0]:.2f} after, "
           f"{os.cpu_count()} CPUs; 1 ms host steps, `corrected`, two passes per step.")
     if args.long:

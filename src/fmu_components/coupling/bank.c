@@ -42,6 +42,8 @@ EXPORT void bank_bind(Bank *bank, const double *deflection, double *laws, double
     bank->flagged = flagged;
 }
 
+EXPORT void bank_bind_call(Bank *bank, BankCall *call) { bank->call = call; }
+
 EXPORT void bank_set_scheme(Bank *bank, int scheme, int passes, double tolerance) {
     bank->scheme = scheme;
     bank->passes = passes;
@@ -241,8 +243,9 @@ static int restore(Bank *bank, int i) {
 
 /* Every instance: undo a trial of a step given up, save the state, and the first law.
    Instances whose first law is their linearised step are listed in `flagged`. */
-EXPORT int bank_begin_step(Bank *bank, double time) {
+EXPORT int bank_begin_step(Bank *bank) {
     if (__sync_lock_test_and_set(&bank->busy, 1)) return BUSY;
+    double time = bank->call->time;
     int result = 0;
     bank->n_flagged = 0;
     for (int i = 0; i < bank->n && result == 0; i++) {
@@ -345,14 +348,17 @@ static int corrected_law(Bank *bank, int i, double time) {
     return 0;
 }
 
-/* After the host's solve to `time` (its deflections in the bound array): step every
-   instance, judge the pass (the scheme's mismatch, written to *mismatch), and on REPEAT
-   the next laws (instances to linearise listed in `flagged`, *n_flagged of them). A
-   discarded step restores the whole bank (RETRY); a host that cannot retry has the
-   instance's step cut into up to `max_pieces` pieces instead. */
-EXPORT int bank_end_pass(Bank *bank, double time, int pass, int max_pieces,
-                         double *mismatch, int *n_flagged, int *cut) {
+/* After the host's solve to the call's time (its deflections in the bound array): step
+   every instance, judge the pass (the scheme's mismatch, into the call's mismatch), and on
+   REPEAT the next laws (instances to linearise listed in `flagged`, the call's n_flagged
+   of them). A discarded step restores the whole bank (RETRY); a host that cannot retry has
+   the instance's step cut into up to the call's max_pieces pieces instead. */
+EXPORT int bank_end_pass(Bank *bank) {
     if (__sync_lock_test_and_set(&bank->busy, 1)) return BUSY;
+    BankCall *call = bank->call;
+    double time = call->time;
+    int pass = call->pass, max_pieces = call->max_pieces;
+    int *cut = &call->cut;
     int verdict = ACCEPT;
     double worst = 0.0;
     bank->n_flagged = 0;
@@ -395,14 +401,16 @@ EXPORT int bank_end_pass(Bank *bank, double time, int pass, int max_pieces,
             break;
         }
 done:
-    *mismatch = worst;
-    *n_flagged = bank->n_flagged;
+    call->mismatch = worst;
+    call->n_flagged = bank->n_flagged;
     __sync_lock_release(&bank->busy);
     return verdict;
 }
 
-/* The host accepted its step: every instance's last trial becomes its accepted point. */
-EXPORT int bank_accept(Bank *bank, double time) {
+/* The host accepted its step (to the call's time): every instance's last trial becomes
+   its accepted point. */
+EXPORT int bank_accept(Bank *bank) {
+    double time = bank->call->time;
     for (int i = 0; i < bank->n; i++) {
         Instance *c = &bank->instances[i];
         if (!c->tried) return fail(bank, i, FAILED_NO_STEP, 0, time, 0.0);

@@ -86,8 +86,21 @@ typedef struct {
     unsigned state_vrs[MAX_STATES], unknowns[MAX_STATES + 2], knowns[MAX_STATES + 2];
 } Instance;
 
+/* The arguments and results of a host step's calls (begin_step, end_pass, accept), in a
+   block bank.py binds once: a call then passes the bank alone, which costs Python a
+   fraction of a call with arguments to convert (bank.py's ctypes). */
+typedef struct {
+    double time;     /* in: the time the step reaches */
+    double mismatch; /* out: the pass's mismatch (end_pass) */
+    int pass;        /* in: the pass's number, from 1 (end_pass) */
+    int max_pieces;  /* in: 1, or a discarded step's most pieces for a host that cannot retry */
+    int n_flagged;   /* out: instances whose law Python makes (listed in `flagged`) */
+    int cut;         /* out: steps cut into pieces in the pass */
+} BankCall;
+
 typedef struct {
     int n, scheme, passes;
+    BankCall *call;
     double tolerance;
     Instance *instances;
     /* the caller's arrays (bank.py): rows of n */

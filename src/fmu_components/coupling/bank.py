@@ -27,15 +27,13 @@ path). A bank is used by the thread that made it: another thread's call is refus
 """
 
 import ctypes
-import math
 import threading
-import warnings
 
 import numpy as np
 
 from .bank_build import library_path
 from .errors import CouplingError, StepDiscarded
-from .master import Verdict
+from .master import Verdict, count_unconverged
 from .schemes import scheme_named
 
 MAX_OUTPUTS = 8
@@ -82,13 +80,21 @@ def library():
         lib.bank_failure.argtypes = [pointer] * 7
         lib.bank_lagged_laws.argtypes = [pointer]
         lib.bank_law_loads.argtypes = [pointer] * 4
-        lib.bank_begin_step.argtypes = [pointer, double]
-        lib.bank_end_pass.argtypes = [pointer, double, integer, integer, pointer, pointer,
-                                      pointer]
-        lib.bank_accept.argtypes = [pointer, double]
+        lib.bank_bind_call.argtypes = [pointer, pointer]
+        # the calls of every host step take the bank alone, as a c_void_p (no argtypes:
+        # ctypes passes it as it is; converting arguments cost more than the calls' work)
+        for name in ("bank_begin_step", "bank_end_pass", "bank_accept"):
+            getattr(lib, name).argtypes = None
         lib.bank_reject.argtypes = [pointer]
         _library = lib
     return _library
+
+
+class _Call(ctypes.Structure):
+    """bank.h's BankCall: the arguments and results of a host step's calls."""
+    _fields_ = [("time", ctypes.c_double), ("mismatch", ctypes.c_double),
+                ("pass_", ctypes.c_int), ("max_pieces", ctypes.c_int),
+                ("n_flagged", ctypes.c_int), ("cut", ctypes.c_int)]
 
 
 def _address(array):
@@ -140,7 +146,15 @@ class Bank:
         self.load_index = np.zeros(n, dtype=int)
         for i, component in enumerate(self.components):
             self._hand_over(i, component)
-        self._out = (ctypes.c_double(), ctypes.c_int(), ctypes.c_int())
+        self._load_cells = np.arange(n) * MAX_OUTPUTS + self.load_index  # in outputs, flat
+        # a host step's calls: their arguments and results in a block bound once, the
+        # functions and the bank's pointer looked up once (a fixed few microseconds of
+        # Python per host step, whatever the number of instances)
+        self._call = _Call(max_pieces=1 if host_can_retry else 64)
+        lib.bank_bind_call(self._handle, ctypes.byref(self._call))
+        self._bank = ctypes.c_void_p(self._handle)
+        self._begin, self._end, self._accept = lib.bank_begin_step, lib.bank_end_pass, \
+            lib.bank_accept
         self.time = None
         self.passes = self.steps = self.total_passes = self.retries = 0
         self.unconverged_steps = 0
@@ -215,27 +229,35 @@ class Bank:
 
     def begin_step(self, time):
         """The host starts a step to `time` from the last accepted point."""
-        self._self_check()
+        if threading.get_ident() != self._owner:
+            self._self_check()
         self.passes = 0
-        flagged = self._lib.bank_begin_step(self._handle, time)
-        if flagged < 0:
-            self._raise(busy=flagged == BUSY)
-        for i in self._flagged[:flagged]:
-            self._predicted_law(i, time)
+        self._call.time = time
+        flagged = self._begin(self._bank)
+        if flagged:
+            if flagged < 0:
+                self._raise(busy=flagged == BUSY)
+            for i in self._flagged[:flagged]:
+                self._predicted_law(i, time)
 
     def end_pass(self, time, deflection):
         """After the host's solve to `time`, its deflections: step each FMU along the
         secant to them and judge the pass (master.py's Verdict)."""
-        self._self_check()
+        if threading.get_ident() != self._owner:
+            self._self_check()
         self.passes += 1
         self.total_passes += 1
-        np.copyto(self.deflection, deflection)
-        mismatch, flagged, cut = self._out
-        verdict = self._lib.bank_end_pass(self._handle, time, self.passes,
-                                          1 if self.host_can_retry else 64,
-                                          ctypes.byref(mismatch), ctypes.byref(flagged),
-                                          ctypes.byref(cut))
-        self.retries += cut.value
+        self.deflection[...] = deflection
+        call = self._call
+        call.time, call.pass_ = time, self.passes
+        verdict = self._end(self._bank)
+        if call.cut:
+            self.retries += call.cut
+        if verdict == ACCEPT:
+            self.last_mismatch = mismatch = call.mismatch
+            if mismatch > self.scheme.tolerance and self.scheme.warn_unconverged:
+                count_unconverged(self, time, mismatch)
+            return Verdict(mismatch=mismatch)
         if verdict in (FAILED, BUSY):
             self._raise(busy=verdict == BUSY)
         if verdict == RETRY:
@@ -243,32 +265,22 @@ class Bank:
                 self._raise(cut_too=True)
             self.retries += 1
             return Verdict(retry_step=0.5 * (time - self.time))
-        self.last_mismatch = mismatch.value
-        if verdict == ACCEPT:
-            if mismatch.value > self.scheme.tolerance and self.scheme.warn_unconverged:
-                self.unconverged_steps += 1
-                if self.unconverged_steps == 1:
-                    warnings.warn(f"{self.scheme.name} coupling: at t = {time:.6g} s the "
-                                  f"loads still differ by {mismatch.value:.2g} of their "
-                                  f"scale after {self.passes} passes (the limit); further "
-                                  f"steps like it are counted in unconverged_steps",
-                                  stacklevel=2)
-            return Verdict(mismatch=mismatch.value)
-        for i in self._flagged[:flagged.value]:
-            self._corrected_law(i, time)
-        return Verdict(repeat=True, mismatch=mismatch.value)
+        self.last_mismatch = call.mismatch
+        if call.n_flagged:
+            for i in self._flagged[:call.n_flagged]:
+                self._corrected_law(i, time)
+        return Verdict(repeat=True, mismatch=call.mismatch)
 
     def accept(self, time):
         """The host accepted its step to `time` (at the time reached: only records)."""
-        self._self_check()
-        if time <= self.time:
-            if self.record:
-                self.record(time)
-            return
-        if self._lib.bank_accept(self._handle, time):
-            self._raise()
-        self.time = time
-        self.steps += 1
+        if threading.get_ident() != self._owner:
+            self._self_check()
+        if time > self.time:
+            self._call.time = time
+            if self._accept(self._bank):
+                self._raise()
+            self.time = time
+            self.steps += 1
         if self.record:
             self.record(time)
 
@@ -327,7 +339,7 @@ class Bank:
     @property
     def loads(self):
         """Each instance's load after the last accepted step."""
-        return self.outputs[np.arange(self.n), self.load_index]
+        return self.outputs.take(self._load_cells)
 
     def costs(self):
         steps, n = max(self.steps, 1), max(self.n, 1)

@@ -39,27 +39,32 @@ class SymbolicLaws:
         self.matrix.SetMatrix(self.bank.laws)
 
     def when(self, condition, if_true, if_false):
+        """exudyn's IfThenElse of symbolic values or numbers."""
         real = self.esym.Real
         return self.esym.IfThenElse(*(v if isinstance(v, real) else real(float(v))
                                       for v in (condition, if_true, if_false)))
 
     def load(self, i, deflection):
         """The symbolic load of instance i's law at a symbolic `deflection`."""
-        when, m = self.when, self.matrix
+        # exudyn's max(a, b) is b > a ? b : a and its min(a, b) b < a ? b : a (ties and NaN
+        # to the first), as Python's max and min of two: LoadLaw's to the bit, each
+        # argument evaluated once (an IfThenElse would evaluate the clamped secant again
+        # in its branch, each time reading the law's numbers from the matrix anew)
+        larger, smaller = self.esym.max, self.esym.min
+        m = self.matrix
         x_star, load, k, half_q, touch, low, high = (m[i, j] for j in (0, 1, 2, 5, 4, 6, 7))
         dx = deflection - x_star
         # LoadLaw.secant, min(max(K + Q/2 dx, low), high), its bounds from the bank; with
         # Q = 0 it is K
-        secant = k + half_q * dx
-        raised = when(low > secant, low, secant)
-        secant = when(high < raised, high, raised)
+        secant = smaller(larger(k + half_q * dx, low), high)
         about = load + secant * dx
         if not self.bank.unilateral[i]:
             return about
-        touching = touch * (deflection - when(x_star > 0.0, x_star, 0.0))
-        return when(deflection <= 0.0, 0.0,
-                    when(load <= 0.0, when(touching > 0.0, touching, 0.0),
-                         when(about > 0.0, about, 0.0)))
+        zero = self.esym.Real(0.0)
+        touching = larger(zero, touch * (deflection - larger(x_star, zero)))
+        return self.esym.IfThenElse(deflection <= zero, zero,
+                                    self.esym.IfThenElse(load <= zero, touching,
+                                                         larger(about, zero)))
 
 
 def symbolic_function(mbs, item, function, name="springForceUserFunction"):

@@ -9,35 +9,44 @@
 
 #define MAX_AUGMENTED (2 * MAX_STATES + 2)
 
-/* The columns of row r that can be nonzero in linearised_step's augmented matrix (d = 2n
-   + 2: two n x n blocks of A on the diagonal, the last two columns, and the 2 x 2 corner),
-   which its powers, their sums and products keep. */
-static int pattern(int d, int r, int *columns) {
-    int n = (d - 2) / 2, count = 0;
-    if (r < 2 * n)
-        for (int j = r < n ? 0 : n, end = j + n; j < end; j++) columns[count++] = j;
-    for (int j = r == d - 1 ? d - 1 : 2 * n; j < d; j++) columns[count++] = j;
-    return count;
-}
-
-/* C = A B for d x d matrices of that pattern, row-major: each entry the sum of its
-   products in the order of j from +0, as in full, without the products by the pattern's
-   zeros (each +0 or -0: adding it to a sum from +0 changes nothing; the entries are
-   finite). A third of a full product's work. */
+/* C = A B for d x d matrices of linearised_step's augmented pattern (d = 2n + 2: two
+   n x n blocks on the diagonal, the last two columns, and the upper triangular 2 x 2
+   corner; its powers, their sums and products keep it), row-major. Each entry is the sum
+   of its products in the order of the inner index from +0, as in a full product, without
+   the products by the pattern's zeros: each is +0 or -0 (the entries are finite), and
+   adding it to a sum from +0 changes nothing, so the bits are a full product's (and
+   linearised.py's _multiply's with the pattern). */
 static void multiply(int d, const double *a, const double *b, double *c) {
-    int columns[MAX_AUGMENTED];
-    for (int r = 0; r < d; r++) {
-        int count = pattern(d, r, columns);
-        const double *row = a + r * d;
-        double *out = c + r * d;
-        for (int k = 0; k < d; k++) out[k] = 0.0;
-        for (int p = 0; p < count; p++) {
-            int k = columns[p];
-            double sum = 0.0;
-            for (int q = 0; q < count; q++) sum += row[columns[q]] * b[columns[q] * d + k];
-            out[k] = sum;
+    int n = (d - 2) / 2, s = 2 * n, t = s + 1;
+    for (int k = 0; k < d * d; k++) c[k] = 0.0;
+    for (int block = 0; block < s; block += n)
+        for (int r = block; r < block + n; r++) {
+            const double *row = a + r * d;
+            double *out = c + r * d;
+            for (int k = block; k < block + n; k++) {
+                double sum = 0.0;
+                for (int j = block; j < block + n; j++) sum += row[j] * b[j * d + k];
+                out[k] = sum;
+            }
+            double last = 0.0, next = 0.0; /* the columns s and t */
+            for (int j = block; j < block + n; j++) {
+                last += row[j] * b[j * d + s];
+                next += row[j] * b[j * d + t];
+            }
+            last += row[s] * b[s * d + s];
+            next += row[s] * b[s * d + t];
+            next += row[t] * b[t * d + t];
+            out[s] = last;
+            out[t] = next;
         }
-    }
+    double corner = 0.0;
+    c[s * d + s] = corner + a[s * d + s] * b[s * d + s];
+    corner = 0.0;
+    corner += a[s * d + s] * b[s * d + t];
+    corner += a[s * d + t] * b[t * d + t];
+    c[s * d + t] = corner;
+    corner = 0.0;
+    c[t * d + t] = corner + a[t * d + t] * b[t * d + t];
 }
 
 /* Solve A X = B (d x d, overwritten), Gaussian elimination with partial pivoting. */

@@ -15,6 +15,7 @@ exudyn is imported here only, and only when these functions run.
 """
 
 import math
+import time
 
 from .master import Coupling
 
@@ -41,6 +42,7 @@ class ExudynCoupling:
         self.coupling = coupling
         self.failure = None
         self.attempts = 0  # steps begun, retries included
+        self.solve_cpu = 0.0  # CPU seconds of the process in the dynamic solve (solve())
 
     def _guarded(self, hook, failed_value):
         def run(mbs, t):
@@ -94,8 +96,9 @@ def solve(mbs, coupling, end_time, step, start_time=0.0, settings=None, host=Non
     implicit generalized-alpha at `step` (shortened only where a component asks for a
     retry) to the first multiple of it at or after end_time, coupling the components by
     the coupling's scheme. Frees the components. Returns the ExudynCoupling (its
-    `attempts` against coupling.steps count retries); `host`, one made already (a bank's,
-    bank_exudyn.py)."""
+    `attempts` against coupling.steps count retries; `solve_cpu`, the solve's CPU time,
+    the system's building and the components' start left out); `host`, one made already
+    (a bank's, bank_exudyn.py)."""
     import exudyn as exu
 
     host = host or ExudynCoupling(mbs, coupling)
@@ -111,7 +114,9 @@ def solve(mbs, coupling, end_time, step, start_time=0.0, settings=None, host=Non
     host.install(settings)
     try:
         coupling.start(start_time)
+        began = time.process_time()
         ok = mbs.SolveDynamic(settings, solverType=exu.DynamicSolverType.GeneralizedAlpha)
+        host.solve_cpu = time.process_time() - began
     except Exception:
         if host.failure is not None:
             raise host.failure from None

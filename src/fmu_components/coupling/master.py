@@ -32,6 +32,17 @@ ACCEPT = Verdict()
 MAX_PIECES = 64
 
 
+def count_unconverged(coupling, time, mismatch):
+    """A step the pass limit stopped before its loads agreed: counted in the coupling's
+    (a Coupling's or a Bank's) unconverged_steps, the first with a warning."""
+    coupling.unconverged_steps += 1
+    if coupling.unconverged_steps == 1:
+        warnings.warn(f"{coupling.scheme.name} coupling: at t = {time:.6g} s the loads still "
+                      f"differ by {mismatch:.2g} of their scale after {coupling.passes} "
+                      f"passes (the limit); further steps like it are counted in "
+                      f"unconverged_steps", stacklevel=3)
+
+
 class Coupling:
     """Components coupled to one host by one scheme. `add(component, read_state)` pairs a
     component with the function that returns its (deflection, rate) at the host's current
@@ -95,12 +106,7 @@ class Coupling:
         self.last_mismatch = mismatch
         if self.scheme.done(self.passes, mismatch):
             if mismatch > self.scheme.tolerance and self.scheme.warn_unconverged:
-                self.unconverged_steps += 1
-                if self.unconverged_steps == 1:
-                    warnings.warn(f"{self.scheme.name} coupling: at t = {time:.6g} s the "
-                                  f"loads still differ by {mismatch:.2g} of their scale "
-                                  f"after {self.passes} passes (the limit); further steps "
-                                  f"like it are counted in unconverged_steps", stacklevel=2)
+                count_unconverged(self, time, mismatch)
             return Verdict(mismatch=mismatch)
         for component in self.components:
             component.law = self.scheme.next_law(component)
