@@ -93,6 +93,15 @@ class Scaling:
             value / self.reference)
         return min(max(u, self.lower), self.upper)
 
+    def reach(self, u):
+        """value(u), or +-inf where it lies beyond the floats (an interval's end far
+        outside the bounds: a parameter the data do not determine)."""
+        try:
+            return self.value(u)
+        except OverflowError:
+            sign = 1.0 if self.kind == "log" else math.copysign(1.0, u)
+            return math.copysign(math.inf, sign * self.reference)
+
     def derivative(self, u):
         """d value / d u."""
         return self.reference * (math.exp(u) if self.kind == "log" else math.cosh(u))
@@ -254,11 +263,12 @@ class FitResult:
 
     def confidence(self):
         """Per free parameter: (low, high) of its 95 % interval, its half-width relative to
-        its value."""
+        its value. An end beyond the floats is +-inf, and so is the half-width: the
+        interval is unbounded."""
         sigma = np.sqrt(np.maximum(np.diag(self.covariance()), 0.0))
         rows = {}
         for s, ui, si in zip(self.free, self.u, sigma):
-            low, high = s.value(ui - 1.96 * si), s.value(ui + 1.96 * si)
+            low, high = s.reach(ui - 1.96 * si), s.reach(ui + 1.96 * si)
             value = s.value(ui)
             rows[s.name] = (low, high, (high - low) / 2.0 / abs(value) if value else math.inf)
         return rows
@@ -294,9 +304,10 @@ class FitResult:
                              f"{low:.3g} .. {high:.3g}); --fix keeps the thesis value, "
                              f"{self.thesis[name]:g}")
             elif self.too_wide(relative):
+                width = "unbounded" if math.isinf(relative) else \
+                    f"+-{relative * 100:.0f} % of its value"
                 notes.append(f"{name} is not identifiable from these data: its 95 % interval "
-                             f"is +-{relative * 100:.0f} % of its value; fix it (--fix) or "
-                             f"add tests that excite it")
+                             f"is {width}; fix it (--fix) or add tests that excite it")
         correlation = self.correlation()
         names = [s.name for s in self.free]
         for i in range(len(names)):
