@@ -262,6 +262,27 @@ def test_a_verify_campaign_equals_the_serial_run(cluster, tmp_path, native_fmus)
     assert_bitwise_equal(rows, expected)
 
 
+def test_validate_streams_a_results_table_equal_to_the_serial_run(cluster, tmp_path,
+                                                                   native_fmus, capsys):
+    """validate, as verify, leaves REPORT/results.csv, a row per case; on the cluster its
+    numbers and the printed comparison are the serial run's."""
+    from fmu_components import cli
+
+    selection = ["validate", "--fmus", str(native_fmus["RotaryDamper"].parent),
+                 "--fmu=RotaryDamper", "--case=damper-largest-torque-A-D"]
+    printed = {}
+    for name, where in (("serial", ["--jobs", "1"]), ("cluster", ["--scheduler", cluster.address])):
+        assert cli.main([*selection, "--report", str(tmp_path / name), *where]) == 0
+        printed[name] = capsys.readouterr().out.split("report:")[0]
+    rows = by_run(read(tmp_path / "cluster" / FILE))
+    assert len(rows) == 4 and all(r["status"] == "ok" and r["fmu"] == "RotaryDamper"
+                                  for r in rows.values())
+    assert all(r["samples"] > 100 and r["torque_max"] > 0 and r["wall_s"] > 0
+               for r in rows.values()), rows
+    assert_bitwise_equal(rows, by_run(read(tmp_path / "serial" / FILE)))
+    assert printed["cluster"] == printed["serial"]
+
+
 def test_a_failing_run_is_reported_with_its_values_and_the_fmus_message(cluster, tmp_path,
                                                                         native_fmus):
     pytest.importorskip("exudyn")

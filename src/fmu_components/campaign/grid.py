@@ -266,5 +266,19 @@ def verification_grid(runs, reference_data=None):
                 lambda run, outcome: tasks.verify_row(outcome))
 
 
+def validation_grid(cases, fmu_of):
+    """The Grid of the measurements' cases (``fmu-components validate``): each case through
+    its component's FMU (``fmu_of(component)``, the file, travelling with the task)."""
+    from ..verification.measurements import outputs_of
+
+    payloads = {}
+    runs = [Run(case.key, {"fmu": case.fmu, "case": case.name},
+                (case, payloads.setdefault(case.fmu, Payload.of(fmu_of(case.fmu))),
+                 outputs_of(case)), cost=len(case.times()))
+            for case in cases]
+    return Grid("validate", tasks.validate_case, runs,
+                lambda run, result: tasks.validate_row(*result))
+
+
 KINDS = {"station": station_grid, "vehicle": vehicle_grid, "rig": rig_grid,
          "verify": verify_grid}

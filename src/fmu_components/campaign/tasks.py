@@ -32,10 +32,18 @@ def verify_row(outcome):
 # --- the measurements (fmu-components validate) ---------------------------------------------
 
 def validate_case(case, fmu, outputs):
-    """One case of the validation through its component's FMU: fmpy's result."""
+    """One case of the validation through its component's FMU: (fmpy's result, wall s)."""
     from ..verification.cases import simulate_case
 
-    return simulate_case(fmu, case.inputs(), case.options(), outputs, label=case.key)[0]
+    return simulate_case(fmu, case.inputs(), case.options(), outputs, label=case.key)
+
+
+def validate_row(result, wall):
+    """The case's row: its samples, each output's range over the run, the wall time."""
+    row = {"samples": len(result)}
+    for name in result.dtype.names[1:]:
+        row[f"{name}_min"], row[f"{name}_max"] = float(result[name].min()), float(result[name].max())
+    return {**row, "wall_s": wall}
 
 
 # --- the fit (fmu-components fit) ------------------------------------------------------------
