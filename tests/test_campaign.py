@@ -283,6 +283,26 @@ def test_validate_streams_a_results_table_equal_to_the_serial_run(cluster, tmp_p
     assert printed["cluster"] == printed["serial"]
 
 
+def test_rig_compares_the_structures_on_the_cluster_as_in_one_process(cluster, tmp_path,
+                                                                      capsys):
+    """rig --compare-structures: each structure a task on the cluster, the table the one
+    a single process computes, every number to the last bit."""
+    from fmu_components import cli
+    from fmu_components.campaign.tasks import structures_runner
+    from fmu_components.lab.rig_plots import compare_structures
+
+    assert cli.main(["rig", "--component", "TrackBushTorsion", "--compare-structures",
+                     "--out", str(tmp_path / "cluster"), "--scheduler", cluster.address]) == 0
+    assert f"running on 2 workers of {cluster.address}" in capsys.readouterr().err
+    serial_table = compare_structures(tmp_path / "serial", processes=1)
+    assert len(serial_table) == 3
+    assert (tmp_path / "cluster" / "structures.md").read_text() == \
+        (tmp_path / "serial" / "structures.md").read_text()
+    with Engine(cluster.address) as engine:
+        assert compare_structures(tmp_path / "again", runner=structures_runner(engine)) == \
+            serial_table
+
+
 def test_a_failing_run_is_reported_with_its_values_and_the_fmus_message(cluster, tmp_path,
                                                                         native_fmus):
     pytest.importorskip("exudyn")

@@ -101,6 +101,22 @@ def rig_runner(engine):
     return run
 
 
+def structures_runner(engine):
+    """``lab.rig_plots.compare_structures``' runner: each structure's records a task on the
+    engine; one that fails is a RigError naming it."""
+    from ..lab.rig import RigError
+    from ..lab.rig_plots import structure_records
+    from .engine import Failure
+
+    def run(structures):
+        results = engine.map(structure_records, [(s,) for s in structures])
+        for structure, result in zip(structures, results):
+            if isinstance(result, Failure):
+                raise RigError(f"the {structure} structure: {result.message}")
+        return results
+    return run
+
+
 def rig_row(run, row, wall):
     values = dataclasses.asdict(row)
     return {"run": run, **values, "wall_s": wall}
