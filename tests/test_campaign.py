@@ -262,6 +262,33 @@ def test_a_verify_campaign_equals_the_serial_run(cluster, tmp_path, native_fmus)
     assert_bitwise_equal(rows, expected)
 
 
+def test_verify_draws_each_cases_plot_in_its_task_and_the_client_only_assembles(
+        cluster, tmp_path, native_fmus, monkeypatch):
+    """verify on a cluster: each case's plot is drawn by the task that ran the case (the
+    client's plot_case is never called), and the report is the serial run's, every PNG
+    byte for byte and every number of its table bit for bit."""
+    from fmu_components import cli
+    from fmu_components.verification import report
+
+    selection = ["verify", "--fmus", str(native_fmus["TrackBushRadial"].parent),
+                 "--fmu=TrackBushRadial", "--case=II_amplitude_0.1mm", "--case=II_amplitude_0.2mm",
+                 "--case=III_frequency_10Hz"]
+    assert cli.main([*selection, "--report", str(tmp_path / "serial"), "--jobs", "1"]) == 0
+
+    def not_here(*arguments):
+        raise AssertionError("a case's plot drawn on the client")
+    monkeypatch.setattr(report, "plot_case", not_here)
+    assert cli.main([*selection, "--report", str(tmp_path / "cluster"),
+                     "--scheduler", cluster.address]) == 0
+    drawn = sorted(p.name for p in (tmp_path / "serial").glob("*.png"))
+    assert len([n for n in drawn if n.startswith("case_")]) == 3 and len(drawn) == 3 + 2
+    for name in drawn:
+        assert (tmp_path / "cluster" / name).read_bytes() == \
+            (tmp_path / "serial" / name).read_bytes(), name
+    assert_bitwise_equal(by_run(read(tmp_path / "cluster" / FILE)),
+                         by_run(read(tmp_path / "serial" / FILE)))
+
+
 def test_validate_streams_a_results_table_equal_to_the_serial_run(cluster, tmp_path,
                                                                    native_fmus, capsys):
     """validate, as verify, leaves REPORT/results.csv, a row per case; on the cluster its

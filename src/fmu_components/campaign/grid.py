@@ -248,10 +248,11 @@ def verify_grid(spec, folder):
     return verification_grid(runs)
 
 
-def verification_grid(runs, reference_data=None):
+def verification_grid(runs, reference_data=None, drawn=False):
     """The Grid of (case, FMU path, Identity) runs of the test programme: each FMU and
     each case's reference tables (from `reference_data`, default the committed ones)
-    travel with its tasks."""
+    travel with its tasks. drawn: each task also draws its case's plot for the report
+    (its result is then (Outcome, PNG bytes))."""
     from ..verification import cases as programme
     from ..verification.verify import needs_own_reference
 
@@ -262,6 +263,9 @@ def verification_grid(runs, reference_data=None):
             programme.read(case, reference_data or programme.REFERENCE_DATA)
         grid_runs.append(Run(f"{path.stem}/{case.name}", {"fmu": path.stem, "case": case.name},
                              (case, payload, tables, identity), cost=len(case.times())))
+    if drawn:
+        return Grid("verify", tasks.verify_and_draw_case, grid_runs,
+                    lambda run, result: tasks.verify_row(result[0]))
     return Grid("verify", tasks.verify_case, grid_runs,
                 lambda run, outcome: tasks.verify_row(outcome))
 

@@ -20,6 +20,15 @@ def verify_case(case, fmu, tables, identity):
     return run_case(case, fmu, identity=identity, tables=tables)
 
 
+def verify_and_draw_case(case, fmu, tables, identity):
+    """``verify_case`` and the case's plot for the report, drawn here, where the case ran:
+    (Outcome, PNG bytes or None)."""
+    from ..verification.report import case_png
+
+    outcome = verify_case(case, fmu, tables, identity)
+    return outcome, case_png(outcome)
+
+
 def verify_row(outcome):
     return {"run": f"{outcome.name}/{outcome.case.name}", "fmu": outcome.name,
             "case": outcome.case.name, "passed": outcome.passed,
