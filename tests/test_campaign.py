@@ -413,7 +413,11 @@ def test_a_failure_is_a_value_of_the_stream_not_an_exception():
         assert engine.map(task, [(1,), (2,), (3,)]) == [10, Failure("ValueError: two"), 30]
 
 
-def test_a_fits_starts_on_the_cluster_give_the_serial_fit(cluster, tmp_path):
+@pytest.mark.parametrize("starts", [2, 1], ids=["each start a task", "Jacobian columns"])
+def test_a_fit_on_the_cluster_gives_the_serial_fit(cluster, tmp_path, starts):
+    """As many starts as workers: each start's fit a task; fewer: the starts run from the
+    client and each Jacobian's columns go to the workers. The parameters are the serial
+    fit's to the last bit either way."""
     import numpy as np
 
     t = np.arange(1001) * 2e-3
@@ -427,11 +431,13 @@ def test_a_fits_starts_on_the_cluster_give_the_serial_fit(cluster, tmp_path):
     for where in (["--jobs", "1"], ["--scheduler", cluster.address]):
         out = tmp_path / f"{where[0][2:]}.json"
         result = subprocess.run([sys.executable, "-m", "fmu_components", "fit", "--component",
-                                 "TrackBushRadial", "--starts", "2", "--fix", *fix, "--out",
-                                 out, data, *where], cwd=ROOT, env=ENVIRONMENT,
+                                 "TrackBushRadial", "--starts", str(starts), "--fix", *fix,
+                                 "--out", out, data, *where], cwd=ROOT, env=ENVIRONMENT,
                                 capture_output=True, text=True, timeout=300)
         assert result.returncode == 0, result.stderr
         fitted[where[0]] = json.loads(out.read_text())
+    columns = "each Jacobian's 4 columns in 2 tasks per start"
+    assert (columns in result.stderr) == (starts == 1), result.stderr
     assert fitted["--scheduler"] == fitted["--jobs"]  # json keeps every float's 17 digits
 
 

@@ -57,26 +57,86 @@ def validate_row(result, wall):
 
 # --- the fit (fmu-components fit) ------------------------------------------------------------
 
-def fit_runner(engine):
-    """``lab.fit.fit``'s runner: each start's fit a task on the engine (the measured tests
-    travel inside the problem); a start that fails ends the fit with its message."""
+def fit_runner(engine, say=None):
+    """``lab.fit.fit``'s runner, at the grain that pays on the engine's workers. With no
+    more workers than starts, each start's whole fit is a task (the measured tests travel
+    inside the problem): hundreds of residual evaluations of a few milliseconds each, no
+    task per evaluation. With more workers than starts, the starts run side by side from
+    here and each finite-difference Jacobian's columns (one residual evaluation each, of
+    every test) go to the spare workers as a batch of tasks (``jacobian_columns``). Either
+    way the numbers are the serial fit's: the same evaluations, the same arithmetic. A
+    start that fails ends the fit with its message. say(text) hears which grain."""
     from ..lab.fit import solve_start
     from .engine import Failure, Progress
 
     def run(problem, points):
-        outcomes = [None] * len(points)
         starts = len(points)
+        engine.start()
+        chunks = engine.workers // starts if engine.client is not None else 0
         progress = Progress(starts, what=f"fitting from {starts} start{'s' if starts > 1 else ''}")
         try:
-            for index, outcome in engine.stream(solve_start, [(problem, p) for p in points]):
-                if isinstance(outcome, Failure):
-                    raise RuntimeError(f"the fit from start {index + 1}: {outcome.message}")
-                outcomes[index] = outcome
-                progress.update(f"start {index + 1}")
+            if chunks > 1:
+                if say is not None:
+                    say(f"each Jacobian's {len(problem.free)} columns in {chunks} tasks "
+                        f"per start")
+                outcomes = _starts_here(problem, points, jacobian_columns(engine, chunks),
+                                        progress)
+            else:
+                outcomes = [None] * starts
+                for index, outcome in engine.stream(solve_start, [(problem, p) for p in points]):
+                    if isinstance(outcome, Failure):
+                        raise RuntimeError(f"the fit from start {index + 1}: {outcome.message}")
+                    outcomes[index] = outcome
+                    progress.update(f"start {index + 1}")
         finally:
             progress.close()
         return outcomes
     return run
+
+
+def _starts_here(problem, points, columns, progress):
+    """Every start's fit in a thread of this process (its Jacobians' columns on the
+    engine; the native simulation releases the GIL): the outcomes in order."""
+    from concurrent.futures import ThreadPoolExecutor, as_completed
+
+    from ..lab.fit import solve_start
+
+    with ThreadPoolExecutor(len(points)) as pool:
+        futures = {pool.submit(solve_start, problem, p, columns): i for i, p in enumerate(points)}
+        outcomes = [None] * len(points)
+        for future in as_completed(futures):
+            index = futures[future]
+            try:
+                outcomes[index] = future.result()
+            except Exception as error:
+                raise RuntimeError(f"the fit from start {index + 1}: {type(error).__name__}: "
+                                   f"{error}") from None
+            progress.update(f"start {index + 1}")
+    return outcomes
+
+
+def evaluations(function, points):
+    """function at each point: one task's share of a Jacobian's columns."""
+    return [function(point) for point in points]
+
+
+def jacobian_columns(engine, chunks):
+    """A map-like callable for scipy's least_squares (``workers``): the points of a
+    finite-difference Jacobian in `chunks` tasks on the engine, each evaluating its
+    consecutive share; the values in the points' order."""
+    from .engine import Failure
+
+    def columns(function, points):
+        points = list(points)
+        size = -(-len(points) // chunks)
+        shares = [points[i:i + size] for i in range(0, len(points), size)]
+        values = []
+        for result in engine.map(evaluations, [(function, share) for share in shares]):
+            if isinstance(result, Failure):
+                raise RuntimeError(f"a Jacobian's columns: {result.message}")
+            values += result
+        return values
+    return columns
 
 
 # --- the virtual test rig (fmu-components rig) -----------------------------------------------

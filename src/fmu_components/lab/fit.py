@@ -220,20 +220,25 @@ def _counted_residuals(u):
     return residuals
 
 
-def solve_start(problem, u0):
+def solve_start(problem, u0, columns=None):
     """One start's fit of `problem` from u0, in this process (a campaign's worker runs
-    it): as a pool worker's."""
+    it): as a pool worker's. columns(residuals, points), if given, evaluates the
+    finite-difference Jacobian's columns (the residuals at each point, in order)
+    elsewhere, a campaign's engine; the numbers are the same, scipy's arithmetic being
+    the same whoever evaluates them."""
     _adopt(problem)
-    return _solve_from(u0)
+    return _solve_from(u0, columns)
 
 
-def _solve_from(u0):
+def _solve_from(u0, columns=None):
     problem = _PROBLEM
     lower = [s.lower for s in problem.free]
     upper = [s.upper for s in problem.free]
-    result = least_squares(_counted_residuals, u0, bounds=(lower, upper), method="trf",
+    # the residuals themselves, not the counting global, when they travel to other workers
+    residuals = problem.residuals if columns is not None else _counted_residuals
+    result = least_squares(residuals, u0, bounds=(lower, upper), method="trf",
                            diff_step=1e-4, x_scale=1.0, ftol=1e-10, xtol=1e-10, gtol=1e-10,
-                           max_nfev=200)
+                           max_nfev=200, workers=columns)
     return result.x, float(result.cost), result.jac, int(result.nfev), result.message
 
 
