@@ -57,15 +57,24 @@ def validate_row(result, wall):
 
 # --- the fit (fmu-components fit) ------------------------------------------------------------
 
-def fit_runner(engine, say=None):
-    """``lab.fit.fit``'s runner, at the grain that pays on the engine's workers. With no
-    more workers than starts, each start's whole fit is a task (the measured tests travel
-    inside the problem): hundreds of residual evaluations of a few milliseconds each, no
-    task per evaluation. With more workers than starts, the starts run side by side from
-    here and each finite-difference Jacobian's columns (one residual evaluation each, of
-    every test) go to the spare workers as a batch of tasks (``jacobian_columns``). Either
-    way the numbers are the serial fit's: the same evaluations, the same arithmetic. A
-    start that fails ends the fit with its message. say(text) hears which grain."""
+# s: a task's share of a Jacobian's evaluations at least this long, or the columns stay
+# with their start. Measured (benchmarks/campaign.py, 2 workers against one process, a
+# loaded 2-core machine): the radial bush's 14 columns over 2 x 2001 samples (3 ms an
+# evaluation) ran 0.71 times as fast, over 2 x 20001 samples 0.45 times: the tasks'
+# transport and the client's own evaluations cost more than a share of 0.02 or 0.2 s.
+COLUMNS_PAY = 1.0
+
+
+def fit_runner(engine, say=None, pays=COLUMNS_PAY):
+    """``lab.fit.fit``'s runner, at the grain that pays on the engine's workers. By default
+    each start's whole fit is a task (the measured tests travel inside the problem):
+    hundreds of residual evaluations, no task per evaluation. With more workers than
+    starts and an evaluation so costly that a worker's share of a Jacobian's columns
+    takes `pays` seconds or more (one evaluation timed here first), the starts run side by
+    side from here and each finite-difference Jacobian's columns go to the workers as a
+    batch of tasks (``jacobian_columns``). Either way the numbers are the serial fit's:
+    the same evaluations, the same arithmetic. A start that fails ends the fit with its
+    message. say(text) hears which grain was taken."""
     from ..lab.fit import solve_start
     from .engine import Failure, Progress
 
@@ -73,6 +82,11 @@ def fit_runner(engine, say=None):
         starts = len(points)
         engine.start()
         chunks = engine.workers // starts if engine.client is not None else 0
+        if chunks > 1:
+            started = time.perf_counter()
+            problem.residuals(points[0])
+            share = (time.perf_counter() - started) * -(-len(problem.free) // chunks)
+            chunks = chunks if share >= pays else 0
         progress = Progress(starts, what=f"fitting from {starts} start{'s' if starts > 1 else ''}")
         try:
             if chunks > 1:
