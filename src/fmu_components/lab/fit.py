@@ -16,7 +16,7 @@ a0..a3 and the geometric slope h (``--fix`` keeps any of them at its thesis valu
 x_ref, where the geometric multiplier is 1, is the part's geometry (the tyre's first
 contact, the torsion bush's live angle) and stays at the thesis value. The method: bounds,
 log-scaled parameters (k, c, xi; sign-aware, asinh, for a0..a3 and h, which may be zero),
-several starting points fitted in parallel on a process pool, and
+several starting points fitted in parallel (a campaign's tasks, or a local process pool), and
 ``scipy.optimize.least_squares`` on the simulated responses, which come from the compiled
 native co-simulation (``history``) at the FMU's default tolerance. Each test's residuals are
 divided by its measured peak-to-peak force and by the square root of its sample count, so
