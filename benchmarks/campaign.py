@@ -57,17 +57,18 @@ def local_cluster(workers):
 
 
 def time_verify(cases, workers, folder):
-    """Wall seconds of the verify command on a local cluster of `workers` (None: in this
-    process, --jobs 1)."""
+    """(wall seconds, this process's CPU seconds) of the verify command on a local cluster
+    of `workers` (None: in this process, --jobs 1). On a cluster this process is the
+    client: its CPU time is what does not run on the workers."""
     arguments = ["verify", "--report", str(folder)] + [f"--case={c}" for c in cases]
     if workers is None:
-        started = time.perf_counter()
+        started, cpu = time.perf_counter(), time.process_time()
         cli.main(arguments + ["--jobs", "1"])
-        return time.perf_counter() - started
+        return time.perf_counter() - started, time.process_time() - cpu
     with local_cluster(workers) as cluster:
-        started = time.perf_counter()
+        started, cpu = time.perf_counter(), time.process_time()
         cli.main(arguments + ["--scheduler", cluster.scheduler_address])
-        return time.perf_counter() - started
+        return time.perf_counter() - started, time.process_time() - cpu
 
 
 def carry(fmu):
@@ -156,10 +157,13 @@ def main(argv=None):
     with tempfile.TemporaryDirectory() as scratch:
         scratch = Path(scratch)
         if "verify" not in args.skip:
-            walls = {n: time_verify(args.case, n, scratch / f"verify{n}") for n in (1, 2, None)}
+            timed = {n: time_verify(args.case, n, scratch / f"verify{n}") for n in (1, 2, None)}
+            walls = {n: wall for n, (wall, _) in timed.items()}
             print(f"verify{' ' + ' '.join(args.case) if args.case else ', every case'}: "
                   f"2 workers {walls[2]:.1f} s, 1 worker {walls[1]:.1f} s, in this process "
-                  f"{walls[None]:.1f} s: 2 workers {walls[1] / walls[2]:.2f} times as fast as 1")
+                  f"{walls[None]:.1f} s: 2 workers {walls[1] / walls[2]:.2f} times as fast as 1; "
+                  f"the client's CPU {timed[2][1]:.1f} s on 2 workers, {timed[1][1]:.1f} s on "
+                  f"1 (in this process, everything: {timed[None][1]:.1f} s)")
         if "overhead" not in args.skip:
             per_task = overhead(args.tasks)
             print(f"overhead: {per_task * 1e3:.1f} ms per task carrying an FMU "
