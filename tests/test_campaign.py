@@ -315,12 +315,13 @@ def test_rig_compares_the_structures_on_the_cluster_as_in_one_process(cluster, t
     """rig --compare-structures: each structure a task on the cluster, the table the one
     a single process computes, every number to the last bit."""
     from fmu_components import cli
-    from fmu_components.campaign.tasks import structures_runner
     from fmu_components.lab.rig_plots import compare_structures
 
     assert cli.main(["rig", "--component", "TrackBushTorsion", "--compare-structures",
                      "--out", str(tmp_path / "cluster"), "--scheduler", cluster.address]) == 0
     assert f"running on 2 workers of {cluster.address}" in capsys.readouterr().err
+    from fmu_components.campaign.tasks import structures_runner
+
     serial_table = compare_structures(tmp_path / "serial", processes=1)
     assert len(serial_table) == 3
     assert (tmp_path / "cluster" / "structures.md").read_text() == \
