@@ -262,6 +262,75 @@ def test_a_verify_campaign_equals_the_serial_run(cluster, tmp_path, native_fmus)
     assert_bitwise_equal(rows, expected)
 
 
+def test_verify_draws_each_cases_plot_in_its_task_and_the_client_only_assembles(
+        cluster, tmp_path, native_fmus, monkeypatch):
+    """verify on a cluster: each case's plot is drawn by the task that ran the case (the
+    client's plot_case is never called), and the report is the serial run's, every PNG
+    byte for byte and every number of its table bit for bit."""
+    from fmu_components import cli
+    from fmu_components.verification import report
+
+    selection = ["verify", "--fmus", str(native_fmus["TrackBushRadial"].parent),
+                 "--fmu=TrackBushRadial", "--case=II_amplitude_0.1mm", "--case=II_amplitude_0.2mm",
+                 "--case=III_frequency_10Hz"]
+    assert cli.main([*selection, "--report", str(tmp_path / "serial"), "--jobs", "1"]) == 0
+
+    def not_here(*arguments):
+        raise AssertionError("a case's plot drawn on the client")
+    monkeypatch.setattr(report, "plot_case", not_here)
+    assert cli.main([*selection, "--report", str(tmp_path / "cluster"),
+                     "--scheduler", cluster.address]) == 0
+    drawn = sorted(p.name for p in (tmp_path / "serial").glob("*.png"))
+    assert len([n for n in drawn if n.startswith("case_")]) == 3 and len(drawn) == 3 + 2
+    for name in drawn:
+        assert (tmp_path / "cluster" / name).read_bytes() == \
+            (tmp_path / "serial" / name).read_bytes(), name
+    assert_bitwise_equal(by_run(read(tmp_path / "cluster" / FILE)),
+                         by_run(read(tmp_path / "serial" / FILE)))
+
+
+def test_validate_streams_a_results_table_equal_to_the_serial_run(cluster, tmp_path,
+                                                                   native_fmus, capsys):
+    """validate, as verify, leaves REPORT/results.csv, a row per case; on the cluster its
+    numbers and the printed comparison are the serial run's."""
+    from fmu_components import cli
+
+    selection = ["validate", "--fmus", str(native_fmus["RotaryDamper"].parent),
+                 "--fmu=RotaryDamper", "--case=damper-largest-torque-A-D"]
+    printed = {}
+    for name, where in (("serial", ["--jobs", "1"]), ("cluster", ["--scheduler", cluster.address])):
+        assert cli.main([*selection, "--report", str(tmp_path / name), *where]) == 0
+        printed[name] = capsys.readouterr().out.split("report:")[0]
+    rows = by_run(read(tmp_path / "cluster" / FILE))
+    assert len(rows) == 4 and all(r["status"] == "ok" and r["fmu"] == "RotaryDamper"
+                                  for r in rows.values())
+    assert all(r["samples"] > 100 and r["torque_max"] > 0 and r["wall_s"] > 0
+               for r in rows.values()), rows
+    assert_bitwise_equal(rows, by_run(read(tmp_path / "serial" / FILE)))
+    assert printed["cluster"] == printed["serial"]
+
+
+def test_rig_compares_the_structures_on_the_cluster_as_in_one_process(cluster, tmp_path,
+                                                                      capsys):
+    """rig --compare-structures: each structure a task on the cluster, the table the one
+    a single process computes, every number to the last bit."""
+    from fmu_components import cli
+    from fmu_components.lab.rig_plots import compare_structures
+
+    assert cli.main(["rig", "--component", "TrackBushTorsion", "--compare-structures",
+                     "--out", str(tmp_path / "cluster"), "--scheduler", cluster.address]) == 0
+    assert f"running on 2 workers of {cluster.address}" in capsys.readouterr().err
+    from fmu_components.campaign.tasks import structures_runner
+
+    serial_table = compare_structures(tmp_path / "serial", processes=1)
+    assert len(serial_table) == 3
+    assert (tmp_path / "cluster" / "structures.md").read_text() == \
+        (tmp_path / "serial" / "structures.md").read_text()
+    with Engine(cluster.address) as engine:
+        assert compare_structures(tmp_path / "again", runner=structures_runner(engine)) == \
+            serial_table
+
+
 def test_a_failing_run_is_reported_with_its_values_and_the_fmus_message(cluster, tmp_path,
                                                                         native_fmus):
     pytest.importorskip("exudyn")
@@ -345,7 +414,7 @@ def test_a_failure_is_a_value_of_the_stream_not_an_exception():
         assert engine.map(task, [(1,), (2,), (3,)]) == [10, Failure("ValueError: two"), 30]
 
 
-def test_a_fits_starts_on_the_cluster_give_the_serial_fit(cluster, tmp_path):
+def fit_data(tmp_path):
     import numpy as np
 
     t = np.arange(1001) * 2e-3
@@ -353,18 +422,53 @@ def test_a_fits_starts_on_the_cluster_give_the_serial_fit(cluster, tmp_path):
     data = tmp_path / "sine.csv"
     np.savetxt(data, np.column_stack([t, x, 81.8e6 * x]), delimiter=",", fmt="%.17g",
                header="time,deflection,force", comments="")
-    fix = ["xi1", "k2", "c2", "xi2", "k3", "c3", "xi3", "elastic.a2", "elastic.a3",
-           "geometric.h"]
+    return data
+
+
+FIT_FIXED = ["xi1", "k2", "c2", "xi2", "k3", "c3", "xi3", "elastic.a2", "elastic.a3",
+             "geometric.h"]
+
+
+@pytest.mark.parametrize("starts", [2, 1])
+def test_a_fits_starts_on_the_cluster_give_the_serial_fit(cluster, tmp_path, starts):
+    """Each start's whole fit a task (a 1,001-sample fit's evaluations are far too short to
+    go to the workers one Jacobian at a time): the parameters of the serial fit to the
+    last bit."""
+    data = fit_data(tmp_path)
     fitted = {}
     for where in (["--jobs", "1"], ["--scheduler", cluster.address]):
         out = tmp_path / f"{where[0][2:]}.json"
         result = subprocess.run([sys.executable, "-m", "fmu_components", "fit", "--component",
-                                 "TrackBushRadial", "--starts", "2", "--fix", *fix, "--out",
-                                 out, data, *where], cwd=ROOT, env=ENVIRONMENT,
-                                capture_output=True, text=True, timeout=300)
+                                 "TrackBushRadial", "--starts", str(starts), "--fix",
+                                 *FIT_FIXED, "--out", out, data, *where], cwd=ROOT,
+                                env=ENVIRONMENT, capture_output=True, text=True, timeout=300)
         assert result.returncode == 0, result.stderr
         fitted[where[0]] = json.loads(out.read_text())
+    assert "columns" not in result.stderr
     assert fitted["--scheduler"] == fitted["--jobs"]  # json keeps every float's 17 digits
+
+
+def test_a_fits_jacobian_columns_on_the_cluster_give_the_serial_fit(cluster, tmp_path):
+    """One start, two workers, the columns sent whatever they cost (pays=0): the starts
+    run here, each Jacobian's 4 columns in 2 tasks on the workers, and the fit, its
+    Jacobian and its evaluations are the serial fit's to the last bit."""
+    import numpy as np
+
+    from fmu_components.campaign.tasks import fit_runner
+    from fmu_components.lab.fit import fit
+    from fmu_components.lab.history import component_definition
+    from fmu_components.lab.measured import read_data
+
+    tests = [read_data(fit_data(tmp_path), component_definition("TrackBushRadial", "final"))]
+    results, said = {}, []
+    for name, engine in (("serial", Engine(jobs=1)), ("cluster", Engine(cluster.address))):
+        with engine:
+            results[name] = fit("TrackBushRadial", tests, FIT_FIXED, starts=1,
+                                runner=fit_runner(engine, said.append, pays=0))
+    assert said == ["each Jacobian's 4 columns in 2 tasks per start"]
+    serial, distributed = results["serial"], results["cluster"]
+    assert distributed.values == serial.values and distributed.starts == serial.starts
+    assert np.array_equal(distributed.jacobian, serial.jacobian)
 
 
 def test_ctrl_c_at_a_terminal_ends_a_local_cluster_in_one_line(tmp_path):

@@ -291,3 +291,32 @@ def test_fit_shows_its_progress_on_a_terminal(tmp_path):
     # in a log (no terminal) no bar is drawn: a plain line at every tenth done
     assert quiet.returncode == 0 and "\r" not in quiet.stderr
     assert "fitting from 2 starts: 2/2 done" in quiet.stderr
+
+
+def test_an_unidentifiable_parameters_interval_is_unbounded_not_an_overflow():
+    """A parameter the data barely touch has a standard deviation of thousands in its
+    scaled form: the ends of its 95 % interval lie beyond the floats, and the interval is
+    reported as unbounded (inf), where math.exp and math.sinh raised OverflowError."""
+    from fmu_components.lab.fit import FitResult, Scaling
+
+    free = [Scaling("k1", "log", 1e6, -4.6, 4.6), Scaling("k2", "log", 2e6, -4.6, 4.6),
+            Scaling("elastic.a1", "symlog", 10.0, -11.0, 11.0)]
+    rows = 20
+    alternating = np.resize([1.0, -1.0], rows)
+    # k1 well determined; k2 and a1 moved 1e-6 as far by the data: s.d. about 2e4 in u
+    jacobian = np.column_stack([np.ones(rows), 1e-6 * alternating,
+                                1e-6 * alternating * np.resize([1.0, 1.0, -1.0, -1.0], rows)])
+    result = FitResult("TrackBushRadial", "final", {}, free, np.array([0.0, 0.1, 0.2]),
+                       jacobian, np.full(rows, 0.1), [], [], 0.0,
+                       {"k1": 1e6, "k2": 2e6, "elastic.a1": 1.0})
+    confidence = result.confidence()
+    low, high, relative = confidence["k1"]
+    assert 0 < low < 1e6 < high < math.inf and relative < 0.5
+    assert confidence["k2"] == (0.0, math.inf, math.inf)
+    assert confidence["elastic.a1"] == (-math.inf, math.inf, math.inf)
+    notes = result.warnings()
+    assert any(n.startswith("k2 is not identifiable") and "interval is unbounded" in n
+               for n in notes), notes
+    assert any(n.startswith("elastic.a1 is not told apart from 0") and "-inf .. inf" in n
+               for n in notes), notes
+    assert not any(n.startswith("k1 ") for n in notes), notes

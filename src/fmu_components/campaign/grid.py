@@ -248,10 +248,11 @@ def verify_grid(spec, folder):
     return verification_grid(runs)
 
 
-def verification_grid(runs, reference_data=None):
+def verification_grid(runs, reference_data=None, drawn=False):
     """The Grid of (case, FMU path, Identity) runs of the test programme: each FMU and
     each case's reference tables (from `reference_data`, default the committed ones)
-    travel with its tasks."""
+    travel with its tasks. drawn: each task also draws its case's plot for the report
+    (its result is then (Outcome, PNG bytes))."""
     from ..verification import cases as programme
     from ..verification.verify import needs_own_reference
 
@@ -262,8 +263,25 @@ def verification_grid(runs, reference_data=None):
             programme.read(case, reference_data or programme.REFERENCE_DATA)
         grid_runs.append(Run(f"{path.stem}/{case.name}", {"fmu": path.stem, "case": case.name},
                              (case, payload, tables, identity), cost=len(case.times())))
+    if drawn:
+        return Grid("verify", tasks.verify_and_draw_case, grid_runs,
+                    lambda run, result: tasks.verify_row(result[0]))
     return Grid("verify", tasks.verify_case, grid_runs,
                 lambda run, outcome: tasks.verify_row(outcome))
+
+
+def validation_grid(cases, fmu_of):
+    """The Grid of the measurements' cases (``fmu-components validate``): each case through
+    its component's FMU (``fmu_of(component)``, the file, travelling with the task)."""
+    from ..verification.measurements import outputs_of
+
+    payloads = {}
+    runs = [Run(case.key, {"fmu": case.fmu, "case": case.name},
+                (case, payloads.setdefault(case.fmu, Payload.of(fmu_of(case.fmu))),
+                 outputs_of(case)), cost=len(case.times()))
+            for case in cases]
+    return Grid("validate", tasks.validate_case, runs,
+                lambda run, result: tasks.validate_row(*result))
 
 
 KINDS = {"station": station_grid, "vehicle": vehicle_grid, "rig": rig_grid,

@@ -74,7 +74,7 @@ def run_command(args):
     try:
         with cluster.engine(args) as engine:  # the starts on a Dask cluster (commands/cluster.py)
             result = fit(args.component, tests, args.fix, args.structure, args.starts,
-                         runner=fit_runner(engine))
+                         runner=fit_runner(engine, engine.say))
     except HistoryError as error:
         raise UsageError(str(error)) from None
     args.out.parent.mkdir(parents=True, exist_ok=True)

@@ -91,10 +91,12 @@ def _run(args):
         if args.component != "TrackBushTorsion":
             raise RigError("--compare-structures runs the torsion bush (the thesis compares "
                            "the structures on it): use --component TrackBushTorsion")
+        from ..campaign.tasks import structures_runner
         from ..lab.rig_plots import compare_structures, structures_table
 
         started = time.perf_counter()
-        table = compare_structures(args.out, args.jobs)
+        with cluster.engine(args) as engine:  # a structure a task (commands/cluster.py)
+            table = compare_structures(args.out, runner=structures_runner(engine))
         print(structures_table(table))
         print(f"wrote {args.out / 'structures.png'} and {args.out / 'structures.md'} "
               f"({time.perf_counter() - started:.1f} s)")

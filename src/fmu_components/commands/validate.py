@@ -6,7 +6,8 @@
 Runs every selected row of ``reference_data/thesis/measurements.csv`` that names a metric
 through the built FMUs (``verification.measurements``), prints the table of measured and
 model values, and writes the report (``verification.measurements_report``: summary.md and
-plots, default reports/validation). Exit status 0 when every row ran, 1 when an FMU failed to run; with
+plots, default reports/validation; results.csv gets each case's row as it finishes, as
+verify's). Exit status 0 when every row ran, 1 when an FMU failed to run; with
 ``--strict`` also 1 when a judged row lies outside the +-10 % band or breaks its bound.
 ``fmu-components verify`` is the other check: the FMUs against an independent solve of the
 same equations.
@@ -47,24 +48,17 @@ def configure(parser):
     cluster.add_arguments(parser)
 
 
-def _run_cases(runs, cases, engine):
+def _run_cases(runs, cases, engine, folder):
     """Each case through its FMU on the engine (the FMU travels with the task), its result
-    kept in `runs`."""
-    from ..campaign.engine import Failure, Progress
-    from ..campaign.payload import Payload
-    from ..campaign.tasks import validate_case
-    from ..verification.measurements import outputs_of
+    kept in `runs` and its row in FOLDER/results.csv as it finishes."""
+    from ..campaign.grid import validation_grid
+    from ..campaign.run import run_grid
 
-    fmus = {}
-    tasks = [(case, fmus.setdefault(case.fmu, Payload.of(runs.fmu(case.fmu))), outputs_of(case))
-             for case in cases]
-    progress = Progress(len(tasks), what="simulating")
-    try:
-        for index, result in engine.stream(validate_case, tasks):
-            runs.keep(cases[index], result.message if isinstance(result, Failure) else result)
-            progress.update(cases[index].key)
-    finally:
-        progress.close()
+    done = run_grid(validation_grid(cases, runs.fmu), folder, engine, keep=True,
+                    what="simulating")
+    failed = {run.key: message for run, message in done.failures}
+    for case in cases:
+        runs.keep(case, failed[case.key] if case.key in failed else done.results[case.key][0])
 
 
 def run_command(args):
@@ -85,7 +79,7 @@ def run_command(args):
     runs = Runs(args.fmus)
     cases = {c.key: c for m in selected if m.metric for c in runs.select(m)}
     with cluster.engine(args) as engine:  # every case runs once, on the engine
-        _run_cases(runs, list(cases.values()), engine)
+        _run_cases(runs, list(cases.values()), engine, args.report)
     comparisons = compare_all(selected, runs)
 
     from ..verification.measurements_report import write_report  # matplotlib only once there is a result

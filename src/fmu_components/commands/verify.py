@@ -62,8 +62,9 @@ def configure(parser):
 
 def _run(runs, args):
     """Every (case, FMU, identity) run on the engine the options name (commands/cluster.py),
-    each case's row in REPORT/results.csv as it finishes, then the report, its plots drawn
-    on the same engine: (the Outcomes in the runs' order, the summary's path). A case that
+    each case's plot drawn in its task, each case's row in REPORT/results.csv as it
+    finishes; then the report, the tests' plots drawn on the same engine and the rest
+    assembled here: (the Outcomes in the runs' order, the summary's path). A case that
     cannot run is a failed case, not a crash."""
     from tqdm import tqdm
 
@@ -71,20 +72,26 @@ def _run(runs, args):
     from ..campaign.run import run_grid
     from ..verification.outcome import Outcome
 
-    grid = verification_grid(runs, args.reference_data)
+    grid = verification_grid(runs, args.reference_data, drawn=True)
     with cluster.engine(args) as engine:
-        done = run_grid(grid, args.report, engine, keep=True, what="simulating")
-        failed = {run.key: message for run, message in done.failures}
-        outcomes = [done.results.get(run.key) or
-                    Outcome(case, problem=failed[run.key],
-                            part="" if path.stem == case.fmu else path.stem)
-                    for run, (case, path, _) in zip(grid.runs, runs)]
+        done = run_grid(grid, args.report, engine, keep=True, what="simulating and plotting")
+        from ..verification.report import case_plot_name, plot_count, write_report
 
-        from ..verification.report import plot_count, write_report  # matplotlib only once there is something to plot
-        progress = tqdm(total=plot_count(outcomes), desc="plotting", unit="plot",
+        failed = {run.key: message for run, message in done.failures}
+        outcomes, pngs = [], {}
+        for run, (case, path, _) in zip(grid.runs, runs):
+            if run.key in failed:
+                outcomes.append(Outcome(case, problem=failed[run.key],
+                                        part="" if path.stem == case.fmu else path.stem))
+                continue
+            outcome, png = done.results[run.key]
+            outcomes.append(outcome)
+            if png is not None:
+                pngs[case_plot_name(outcome)] = png
+        progress = tqdm(total=plot_count(outcomes, pngs), desc="plotting", unit="plot",
                         file=sys.stderr, disable=None)
         drawn = _drawn(engine) if engine.client is not None else None
-        summary = write_report(outcomes, args.report, progress, drawn)
+        summary = write_report(outcomes, args.report, progress, drawn, pngs)
         progress.close()
     return outcomes, summary
 

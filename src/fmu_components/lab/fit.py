@@ -16,7 +16,7 @@ a0..a3 and the geometric slope h (``--fix`` keeps any of them at its thesis valu
 x_ref, where the geometric multiplier is 1, is the part's geometry (the tyre's first
 contact, the torsion bush's live angle) and stays at the thesis value. The method: bounds,
 log-scaled parameters (k, c, xi; sign-aware, asinh, for a0..a3 and h, which may be zero),
-several starting points fitted in parallel on a process pool, and
+several starting points fitted in parallel (a campaign's tasks, or a local process pool), and
 ``scipy.optimize.least_squares`` on the simulated responses, which come from the compiled
 native co-simulation (``history``) at the FMU's default tolerance. Each test's residuals are
 divided by its measured peak-to-peak force and by the square root of its sample count, so
@@ -92,6 +92,15 @@ class Scaling:
         u = math.log(value / self.reference) if self.kind == "log" else math.asinh(
             value / self.reference)
         return min(max(u, self.lower), self.upper)
+
+    def reach(self, u):
+        """value(u), or +-inf where it lies beyond the floats (an interval's end far
+        outside the bounds: a parameter the data do not determine)."""
+        try:
+            return self.value(u)
+        except OverflowError:
+            sign = 1.0 if self.kind == "log" else math.copysign(1.0, u)
+            return math.copysign(math.inf, sign * self.reference)
 
     def derivative(self, u):
         """d value / d u."""
@@ -211,20 +220,25 @@ def _counted_residuals(u):
     return residuals
 
 
-def solve_start(problem, u0):
+def solve_start(problem, u0, columns=None):
     """One start's fit of `problem` from u0, in this process (a campaign's worker runs
-    it): as a pool worker's."""
+    it): as a pool worker's. columns(residuals, points), if given, evaluates the
+    finite-difference Jacobian's columns (the residuals at each point, in order)
+    elsewhere, a campaign's engine; the numbers are the same, scipy's arithmetic being
+    the same whoever evaluates them."""
     _adopt(problem)
-    return _solve_from(u0)
+    return _solve_from(u0, columns)
 
 
-def _solve_from(u0):
+def _solve_from(u0, columns=None):
     problem = _PROBLEM
     lower = [s.lower for s in problem.free]
     upper = [s.upper for s in problem.free]
-    result = least_squares(_counted_residuals, u0, bounds=(lower, upper), method="trf",
+    # the residuals themselves, not the counting global, when they travel to other workers
+    residuals = problem.residuals if columns is not None else _counted_residuals
+    result = least_squares(residuals, u0, bounds=(lower, upper), method="trf",
                            diff_step=1e-4, x_scale=1.0, ftol=1e-10, xtol=1e-10, gtol=1e-10,
-                           max_nfev=200)
+                           max_nfev=200, workers=columns)
     return result.x, float(result.cost), result.jac, int(result.nfev), result.message
 
 
@@ -254,11 +268,12 @@ class FitResult:
 
     def confidence(self):
         """Per free parameter: (low, high) of its 95 % interval, its half-width relative to
-        its value."""
+        its value. An end beyond the floats is +-inf, and so is the half-width: the
+        interval is unbounded."""
         sigma = np.sqrt(np.maximum(np.diag(self.covariance()), 0.0))
         rows = {}
         for s, ui, si in zip(self.free, self.u, sigma):
-            low, high = s.value(ui - 1.96 * si), s.value(ui + 1.96 * si)
+            low, high = s.reach(ui - 1.96 * si), s.reach(ui + 1.96 * si)
             value = s.value(ui)
             rows[s.name] = (low, high, (high - low) / 2.0 / abs(value) if value else math.inf)
         return rows
@@ -294,9 +309,10 @@ class FitResult:
                              f"{low:.3g} .. {high:.3g}); --fix keeps the thesis value, "
                              f"{self.thesis[name]:g}")
             elif self.too_wide(relative):
+                width = "unbounded" if math.isinf(relative) else \
+                    f"+-{relative * 100:.0f} % of its value"
                 notes.append(f"{name} is not identifiable from these data: its 95 % interval "
-                             f"is +-{relative * 100:.0f} % of its value; fix it (--fix) or "
-                             f"add tests that excite it")
+                             f"is {width}; fix it (--fix) or add tests that excite it")
         correlation = self.correlation()
         names = [s.name for s in self.free]
         for i in range(len(names)):

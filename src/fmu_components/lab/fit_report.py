@@ -127,14 +127,15 @@ def write_report(result, out):
               f"![residuals]({figures['residuals']})", "",
               "## Parameters", "",
               "95 % intervals from the Jacobian at the solution (s^2 (J'J)^-1 in the scaled "
-              "parameters).", "",
+              "parameters); an end beyond the floats is inf, the interval unbounded.", "",
               "| parameter | thesis | fitted | 95 % interval | +- % |", "|---|---|---|---|---|"]
     for name, value in result.values.items():
         if name in confidence:
             low, high, relative = confidence[name]
             flag = " **not identifiable**" if result.too_wide(relative) else ""
+            width = "unbounded" if math.isinf(relative) else f"{relative * 100:.1f}"
             lines.append(f"| `{name}` | {result.thesis[name]:.5g} | {value:.5g} | "
-                         f"{low:.4g} .. {high:.4g} | {relative * 100:.1f}{flag} |")
+                         f"{low:.4g} .. {high:.4g} | {width}{flag} |")
         else:
             lines.append(f"| `{name}` | {result.thesis[name]:.5g} | {value:.5g} (fixed) | | |")
     lines += ["", f"Condition number of the Jacobian: {result.condition():.3g}.", "",

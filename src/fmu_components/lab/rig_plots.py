@@ -106,7 +106,9 @@ def dual_sine_record(setup):
     return times, deflection, drive(setup, times, deflection, rates)
 
 
-def _structure_task(structure):
+def structure_records(structure):
+    """(structure, the dual sine's (t, x, f), the step and hold's (t, x, f)) of one of the
+    torsion bush's structures: one task of the comparison."""
     setup = make_setup("TrackBushTorsion", structure)
     dual = dual_sine_record(setup)
     relax = relaxation_record(setup, RELAXATION_FROM, RELAXATION_TO - RELAXATION_FROM,
@@ -114,10 +116,12 @@ def _structure_task(structure):
     return structure, dual, relax
 
 
-def compare_structures(out, processes=None, dpi=200):
+def compare_structures(out, processes=None, dpi=200, runner=None):
     """The three structures of the torsion bush on the dual sine and the step-and-hold test:
     a figure (DIR/structures.png) and a Markdown table (DIR/structures.md). Returns the
-    table's rows as dicts."""
+    table's rows as dicts. runner(structures), if given, runs ``structure_records`` of
+    each elsewhere (a campaign's engine) and returns them in order; else they run on
+    `processes` local processes."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -125,11 +129,13 @@ def compare_structures(out, processes=None, dpi=200):
     out.mkdir(parents=True, exist_ok=True)
     structures = [s for s in STRUCTURES if s in structures_of("TrackBushTorsion")]
     processes = min(processes or _cores(), len(structures))
-    if processes > 1:
+    if runner is not None:
+        results = runner(structures)
+    elif processes > 1:
         with get_context("fork").Pool(processes) as pool:
-            results = pool.map(_structure_task, structures, chunksize=1)
+            results = pool.map(structure_records, structures, chunksize=1)
     else:
-        results = [_structure_task(s) for s in structures]
+        results = [structure_records(s) for s in structures]
     figure, (loops, relaxation) = plt.subplots(1, 2, figsize=(11, 4.2))
     table = []
     figures = {"final": "Fig. 6.4-2, 6.4-3", "four-element": "Figs. 6.3-4, 6.3-5",
