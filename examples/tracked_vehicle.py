@@ -19,6 +19,7 @@ from pathlib import Path
 
 from fmu_components.coupling import DEFAULT_SCHEME, SCHEMES
 
+import bank_path
 from coupling_study import write_csv
 from vehicle import outputs
 from vehicle.course import COURSES
@@ -28,11 +29,11 @@ DEFAULT_STEP = 1e-3  # s
 
 
 def simulate(course_name, speed, end_time, step, coupling=DEFAULT_SCHEME, linear=None,
-             statics=None, settle_time=3.0, fmu_dir=None):
+             statics=None, settle_time=3.0, fmu_dir=None, path=bank_path.DEFAULT_PATH):
     """One run; returns (vehicle, histories, wall seconds, CPU seconds) of the run proper
     (the settling to the static point, stored after the first run, excluded)."""
     statics = statics or static_points(fmu_dir)
-    vehicle = Vehicle(None, speed, fmu_dir, linear, coupling, statics)
+    vehicle = Vehicle(None, speed, fmu_dir, linear, coupling, statics, path)
     vehicle.course = COURSES[course_name](vehicle.layout.sprocket[0] + 0.3)
     if settle_time > 0:
         vehicle.settle(settle_time)
@@ -56,6 +57,7 @@ def main(argv=None):
                         help="also run the vehicle with linear Kelvin elements")
     parser.add_argument("--csv", action="store_true", help="write the histories (SI) as CSV")
     parser.add_argument("--animate", action="store_true", help="write an animated GIF")
+    bank_path.add_argument(parser)
     parser.add_argument("--fmu-dir", type=Path, help="default: fmus/")
     parser.add_argument("--out", type=Path, default=Path("reports") / "tracked_vehicle")
     args = parser.parse_args(argv)
@@ -68,7 +70,7 @@ def main(argv=None):
     try:
         vehicle, result, wall, cpu = simulate(args.course, args.speed, args.end_time,
                                               args.step, args.coupling, None, statics,
-                                              args.settle_time, args.fmu_dir)
+                                              args.settle_time, args.fmu_dir, args.path)
         runs["FMUs"] = result
         if args.linear:
             linear = Linear(statics, args.fmu_dir)
@@ -82,7 +84,7 @@ def main(argv=None):
     name = f"{args.course}_{args.speed:g}mps"
     print(f"{vehicle.instances} FMU instances ({vehicle.links} links), course: "
           f"{vehicle.course.describe()}; {args.speed:g} m/s, host step {args.step * 1e3:g} ms, "
-          f"coupling {args.coupling}")
+          f"coupling {args.coupling}, {'compiled' if vehicle.compiled else 'Python'} path")
     print(f"{simulated:.3f} s simulated in {wall:.1f} s wall, {cpu:.1f} s CPU: "
           f"{wall / simulated:.1f} s wall and {cpu / simulated:.1f} s CPU per simulated "
           f"second")

@@ -46,14 +46,6 @@ def _cross(omega, r):
     return np.stack([-omega * r[..., 1], omega * r[..., 0]], axis=-1)
 
 
-def _law_key(component):
-    """What decides the component's present load law (its values; None for none)."""
-    law = getattr(component, "law", None)
-    if law is None or not hasattr(law, "__slots__"):
-        return id(law)  # none, or a law that never changes (a Kelvin element)
-    return tuple(getattr(law, name) for name in law.__slots__)
-
-
 def _penalty(depth, closing, stiffness, damping):
     """A penalty contact with a smooth onset: the spring's force k d^2 / (2 e) over the
     first CONTACT_ONSET e of depth d, then k (d - e / 2), and the damper's taken up over the
@@ -143,8 +135,7 @@ class Contacts:
     def _update(self, t, q, qd):
         q, qd = np.asarray(q), np.asarray(qd)
         # the tyres' load laws change between the coupling's passes at the same state
-        laws = tuple(_law_key(tyre) for pair in self.v.tyres for tyre in pair)
-        key = (t, q.tobytes(), qd.tobytes(), self.v.settling, laws)
+        key = (t, q.tobytes(), qd.tobytes(), self.v.settling, self.v.tyre_laws_key())
         if key == self._key:
             return
         self._key = key
@@ -373,18 +364,16 @@ class Contacts:
         self.tyre_force = np.zeros(len(self.wheels))
         self.tyre_terms = []
         tyres = np.zeros(3 * len(self.nodes))
-        for w, pair in enumerate(v.tyres):
-            share = self.tyre_share[w]
+        loads, slopes = v.tyre_loads(self.compression, self.compression_rate)
+        for w, share in enumerate(self.tyre_share):
             if share is None:
                 continue
             weights, gradient = share
-            compression = self.compression[w]
-            force = sum(v.load(tyre, compression, self.compression_rate[w]) for tyre in pair)
+            force = loads[w]
             self.tyre_force[w] = force
             tyres -= force * (weights @ gradient)  # pushes the compression back
             if force > 0.0:
-                slope = sum(v.tangent(tyre, compression) for tyre in pair)
-                self.tyre_terms.append((w, force, slope))
+                self.tyre_terms.append((w, force, slopes[w]))
 
         # pins onto the seats of the links either side
         seat[:, 0] += 0.5 * pin
