@@ -31,12 +31,14 @@ DEFAULT_STEP = 1e-3  # s
 def simulate(course_name, speed, end_time, step, coupling=DEFAULT_SCHEME, linear=None,
              statics=None, settle_time=3.0, fmu_dir=None, path=bank_path.DEFAULT_PATH):
     """One run; returns (vehicle, histories, wall seconds, CPU seconds) of the run proper
-    (the settling to the static point, stored after the first run, excluded)."""
+    (the settling to the static point, stored after the first run, and the set-up,
+    Vehicle.prepare, excluded)."""
     statics = statics or static_points(fmu_dir)
     vehicle = Vehicle(None, speed, fmu_dir, linear, coupling, statics, path)
     vehicle.course = COURSES[course_name](vehicle.layout.sprocket[0] + 0.3)
     if settle_time > 0:
         vehicle.settle(settle_time)
+    vehicle.prepare()
     wall, cpu = time.perf_counter(), time.process_time()
     result = vehicle.run(end_time, step, settle=False)
     return vehicle, result, time.perf_counter() - wall, time.process_time() - cpu

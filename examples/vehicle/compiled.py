@@ -122,7 +122,7 @@ class _Starting:
 def solve_compiled(vehicle, end_time, step, settings):
     """The run on the compiled path; returns exudyn_host.solve's host. The bank stands in
     for the Python coupling afterwards (its counts: Vehicle.solver_statistics)."""
-    path = CompiledPath(vehicle)
+    path = vehicle.compiled_path
     vehicle.bank = path.bank
     try:
         host = ExudynBank(vehicle.mbs, path.bank, path.laws, path.deflections)
@@ -131,4 +131,3 @@ def solve_compiled(vehicle, end_time, step, settings):
     finally:
         vehicle.bank = None
         vehicle.coupling = path.bank
-        vehicle.compiled_path = path  # keeps the compiled functions with the system

@@ -102,11 +102,15 @@ class Contacts:
         self.reference = np.array([v.mbs.GetNodeParameter(n, "referenceCoordinates")
                                    for n in self.nodes], dtype=float)
         size = 3 * len(self.nodes)
+        # sparse (triplets): a dense matrix of this size made exudyn's sparse solver factor
+        # a dense block at every Newton iteration
+        massless = exu.MatrixContainer()
+        massless.SetWithSparseMatrix(np.zeros((0, 3)), size, size)
         v.mbs.AddObject(ObjectGenericODE2(
-            nodeNumbers=self.nodes, massMatrix=np.zeros((size, size)),
+            nodeNumbers=self.nodes, massMatrix=massless,
             forceUserFunction=lambda mbs, t, item, q, qd: self._generalized(t, q, qd),
             jacobianUserFunction=lambda mbs, t, item, q, qd, f, f_t:
-                self._jacobian(t, q, qd, f, f_t)))
+                self._sparse_jacobian(t, q, qd, f, f_t)))
 
     def index(self):
         """After Assemble: where the object's coordinates sit in the system's vectors."""
@@ -147,6 +151,15 @@ class Contacts:
     def _generalized(self, t, q, qd):
         self._update(t, q, qd)
         return self.generalized
+
+    def _sparse_jacobian(self, t, q, qd, factor, factor_t):
+        """The Jacobian as exudyn takes it from this object: its nonzero entries."""
+        jacobian = self._jacobian(t, q, qd, factor, factor_t)
+        rows, columns = np.nonzero(jacobian)
+        matrix = exu.MatrixContainer()
+        matrix.SetWithSparseMatrix(np.stack([rows, columns, jacobian[rows, columns]], axis=1),
+                                   len(jacobian), len(jacobian))
+        return matrix
 
     def _jacobian(self, t, q, qd, factor, factor_t):
         self._update(t, q, qd)

@@ -153,6 +153,7 @@ class Vehicle:
         self.course, self.speed = course, speed
         self.compiled = linear is None and bank_path.compiled(path, coupling)
         self.bank = None  # the compiled path's, while it runs
+        self.compiled_path = None  # compiled.CompiledPath, made by prepare()
         self.fmu_dir, self.linear = fmu_dir, linear
         self.statics = statics or static_points(fmu_dir)
         compression, stretch, _ = self.statics
@@ -407,9 +408,19 @@ class Vehicle:
         self.contacts.check(t)
         self.records.append(snapshot(self, t))
 
+    def prepare(self):
+        """What the run sets up before its first step (after the settling, which runs on
+        the Python functions): on the compiled path the bank and the compiled functions
+        (compiled.py); the outputs' modules."""
+        from . import outputs  # noqa: F401 (scipy's import: a few seconds)
+        if self.compiled and self.compiled_path is None:
+            from .compiled import CompiledPath
+            self.compiled_path = CompiledPath(self)
+
     def run(self, end_time, step, settle=True):
         if settle:
             self.settle()
+        self.prepare()
         self.host_steps = math.ceil(end_time / step - 1e-9)
         try:
             if self.compiled:
