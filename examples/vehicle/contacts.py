@@ -164,14 +164,25 @@ class Contacts:
     def _jacobian(self, t, q, qd, factor, factor_t):
         self._update(t, q, qd)
         size = 3 * len(self.nodes)
-        jacobian = np.zeros((size, size))
-        for stiffness, damping, members in self.springs:
-            block = factor * stiffness + factor_t * damping
-            rows = [(3 * b, *[w * g for g in self._g(b, point)]) for b, point, w in members]
-            for ia, force_g, _ in rows:
-                left = force_g.T @ block
-                for ib, _, motion_g in rows:
-                    jacobian[ia:ia + 3, ib:ib + 3] += left @ motion_g
+        # every spring's block (its members a, b: w_a G_a^T (factor K + factor_t C) w_b H_b,
+        # G how a force at the member's point loads its body, H how the point moves with
+        # it) at once, summed into the matrix by index
+        if not self.springs:
+            return self._add_tyre_jacobians(np.zeros((size, size)), factor)
+        stiffness, damping, bodies, force_g, motion_g, weights = (
+            np.concatenate(part) for part in zip(*self.springs))
+        block = factor * stiffness + factor_t * damping
+        left = weights[:, :, None, None] * force_g
+        right = weights[:, :, None, None] * motion_g
+        blocks = np.einsum("saji,sjk,sbkl->sabil", left, block, right)
+        first = 3 * bodies[:, :, None] + np.arange(3)  # (spring, member, coordinate)
+        rows = np.broadcast_to(first[:, :, None, :, None], blocks.shape)
+        columns = np.broadcast_to(first[:, None, :, None, :], blocks.shape)
+        jacobian = np.bincount((rows * size + columns).ravel(), blocks.ravel(),
+                               minlength=size * size).reshape(size, size)
+        return self._add_tyre_jacobians(jacobian, factor)
+
+    def _add_tyre_jacobians(self, jacobian, factor):
         for w, force, slope in self.tyre_terms:
             self._add_tyre_jacobian(jacobian, factor, w, force, slope)
         return jacobian
@@ -188,6 +199,40 @@ class Contacts:
         spread = gradient.T @ (weights[:, None] * gradient) - np.outer(mean, mean)
         jacobian[np.ix_(used, used)] += factor * (slope * np.outer(mean, mean)
                                                   + force / TYRE_BLEND * spread)
+
+    def _point_g(self, bodies, points):
+        """d(point)/d(body's x, y, angle), one 2 x 3 matrix per point fixed on its body:
+        how a force there loads the body, and how the point moves with it."""
+        r = points - self.body_pos[bodies]
+        g = np.zeros((len(r), 2, 3))
+        g[:, 0, 0] = g[:, 1, 1] = 1.0
+        g[:, 0, 2], g[:, 1, 2] = -r[:, 1], r[:, 0]
+        return g
+
+    def _add_springs(self, stiffness, damping, members):
+        """Springs (their 2 x 2 stiffness and damping, one per row) for the Jacobian, each
+        between up to three members, given as (bodies, force_g, motion_g, weights) per
+        member slot (a weight 0: no member)."""
+        count = len(stiffness)
+        if not count:
+            return
+        bodies = np.zeros((count, 3), dtype=int)
+        force_g, motion_g = np.zeros((count, 3, 2, 3)), np.zeros((count, 3, 2, 3))
+        weights = np.zeros((count, 3))
+        for slot, (body, g_force, g_motion, weight) in enumerate(members):
+            bodies[:, slot], weights[:, slot] = body, weight
+            force_g[:, slot], motion_g[:, slot] = g_force, g_motion
+        self.springs.append((stiffness, damping, bodies, force_g, motion_g, weights))
+
+    def _pin_springs(self, pins, stiffness, damping, third=None):
+        """Springs on pins (indices): each pin the two seats that make it, half each; and
+        a third member (bodies, force_g, motion_g, weights) if given."""
+        behind = (pins - 1) % len(self.pins)
+        members = []
+        for links, seats in ((behind, self.seats[behind, 1]), (pins, self.seats[pins, 0])):
+            g = self._point_g(self.link0 + links, seats)
+            members.append((self.link0 + links, g, g, 0.5))
+        self._add_springs(stiffness, damping, members + ([third] if third else []))
 
     def _g(self, body, point):
         """(how a force at the point loads the body, how the point moves with it): both
@@ -276,13 +321,6 @@ class Contacts:
             rows[row, body + 2] = along[row] + log_window[row] * height[row]
         return rows
 
-    def _pin_members(self, j, weight=1.0):
-        """Pin j as (body, point, weight) of the two seats that make it."""
-        n = len(self.pins)
-        behind = (j - 1) % n
-        return [(self.link0 + behind, self.seats[behind, 1], 0.5 * weight),
-                (self.link0 + j, self.seats[j, 0], 0.5 * weight)]
-
     def tyre_state(self, w):
         self.evaluate(self.v.mbs.systemData.GetTime())
         if self.tyre_share[w] is None:
@@ -295,17 +333,18 @@ class Contacts:
         pin = np.zeros((count, 2))  # forces on the pins
         seat = np.zeros((count, 2, 2))  # forces on the links' seats, besides the pins'
         bodies = np.zeros((len(self.nodes), 3))
-        springs = []
+        self.springs = []
         hull_pos, hull_theta = self.hull[:2], self.hull[2]
         hull_vel, hull_omega = self.hull_v[:2], self.hull_v[2]
 
-        def on_body(body, point, force):
-            bodies[body, :2] += force
-            r = point - self.body_pos[body]
-            bodies[body, 2] += r[0] * force[1] - r[1] * force[0]
+        def on_body(body, points, forces):
+            bodies[body, :2] += forces.sum(axis=0)
+            r = points - self.body_pos[body]
+            bodies[body, 2] += np.sum(r[:, 0] * forces[:, 1] - r[:, 1] * forces[:, 0])
 
-        def normal_spring(k, c, normal):
-            return k * np.outer(normal, normal), c * np.outer(normal, normal)
+        def normal_springs(k, c, normals):
+            outer = normals[:, :, None] * normals[:, None, :]
+            return k[:, None, None] * outer, c[:, None, None] * outer
 
         # ground (frictionless, vertical)
         ground = v.course.height(self.pins[:, 0])
@@ -314,10 +353,9 @@ class Contacts:
                                             GROUND_DAMPING)
         pin[:, 1] += load
         self.ground_load = load
-        vertical = np.array([0.0, 1.0])
-        for j in np.flatnonzero(load > 0.0):
-            springs.append((*normal_spring(stiffness[j], damping[j], vertical),
-                            self._pin_members(j)))
+        on = np.flatnonzero(load > 0.0)
+        self._pin_springs(on, *normal_springs(stiffness[on], damping[on],
+                                              np.tile([0.0, 1.0], (len(on), 1))))
 
         # sprocket teeth
         centre = hull_pos + _rotate(hull_theta, self.sprocket_local)
@@ -340,18 +378,18 @@ class Contacts:
                                          + SPROCKET_DAMPING * (slot_v - self.pins_v))
         pin += tooth_force
         self.tooth_gap = np.where(weight > 0, np.hypot(*(slot - self.pins).T), 0.0)
-        self.drive_torque = 0.0
-        for j in np.flatnonzero(weight > 0.0):
-            on_body(0, slot[j], -tooth_force[j])
-            r = slot[j] - centre
-            self.drive_torque -= r[0] * tooth_force[j, 1] - r[1] * tooth_force[j, 0]
-            # the tooth space turns back as the hull travels forward
-            slot_g = self._g(0, slot[j])[0]
-            motion_g = slot_g.copy()
-            motion_g[:, 0] += [math.sin(slot_angle[j]), -math.cos(slot_angle[j])]
-            springs.append((weight[j] * SPROCKET_STIFFNESS * np.eye(2),
-                            weight[j] * SPROCKET_DAMPING * np.eye(2),
-                            self._pin_members(j) + [(0, (slot_g, motion_g), -1.0)]))
+        on = np.flatnonzero(weight > 0.0)
+        on_body(0, slot[on], -tooth_force[on])
+        r = slot[on] - centre
+        self.drive_torque = -np.sum(r[:, 0] * tooth_force[on, 1] - r[:, 1] * tooth_force[on, 0])
+        # the tooth space turns back as the hull travels forward
+        slot_g = self._point_g(np.zeros(len(on), dtype=int), slot[on])
+        motion_g = slot_g.copy()
+        motion_g[:, 0, 0] += np.sin(slot_angle[on])
+        motion_g[:, 1, 0] -= np.cos(slot_angle[on])
+        identity = weight[on, None, None] * np.eye(2)
+        self._pin_springs(on, SPROCKET_STIFFNESS * identity, SPROCKET_DAMPING * identity,
+                          (0, slot_g, motion_g, -1.0))
 
         # idler (on its crank) and support roller (on the hull)
         roller = hull_pos + _rotate(hull_theta, self.roller_local)
@@ -365,11 +403,13 @@ class Contacts:
             closing = -np.einsum("ij,ij->i", self.pins_v - centre_v, normal)
             force, stiffness, damping = _penalty(radius - distance, closing, WHEEL_STIFFNESS,
                                                  WHEEL_DAMPING)
-            for j in np.flatnonzero(force > 0.0):
-                pin[j] += force[j] * normal[j]
-                on_body(body, centre, -force[j] * normal[j])
-                springs.append((*normal_spring(stiffness[j], damping[j], normal[j]),
-                                self._pin_members(j) + [(body, centre, -1.0)]))
+            on = np.flatnonzero(force > 0.0)
+            pushed = force[on, None] * normal[on]
+            pin[on] += pushed
+            on_body(body, np.tile(centre, (len(on), 1)), -pushed)
+            centre_g = self._point_g(np.full(len(on), body), np.tile(centre, (len(on), 1)))
+            self._pin_springs(on, *normal_springs(stiffness[on], damping[on], normal[on]),
+                              (body, centre_g, centre_g, -1.0))
 
         # tyres: both half-wheels at the wheel's compression, the generalized force minus
         # the load times the compression's gradient (shared among the links beneath by
@@ -394,28 +434,31 @@ class Contacts:
 
         if v.settling:  # to rest: damping of every body's velocity
             seat -= SETTLE_DAMPING["seat"] * self.seats_v
-            self._settle_damping(bodies, springs)
+            self._settle_damping(bodies)
         links = slice(self.link0, None)
         r0, r1 = self.seats[:, 0] - self.link_pos, self.seats[:, 1] - self.link_pos
         bodies[links, :2] += seat[:, 0] + seat[:, 1]
         bodies[links, 2] += (r0[:, 0] * seat[:, 0, 1] - r0[:, 1] * seat[:, 0, 0]
                              + r1[:, 0] * seat[:, 1, 1] - r1[:, 1] * seat[:, 1, 0])
         self.generalized = bodies.reshape(-1) + tyres
-        self.springs = springs
 
-    def _settle_damping(self, bodies, springs):
+    def _settle_damping(self, bodies):
         c = SETTLE_DAMPING
         bodies[0, :2] -= np.array(c["hull"]) * self.hull_v[:2]
         bodies[0, 2] -= c["hull_pitch"] * self.hull_v[2]
-        zero = np.zeros((2, 2))
-        springs.append((zero, np.diag(c["hull"]), [(0, self.body_pos[0], 1.0)]))
-        for w in range(len(self.wheels)):
-            bodies[1 + w, :2] -= c["arm"] * self.wheels_v[w]
-            springs.append((zero, c["arm"] * np.eye(2), [(1 + w, self.wheels[w], 1.0)]))
-        for k in range(len(self.seats)):
-            for side in (0, 1):
-                springs.append((zero, c["seat"] * np.eye(2),
-                                [(self.link0 + k, self.seats[k, side], 1.0)]))
+
+        def dampers(body, points, damping):
+            g = self._point_g(body, points)
+            count = len(points)
+            self._add_springs(np.zeros((count, 2, 2)), np.broadcast_to(damping, (count, 2, 2)),
+                              [(body, g, g, 1.0)])
+
+        dampers(np.zeros(1, dtype=int), self.body_pos[:1], np.diag(c["hull"]))
+        wheels = len(self.wheels)
+        bodies[1:1 + wheels, :2] -= c["arm"] * self.wheels_v
+        dampers(1 + np.arange(wheels), self.wheels, c["arm"] * np.eye(2))
+        links = self.link0 + np.repeat(np.arange(len(self.seats)), 2)
+        dampers(links, self.seats.reshape(-1, 2), c["seat"] * np.eye(2))
 
     # --- checks and records ---------------------------------------------------------------
 
