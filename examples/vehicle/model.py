@@ -393,7 +393,7 @@ class Vehicle:
 
     @property
     def instances(self):
-        return len(self.coupling.entries)
+        return len(self.components)
 
     # --- static state, run, records ---------------------------------------------------------
 
