@@ -83,8 +83,7 @@ class CompiledPath:
         q = np.asarray(data.GetODE2Coordinates())
         deflection = np.empty(self.bank.n)
         v.contacts.evaluate(data.GetTime())
-        compression = np.array([c if share is not None else -HORN_HEIGHT for c, share in
-                                zip(v.contacts.compression, v.contacts.tyre_share)])
+        compression = np.where(v.contacts.in_contact, v.contacts.compression, -HORN_HEIGHT)
         deflection[self.tyre_rows] = compression[:, None]
         deflection[self.damper_rows] = q[self.hull_rotation] - q[self.arm_rotation]
         moved = q[self.link_index]

@@ -183,22 +183,26 @@ class Contacts:
         return self._add_tyre_jacobians(jacobian, factor)
 
     def _add_tyre_jacobians(self, jacobian, factor):
+        """Adds d(generalized tyre force)/dq of each wheel in contact, from the blend's
+        gradient D (a row per link beneath) and weights p: F' (p.D)^T (p.D) +
+        F/b D^T (diag(p) - p p^T) D (b TYRE_BLEND; the second derivatives of each link's
+        own term left out), on the few coordinates D touches (the wheel's, the links')."""
         for w, force, slope in self.tyre_terms:
-            self._add_tyre_jacobian(jacobian, factor, w, force, slope)
+            pairs = np.flatnonzero(self.pair_wheel == w)
+            m = len(pairs)
+            gradient = np.zeros((m, 3 + 3 * m))
+            gradient[:, :3] = self.pair_gradient[pairs, :3]
+            for j in range(3):
+                gradient[np.arange(m), 3 + 3 * np.arange(m) + j] = self.pair_gradient[pairs, 3 + j]
+            used = np.concatenate([3 * (1 + w) + np.arange(3),
+                                   (3 * (self.link0 + self.pair_link[pairs])[:, None]
+                                    + np.arange(3)).ravel()])
+            weights = self.pair_weight[pairs]
+            mean = weights @ gradient
+            spread = gradient.T @ (weights[:, None] * gradient) - np.outer(mean, mean)
+            jacobian[np.ix_(used, used)] += factor * (slope * np.outer(mean, mean)
+                                                      + force / TYRE_BLEND * spread)
         return jacobian
-
-    def _add_tyre_jacobian(self, jacobian, factor, w, force, slope):
-        """Adds d(generalized tyre force)/dq of wheel w, from the blend's gradient D (a row
-        per link beneath) and weights p: F' (p.D)^T (p.D) + F/b D^T (diag(p) - p p^T) D
-        (b TYRE_BLEND; the second derivatives of each link's own term left out), on the
-        few coordinates D touches."""
-        weights, gradient = self.tyre_share[w]
-        used = np.flatnonzero(np.any(gradient != 0.0, axis=0))
-        gradient = gradient[:, used]
-        mean = weights @ gradient
-        spread = gradient.T @ (weights[:, None] * gradient) - np.outer(mean, mean)
-        jacobian[np.ix_(used, used)] += factor * (slope * np.outer(mean, mean)
-                                                  + force / TYRE_BLEND * spread)
 
     def _point_g(self, bodies, points):
         """d(point)/d(body's x, y, angle), one 2 x 3 matrix per point fixed on its body:
@@ -234,16 +238,6 @@ class Contacts:
             members.append((self.link0 + links, g, g, 0.5))
         self._add_springs(stiffness, damping, members + ([third] if third else []))
 
-    def _g(self, body, point):
-        """(how a force at the point loads the body, how the point moves with it): both
-        d(point)/d(body's x, y, angle) for a point fixed on the body; `point` may give the
-        pair of 2 x 3 matrices instead."""
-        if isinstance(point, tuple):
-            return point
-        r = point - self.body_pos[body]
-        g = np.array([[1.0, 0.0, -r[1]], [0.0, 1.0, r[0]]])
-        return g, g
-
     def _kinematics(self, state, rates):
         half = 0.5 * lay.LINK_PITCH
         self.body_pos = state[:, :2]
@@ -269,61 +263,53 @@ class Contacts:
     def _tyre_kinematics(self):
         """Per wheel: the tyre's compression, blended smoothly over the links beneath it
         (a smooth maximum of their overlaps, TYRE_BLEND wide, each link's term faded in and
-        out over HANDOVER of its ends), its rate, each link's share of the contact and
-        the compression's gradient (Contacts._tyre_jacobian)."""
+        out over HANDOVER of its ends), its rate; per (wheel, link beneath) pair: the
+        link's weight in the blend and the gradient of its term (the wheel's three
+        coordinates, then the link's), for the forces and the Jacobian. All wheels at
+        once."""
         count = len(self.wheels)
-        self.compression = np.full(count, -np.inf)
-        self.compression_rate = np.zeros(count)
-        self.tyre_share = []  # per wheel: (weights, the blend's gradient), or None
-        half = 0.5 * lay.LINK_PITCH
-        for w in range(count):
-            r = self.wheels[w] - self.link_pos
-            along = np.einsum("ij,ij->i", r, self.u)
-            height = np.einsum("ij,ij->i", r, self.n)
-            beneath = np.flatnonzero((np.abs(along) < half + 0.5 * HANDOVER) & (height > 0.0)
-                                     & (height < 2 * lay.WHEEL_RADIUS))
-            if not len(beneath):
-                self.tyre_share.append(None)
-                continue
-            overlap = lay.WHEEL_RADIUS - (height[beneath] - lay.LINK_INNER)
-            window = _smoothstep((half + 0.5 * HANDOVER - np.abs(along[beneath])) / HANDOVER)
-            top = overlap.max()
-            terms = window * np.exp((overlap - top) / TYRE_BLEND)
-            total = terms.sum()
-            if total <= 0.0:
-                self.tyre_share.append(None)
-                continue
-            weights = terms / total
-            self.compression[w] = top + TYRE_BLEND * math.log(total)
-            relative = self.wheels_v[w] - self.link_v[beneath]
-            rates = -(np.einsum("ij,ij->i", relative, self.n[beneath])
-                      - self.link_omega[beneath] * along[beneath])
-            self.compression_rate[w] = weights @ rates
-            self.tyre_share.append((weights, self._blend_gradient(
-                w, beneath, along[beneath], height[beneath], window)))
-
-    def _blend_gradient(self, w, links, along, height, window):
-        """A row per link beneath wheel w: the gradient, by the object's coordinates, of
-        that link's term in the blend, its overlap plus TYRE_BLEND ln(its window)."""
-        rows = np.zeros((len(links), 3 * len(self.nodes)))
-        wheel_g = self._g(1 + w, self.wheels[w])[1]
-        x = (0.5 * lay.LINK_PITCH + 0.5 * HANDOVER - np.abs(along)) / HANDOVER
-        # d ln(window) / d along: the smoothstep's slope over its value, zero once full
+        reach = 0.5 * lay.LINK_PITCH + 0.5 * HANDOVER
+        r = self.wheels[:, None, :] - self.link_pos[None, :, :]
+        along = r[..., 0] * self.u[:, 0] + r[..., 1] * self.u[:, 1]
+        height = r[..., 0] * self.n[:, 0] + r[..., 1] * self.n[:, 1]
+        wheel, link = np.nonzero((np.abs(along) < reach) & (height > 0.0)
+                                 & (height < 2 * lay.WHEEL_RADIUS))
+        along, height = along[wheel, link], height[wheel, link]
+        overlap = lay.WHEEL_RADIUS - (height - lay.LINK_INNER)
+        x = (reach - np.abs(along)) / HANDOVER
+        window = _smoothstep(x)
+        top = np.full(count, -np.inf)
+        np.maximum.at(top, wheel, overlap)
+        terms = window * np.exp((overlap - top[wheel]) / TYRE_BLEND)
+        total = np.bincount(wheel, terms, minlength=count)
+        self.in_contact = total > 0.0
+        with np.errstate(divide="ignore"):
+            self.compression = np.where(self.in_contact,
+                                        top + TYRE_BLEND * np.log(total), -np.inf)
+        weights = terms / np.where(self.in_contact, total, 1.0)[wheel]
+        n, u = self.n[link], self.u[link]
+        relative = self.wheels_v[wheel] - self.link_v[link]
+        rates = -(np.einsum("ij,ij->i", relative, n) - self.link_omega[link] * along)
+        self.compression_rate = np.bincount(wheel, weights * rates, minlength=count)
+        # the gradient of each term, its overlap plus TYRE_BLEND ln(its window), by the
+        # wheel's coordinates and the link's (overlap R + inner - (wheel - link) . n;
+        # along (wheel - link) . u; d ln(window)/d along: the smoothstep's slope over its
+        # value, zero once full)
         slope = np.where(x < 1.0, 6 * x * (1 - x) / np.maximum(window, 1e-300), 0.0)
         log_window = -TYRE_BLEND * slope * np.sign(along) / HANDOVER
-        for row, k in enumerate(links):
-            n, u = self.n[k], self.u[k]
-            # overlap R + inner - (wheel - link) . n; along (wheel - link) . u
-            by_wheel = -n + log_window[row] * u
-            rows[row, 3 * (1 + w):3 * (2 + w)] = by_wheel @ wheel_g
-            body = 3 * (self.link0 + k)
-            rows[row, body:body + 2] = -by_wheel
-            rows[row, body + 2] = along[row] + log_window[row] * height[row]
-        return rows
+        by_wheel = -n + log_window[:, None] * u
+        arm = self.wheels[wheel] - self.body_pos[1 + wheel]
+        gradient = np.empty((len(wheel), 6))
+        gradient[:, :2] = by_wheel
+        gradient[:, 2] = -by_wheel[:, 0] * arm[:, 1] + by_wheel[:, 1] * arm[:, 0]
+        gradient[:, 3:5] = -by_wheel
+        gradient[:, 5] = along + log_window * height
+        self.pair_wheel, self.pair_link = wheel, link
+        self.pair_weight, self.pair_gradient = weights, gradient
 
     def tyre_state(self, w):
         self.evaluate(self.v.mbs.systemData.GetTime())
-        if self.tyre_share[w] is None:
+        if not self.in_contact[w]:
             return -HORN_HEIGHT, 0.0
         return float(self.compression[w]), float(self.compression_rate[w])
 
@@ -414,19 +400,16 @@ class Contacts:
         # tyres: both half-wheels at the wheel's compression, the generalized force minus
         # the load times the compression's gradient (shared among the links beneath by
         # their weights in the blend, each along its own normal)
-        self.tyre_force = np.zeros(len(self.wheels))
-        self.tyre_terms = []
-        tyres = np.zeros(3 * len(self.nodes))
         loads, slopes = v.tyre_loads(self.compression, self.compression_rate)
-        for w, share in enumerate(self.tyre_share):
-            if share is None:
-                continue
-            weights, gradient = share
-            force = loads[w]
-            self.tyre_force[w] = force
-            tyres -= force * (weights @ gradient)  # pushes the compression back
-            if force > 0.0:
-                self.tyre_terms.append((w, force, slopes[w]))
+        self.tyre_force = np.where(self.in_contact, loads, 0.0)
+        self.tyre_terms = [(w, self.tyre_force[w], slopes[w])
+                           for w in np.flatnonzero(self.tyre_force > 0.0)]
+        # pushes the compression back: minus the load times the gradient, by weight
+        share = -(self.tyre_force[self.pair_wheel] * self.pair_weight)[:, None] * self.pair_gradient
+        coordinates = np.concatenate([3 * (1 + self.pair_wheel)[:, None] + np.arange(3),
+                                      3 * (self.link0 + self.pair_link)[:, None] + np.arange(3)],
+                                     axis=1)
+        tyres = np.bincount(coordinates.ravel(), share.ravel(), minlength=3 * len(self.nodes))
 
         # pins onto the seats of the links either side
         seat[:, 0] += 0.5 * pin
