@@ -153,22 +153,27 @@ class Contacts:
         return self.generalized
 
     def _sparse_jacobian(self, t, q, qd, factor, factor_t):
-        """The Jacobian as exudyn takes it from this object: its nonzero entries."""
-        jacobian = self._jacobian(t, q, qd, factor, factor_t)
-        rows, columns = np.nonzero(jacobian)
+        """The Jacobian as exudyn takes it from this object: (row, column, value)
+        triplets, repeated entries summed."""
+        self._update(t, q, qd)
+        size = 3 * len(self.nodes)
         matrix = exu.MatrixContainer()
-        matrix.SetWithSparseMatrix(np.stack([rows, columns, jacobian[rows, columns]], axis=1),
-                                   len(jacobian), len(jacobian))
+        matrix.SetWithSparseMatrix(np.stack(self._triplets(factor, factor_t), axis=1),
+                                   size, size)
         return matrix
 
     def _jacobian(self, t, q, qd, factor, factor_t):
+        """The Jacobian as a dense matrix (for checks)."""
         self._update(t, q, qd)
         size = 3 * len(self.nodes)
-        # every spring's block (its members a, b: w_a G_a^T (factor K + factor_t C) w_b H_b,
-        # G how a force at the member's point loads its body, H how the point moves with
-        # it) at once, summed into the matrix by index
-        if not self.springs:
-            return self._add_tyre_jacobians(np.zeros((size, size)), factor)
+        rows, columns, values = self._triplets(factor, factor_t)
+        return np.bincount((rows * size + columns).astype(int), values,
+                           minlength=size * size).reshape(size, size)
+
+    def _triplets(self, factor, factor_t):
+        """Every spring's block (its members a, b: w_a G_a^T (factor K + factor_t C) w_b H_b,
+        G how a force at the member's point loads its body, H how the point moves with
+        it) at once, then the tyres'."""
         stiffness, damping, bodies, force_g, motion_g, weights = (
             np.concatenate(part) for part in zip(*self.springs))
         block = factor * stiffness + factor_t * damping
@@ -176,33 +181,47 @@ class Contacts:
         right = weights[:, :, None, None] * motion_g
         blocks = np.einsum("saji,sjk,sbkl->sabil", left, block, right)
         first = 3 * bodies[:, :, None] + np.arange(3)  # (spring, member, coordinate)
-        rows = np.broadcast_to(first[:, :, None, :, None], blocks.shape)
-        columns = np.broadcast_to(first[:, None, :, None, :], blocks.shape)
-        jacobian = np.bincount((rows * size + columns).ravel(), blocks.ravel(),
-                               minlength=size * size).reshape(size, size)
-        return self._add_tyre_jacobians(jacobian, factor)
+        parts = [(np.broadcast_to(first[:, :, None, :, None], blocks.shape).ravel(),
+                  np.broadcast_to(first[:, None, :, None, :], blocks.shape).ravel(),
+                  blocks.ravel())]
+        parts += self._tyre_triplets(factor)
+        return tuple(np.concatenate(part).astype(float) for part in zip(*parts))
 
-    def _add_tyre_jacobians(self, jacobian, factor):
-        """Adds d(generalized tyre force)/dq of each wheel in contact, from the blend's
+    def _tyre_triplets(self, factor):
+        """d(generalized tyre force)/dq of each wheel in contact, from the blend's
         gradient D (a row per link beneath) and weights p: F' (p.D)^T (p.D) +
         F/b D^T (diag(p) - p p^T) D (b TYRE_BLEND; the second derivatives of each link's
         own term left out), on the few coordinates D touches (the wheel's, the links')."""
-        for w, force, slope in self.tyre_terms:
-            pairs = np.flatnonzero(self.pair_wheel == w)
-            m = len(pairs)
-            gradient = np.zeros((m, 3 + 3 * m))
-            gradient[:, :3] = self.pair_gradient[pairs, :3]
-            for j in range(3):
-                gradient[np.arange(m), 3 + 3 * np.arange(m) + j] = self.pair_gradient[pairs, 3 + j]
-            used = np.concatenate([3 * (1 + w) + np.arange(3),
-                                   (3 * (self.link0 + self.pair_link[pairs])[:, None]
-                                    + np.arange(3)).ravel()])
-            weights = self.pair_weight[pairs]
-            mean = weights @ gradient
-            spread = gradient.T @ (weights[:, None] * gradient) - np.outer(mean, mean)
-            jacobian[np.ix_(used, used)] += factor * (slope * np.outer(mean, mean)
-                                                      + force / TYRE_BLEND * spread)
-        return jacobian
+        count = len(self.wheels)
+        force, slope = np.zeros(count), np.zeros(count)
+        for w, f, k in self.tyre_terms:
+            force[w], slope[w] = f, k
+        pairs = np.flatnonzero(force[self.pair_wheel] > 0.0)
+        wheel, weights = self.pair_wheel[pairs], self.pair_weight[pairs]
+        gradient = self.pair_gradient[pairs]
+        coordinates = np.concatenate([3 * (1 + wheel)[:, None] + np.arange(3),
+                                      3 * (self.link0 + self.pair_link[pairs])[:, None]
+                                      + np.arange(3)], axis=1)
+        # F/b sum_k p_k D_k^T D_k, a 6 x 6 block per pair
+        scale = factor * force[wheel] / TYRE_BLEND * weights
+        own = (np.broadcast_to(coordinates[:, :, None], (len(pairs), 6, 6)).ravel(),
+               np.broadcast_to(coordinates[:, None, :], (len(pairs), 6, 6)).ravel(),
+               (scale[:, None, None] * gradient[:, :, None] * gradient[:, None, :]).ravel())
+        # (F' - F/b) (p.D)^T (p.D): p.D's entries, the wheel's summed over its links
+        wheels = np.flatnonzero(force > 0.0)
+        by_wheel = np.stack([np.bincount(wheel, weights * gradient[:, j], minlength=count)
+                             for j in range(3)], axis=1)[wheels]
+        entry_wheel = np.concatenate([np.repeat(wheels, 3), np.repeat(wheel, 3)])
+        entry_coordinate = np.concatenate([(3 * (1 + wheels)[:, None] + np.arange(3)).ravel(),
+                                           coordinates[:, 3:].ravel()])
+        entry_value = np.concatenate([by_wheel.ravel(),
+                                      (weights[:, None] * gradient[:, 3:]).ravel()])
+        first, second = np.nonzero(entry_wheel[:, None] == entry_wheel[None, :])
+        w = entry_wheel[first]
+        mean = (entry_coordinate[first], entry_coordinate[second],
+                factor * (slope[w] - force[w] / TYRE_BLEND) * entry_value[first]
+                * entry_value[second])
+        return [own, mean]
 
     def _point_g(self, bodies, points):
         """d(point)/d(body's x, y, angle), one 2 x 3 matrix per point fixed on its body:
@@ -319,7 +338,8 @@ class Contacts:
         pin = np.zeros((count, 2))  # forces on the pins
         seat = np.zeros((count, 2, 2))  # forces on the links' seats, besides the pins'
         bodies = np.zeros((len(self.nodes), 3))
-        self.springs = []
+        self.springs = [(np.zeros((0, 2, 2)), np.zeros((0, 2, 2)), np.zeros((0, 3), dtype=int),
+                         np.zeros((0, 3, 2, 3)), np.zeros((0, 3, 2, 3)), np.zeros((0, 3)))]
         hull_pos, hull_theta = self.hull[:2], self.hull[2]
         hull_vel, hull_omega = self.hull_v[:2], self.hull_v[2]
 
