@@ -1,12 +1,16 @@
 """One side of a Warrior-class tracked vehicle in the pitch plane, in the exudyn multibody
 host, every running-gear part an FMU: 12 RoadWheelTyre (two per wheel), 3 RotaryDamper
 (stations 1, 2 and 6, section 9.0), a TrackBushRadial and a TrackBushTorsion at each of
-the 80 joints of the closed track loop, coupled by fmu_components.coupling. See
-docs/vehicle.md for the model, its values and its present state.
+the 80 joints of the closed track loop, coupled by fmu_components.coupling: by default
+its compiled path (one bank of all 175 instances, the load laws in exudyn's compiled
+symbolic functions; vehicle/compiled.py), or its Python path (--path python, the readable
+reference; the same numbers). See docs/vehicle.md for the model, its values and its
+present state.
 
     python examples/tracked_vehicle.py --course bump --speed 5 --end-time 2
     python examples/tracked_vehicle.py --course random --csv --animate
     python examples/tracked_vehicle.py --course sine --linear   # and the Kelvin vehicle
+    python examples/tracked_vehicle.py --path python            # the Python path
 
 Plots, CSV and the animation go to reports/tracked_vehicle/ (or --out).
 """
