@@ -46,9 +46,16 @@ class CompiledPath:
         functions in model.py, term for term), and the speed hold's."""
         laws, v, mbs = self.laws, self.v, self.v.mbs
 
+        sqrt = laws.esym.sqrt
+
         def radial(i):
-            def radial_force(mbs, t, itemNumber, deltaL, deltaL_t, stiffness, damping, force):
-                return laws.load(i, deltaL)
+            # model.Vehicle._radial_force: the law of the seats' distance along their line
+            def radial_force(mbs, t, itemNumber, displacement, velocity, stiffness, damping,
+                             offset):
+                dx, dy = displacement[0], displacement[1]
+                distance = sqrt(dx * dx + dy * dy)
+                scale = laws.load(i, distance) / distance
+                return [scale * dx, scale * dy, 0.0]
             return radial_force
 
         def coordinate(i, offset=None):
@@ -89,7 +96,8 @@ class CompiledPath:
         moved = q[self.link_index]
         x, y, angle = (self.link_reference + moved).T
         # joint j: link j - 1's front seat to link j's rear seat (as exudyn places them:
-        # the node's position plus the rotated local position)
+        # the node's position plus the rotated local position), their distance as
+        # model._seat_deflection has it
         half = 0.5 * lay.LINK_PITCH
         cos, sin = np.cos(angle), np.sin(angle)
         front_x, front_y = x + cos * half, y + sin * half
