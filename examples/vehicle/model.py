@@ -429,6 +429,13 @@ class Vehicle:
         if settle:
             self.settle()
         self.prepare()
+        # the components start relaxed at the host's current state (their readers read
+        # it before exudyn's solve makes the initial state current): the initial one, not
+        # the laid-out geometry nor the settling's last state at rest
+        data = self.mbs.systemData
+        for get, put in ((data.GetODE2Coordinates, data.SetODE2Coordinates),
+                         (data.GetODE2Coordinates_t, data.SetODE2Coordinates_t)):
+            put(get(exu.ConfigurationType.Initial), exu.ConfigurationType.Current)
         self.host_steps = math.ceil(end_time / step - 1e-9)
         try:
             if self.compiled:
