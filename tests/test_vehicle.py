@@ -228,3 +228,27 @@ def test_the_compiled_path_gives_the_python_paths_numbers(native_fmus):
     # the run did something: every wheel on its tyres, the bushes carrying the tension
     assert np.all(runs["compiled"]["tyre_force"][-1] > 0.0)
     assert np.max(runs["compiled"]["bush_radial_force"][-1]) > 5e3
+
+
+def test_the_components_start_at_the_runs_initial_state(native_fmus):
+    """The run's initial state (a stored static point, here the laid-out geometry with one
+    link turned by 0.01 rad) is where the components start relaxed, not exudyn's current
+    configuration before the solve (the laid-out geometry): the torsion bushes either side
+    of the turned link start at their joints' angles in the initial state."""
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle.course import Bump
+    from vehicle.model import Vehicle
+
+    vehicle = Vehicle(Bump(3.0), 5.0, native_fmus["RoadWheelTyre"].parent)
+    data = vehicle.mbs.systemData
+    k = 40
+    turned = vehicle.mbs.GetNodeODE2Index(vehicle.link_nodes[k]) + 2
+    q = np.array(data.GetODE2Coordinates(exu.ConfigurationType.Initial))
+    assert q[turned] == 0.0  # the laid-out geometry is the nodes' reference
+    q[turned] = 0.01
+    data.SetODE2Coordinates(q, exu.ConfigurationType.Initial)
+    result = vehicle.run(1e-3, 1e-3, settle=False)
+    offsets = [offset for _, offset in vehicle.torsion_connectors]
+    assert result["time"][0] == 0.0
+    assert result["bush_angle"][0][k] == pytest.approx(0.01 + offsets[k], abs=1e-12)
+    assert result["bush_angle"][0][k + 1] == pytest.approx(-0.01 + offsets[k + 1], abs=1e-12)
