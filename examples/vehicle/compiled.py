@@ -46,16 +46,10 @@ class CompiledPath:
         functions in model.py, term for term), and the speed hold's."""
         laws, v, mbs = self.laws, self.v, self.v.mbs
 
-        sqrt = laws.esym.sqrt
-
         def radial(i):
-            # model.Vehicle._radial_force: the law of the seats' distance along their line
-            def radial_force(mbs, t, itemNumber, displacement, velocity, stiffness, damping,
-                             offset):
-                dx, dy = displacement[0], displacement[1]
-                distance = sqrt(dx * dx + dy * dy)
-                scale = laws.load(i, distance) / distance
-                return [scale * dx, scale * dy, 0.0]
+            # the law of the seats' distance, along their line (exudyn's spring-damper)
+            def radial_force(mbs, t, itemNumber, deltaL, deltaL_t, stiffness, damping, force):
+                return laws.load(i, deltaL)
             return radial_force
 
         def coordinate(i, offset=None):

@@ -26,7 +26,7 @@ import numpy as np
 import exudyn as exu
 from exudyn.itemInterface import (LoadMassProportional, MarkerBodyMass, MarkerBodyPosition,
                                   MarkerNodeCoordinate, NodePointGround, NodeRigidBody2D,
-                                  ObjectConnectorCartesianSpringDamper,
+                                  ObjectConnectorSpringDamper,
                                   ObjectConnectorCoordinateSpringDamper, ObjectJointRevolute2D,
                                   ObjectRigidBody2D)
 
@@ -309,13 +309,13 @@ class Vehicle:
             radial = make("TrackBushRadial", f"radial_{j}")
             torsion = make("TrackBushTorsion", f"torsion_{j}")
             offset = float(np.angle(np.exp(1j * (angles[ahead_] - angles[behind]))))
-            # the force along the line between the seats as a vector: exudyn differentiates
-            # it whole (its scalar spring-damper along that line, which the seats' 0.16 mm
-            # apart turn with every iterate, made Newton fail at 1 m/s)
-            rc = mbs.AddObject(ObjectConnectorCartesianSpringDamper(
+            # a scalar force along the line between the seats (exudyn's own geometry, as
+            # the track-span example): a tension pulls them together (its Cartesian
+            # spring-damper with the force as a vector cost a fifth more CPU)
+            rc = mbs.AddObject(ObjectConnectorSpringDamper(
                 markerNumbers=[self.link_markers[behind][1], self.link_markers[ahead_][0]],
-                springForceUserFunction=lambda mbs, t, item, d, v, *_, b=radial:
-                    self._radial_force(b, d, v)))
+                springForceUserFunction=lambda mbs, t, item, length, rate, *_, b=radial:
+                    self.load(b, length, rate)))
             tc = mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
                 markerNumbers=[coordinate(self.link_nodes[behind], 2),
                                coordinate(self.link_nodes[ahead_], 2)],
@@ -348,13 +348,6 @@ class Vehicle:
         if self.settling:
             return component.relaxed(deflection)
         return component.host_load(deflection, rate)
-
-    def _radial_force(self, bush, displacement, velocity):
-        deflection, rate = _seat_deflection(displacement, velocity)
-        if deflection == 0.0:
-            return [0.0, 0.0, 0.0]
-        scale = self.load(bush, deflection, rate) / deflection
-        return [scale * displacement[0], scale * displacement[1], 0.0]
 
     def tyre_loads(self, compression, rate):
         """Each wheel's tyre load (both half-wheels) at its compression and rate, and its
