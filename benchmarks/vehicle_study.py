@@ -3,6 +3,7 @@ docs/vehicle.md): a benchmark, not a test (minutes to hours of CPU).
 
     python benchmarks/vehicle_study.py --end-time 0.05            # coupling's own error
     python benchmarks/vehicle_study.py --steps 4 2 1 0.5 --end-time 0.2
+    python benchmarks/vehicle_study.py --path python    # the coupling's Python path
 
 For each host step: the run with the default coupling and with `converged` at the same
 step (the coupling's own error: the largest difference in hull vertical acceleration, in
@@ -25,6 +26,7 @@ sys.path[:0] = [str(ROOT / "examples"), str(ROOT / "src")]
 
 from fmu_components.coupling import DEFAULT_SCHEME  # noqa: E402
 
+import bank_path  # noqa: E402
 from tracked_vehicle import simulate  # noqa: E402
 from vehicle.model import static_points  # noqa: E402
 
@@ -34,7 +36,8 @@ KEY = "hull_vertical_acceleration"
 def run(args, step, scheme, statics):
     cpu = time.process_time()
     vehicle, result, _, run_cpu = simulate(args.course, args.speed, args.end_time, step,
-                                           scheme, None, statics, args.settle_time)
+                                           scheme, None, statics, args.settle_time,
+                                           path=args.path)
     solver = vehicle.solver_statistics()
     print(f"  {scheme} at {step * 1e3:g} ms: {run_cpu:.1f} s CPU "
           f"({time.process_time() - cpu:.1f} with the set-up)", flush=True)
@@ -58,6 +61,7 @@ def main(argv=None):
     parser.add_argument("--course", default="bump")
     parser.add_argument("--scheme", default=DEFAULT_SCHEME)
     parser.add_argument("--settle-time", type=float, default=3.0)
+    bank_path.add_argument(parser)
     args = parser.parse_args(argv)
     statics = static_points()
     runs = {}
@@ -65,8 +69,8 @@ def main(argv=None):
         h = step * 1e-3
         runs[step] = (run(args, h, args.scheme, statics), run(args, h, "converged", statics))
     finest = runs[min(runs)][1]
-    print(f"\n{args.course} at {args.speed:g} m/s, {args.end_time:g} s; errors in hull "
-          f"vertical acceleration, % of range\n")
+    print(f"\n{args.course} at {args.speed:g} m/s, {args.end_time:g} s, the coupling's "
+          f"{args.path} path; errors in hull vertical acceleration, % of range\n")
     print(f"| step (ms) | {args.scheme} against converged | against converged at "
           f"{min(runs):g} ms | CPU s / s | Newton per solve | solves per step |")
     print("|---|---|---|---|---|---|")

@@ -1,12 +1,16 @@
 """One side of a Warrior-class tracked vehicle in the pitch plane, in the exudyn multibody
 host, every running-gear part an FMU: 12 RoadWheelTyre (two per wheel), 3 RotaryDamper
 (stations 1, 2 and 6, section 9.0), a TrackBushRadial and a TrackBushTorsion at each of
-the 80 joints of the closed track loop, coupled by fmu_components.coupling. See
-docs/vehicle.md for the model, its values and its present state.
+the 80 joints of the closed track loop, coupled by fmu_components.coupling: by default
+its compiled path (one bank of all 175 instances, the load laws in exudyn's compiled
+symbolic functions; vehicle/compiled.py), or its Python path (--path python, the readable
+reference; the same numbers). See docs/vehicle.md for the model, its values and its
+present state.
 
     python examples/tracked_vehicle.py --course bump --speed 5 --end-time 2
     python examples/tracked_vehicle.py --course random --csv --animate
     python examples/tracked_vehicle.py --course sine --linear   # and the Kelvin vehicle
+    python examples/tracked_vehicle.py --path python            # the Python path
 
 Plots, CSV and the animation go to reports/tracked_vehicle/ (or --out).
 """
@@ -19,6 +23,7 @@ from pathlib import Path
 
 from fmu_components.coupling import DEFAULT_SCHEME, SCHEMES
 
+import bank_path
 from coupling_study import write_csv
 from vehicle import outputs
 from vehicle.course import COURSES
@@ -28,14 +33,16 @@ DEFAULT_STEP = 1e-3  # s
 
 
 def simulate(course_name, speed, end_time, step, coupling=DEFAULT_SCHEME, linear=None,
-             statics=None, settle_time=3.0, fmu_dir=None):
+             statics=None, settle_time=3.0, fmu_dir=None, path=bank_path.DEFAULT_PATH):
     """One run; returns (vehicle, histories, wall seconds, CPU seconds) of the run proper
-    (the settling to the static point, stored after the first run, excluded)."""
+    (the settling to the static point, stored after the first run, and the set-up,
+    Vehicle.prepare, excluded)."""
     statics = statics or static_points(fmu_dir)
-    vehicle = Vehicle(None, speed, fmu_dir, linear, coupling, statics)
+    vehicle = Vehicle(None, speed, fmu_dir, linear, coupling, statics, path)
     vehicle.course = COURSES[course_name](vehicle.layout.sprocket[0] + 0.3)
     if settle_time > 0:
         vehicle.settle(settle_time)
+    vehicle.prepare()
     wall, cpu = time.perf_counter(), time.process_time()
     result = vehicle.run(end_time, step, settle=False)
     return vehicle, result, time.perf_counter() - wall, time.process_time() - cpu
@@ -56,6 +63,7 @@ def main(argv=None):
                         help="also run the vehicle with linear Kelvin elements")
     parser.add_argument("--csv", action="store_true", help="write the histories (SI) as CSV")
     parser.add_argument("--animate", action="store_true", help="write an animated GIF")
+    bank_path.add_argument(parser)
     parser.add_argument("--fmu-dir", type=Path, help="default: fmus/")
     parser.add_argument("--out", type=Path, default=Path("reports") / "tracked_vehicle")
     args = parser.parse_args(argv)
@@ -68,7 +76,7 @@ def main(argv=None):
     try:
         vehicle, result, wall, cpu = simulate(args.course, args.speed, args.end_time,
                                               args.step, args.coupling, None, statics,
-                                              args.settle_time, args.fmu_dir)
+                                              args.settle_time, args.fmu_dir, args.path)
         runs["FMUs"] = result
         if args.linear:
             linear = Linear(statics, args.fmu_dir)
@@ -82,7 +90,7 @@ def main(argv=None):
     name = f"{args.course}_{args.speed:g}mps"
     print(f"{vehicle.instances} FMU instances ({vehicle.links} links), course: "
           f"{vehicle.course.describe()}; {args.speed:g} m/s, host step {args.step * 1e3:g} ms, "
-          f"coupling {args.coupling}")
+          f"coupling {args.coupling}, {'compiled' if vehicle.compiled else 'Python'} path")
     print(f"{simulated:.3f} s simulated in {wall:.1f} s wall, {cpu:.1f} s CPU: "
           f"{wall / simulated:.1f} s wall and {cpu / simulated:.1f} s CPU per simulated "
           f"second")

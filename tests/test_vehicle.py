@@ -177,7 +177,7 @@ def test_a_short_run_prints_its_summary_and_writes_the_csv(native_fmus, tmp_path
          "--fmu-dir", str(native_fmus["RoadWheelTyre"].parent)],
         capture_output=True, text=True, timeout=900)
     assert run.returncode == 0, run.stderr[-2000:]
-    assert "175 FMU instances" in run.stdout
+    assert "175 FMU instances" in run.stdout and "compiled path" in run.stdout
     assert re.search(r"s wall and [0-9.]+ s CPU per simulated second", run.stdout)
     assert re.search(r"exudyn: [0-9.]+ Newton iterations per solve", run.stdout)
     assert f"wrote {tmp_path}" in run.stdout
@@ -199,3 +199,56 @@ def test_a_short_run_prints_its_summary_and_writes_the_csv(native_fmus, tmp_path
     assert max(stretch) < 1e-3
     for w in range(1, 7):
         assert 0.0 < float(rows[-1][f"tyre_compression_{w}"]) < 0.0375
+
+
+def test_the_compiled_path_gives_the_python_paths_numbers(native_fmus):
+    """Three host steps of 1 ms from the laid-out geometry (5 m/s, `corrected`): the bank
+    with every instance's law in exudyn's compiled symbolic functions and the tyres' laws
+    read from its arrays gives the same histories as a Python force function per
+    connector and a Python call per tyre, to the bit; and the bank is what ran."""
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from tracked_vehicle import simulate
+    from vehicle.model import static_points
+
+    fmu_dir = native_fmus["RoadWheelTyre"].parent
+    statics = static_points(fmu_dir)
+    runs = {}
+    for path in ("python", "compiled"):
+        vehicle, runs[path], _, _ = simulate("bump", 5.0, 0.003, 1e-3, "corrected", None,
+                                             statics, 0.0, fmu_dir, path)
+        assert vehicle.compiled == (path == "compiled")
+        assert type(vehicle.coupling).__name__ == ("Bank" if vehicle.compiled else "Coupling")
+        assert vehicle.coupling.steps == 3 and vehicle.coupling.total_passes == 6
+    keys = [key for key, value in runs["python"].items() if isinstance(value, np.ndarray)]
+    assert {"hull_vertical_acceleration", "tyre_force", "bush_radial_force", "bush_angle",
+            "damper_torque", "track_tension_sprocket"} <= set(keys)
+    for key in keys:
+        assert runs["python"][key].shape == runs["compiled"][key].shape, key
+        assert np.array_equal(runs["python"][key], runs["compiled"][key]), key
+    # the run did something: every wheel on its tyres, the bushes carrying the tension
+    assert np.all(runs["compiled"]["tyre_force"][-1] > 0.0)
+    assert np.max(runs["compiled"]["bush_radial_force"][-1]) > 5e3
+
+
+def test_the_components_start_at_the_runs_initial_state(native_fmus):
+    """The run's initial state (a stored static point, here the laid-out geometry with one
+    link turned by 0.01 rad) is where the components start relaxed, not exudyn's current
+    configuration before the solve (the laid-out geometry): the torsion bushes either side
+    of the turned link start at their joints' angles in the initial state."""
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle.course import Bump
+    from vehicle.model import Vehicle
+
+    vehicle = Vehicle(Bump(3.0), 5.0, native_fmus["RoadWheelTyre"].parent)
+    data = vehicle.mbs.systemData
+    k = 40
+    turned = vehicle.mbs.GetNodeODE2Index(vehicle.link_nodes[k]) + 2
+    q = np.array(data.GetODE2Coordinates(exu.ConfigurationType.Initial))
+    assert q[turned] == 0.0  # the laid-out geometry is the nodes' reference
+    q[turned] = 0.01
+    data.SetODE2Coordinates(q, exu.ConfigurationType.Initial)
+    result = vehicle.run(1e-3, 1e-3, settle=False)
+    offsets = [offset for _, offset in vehicle.torsion_connectors]
+    assert result["time"][0] == 0.0
+    assert result["bush_angle"][0][k] == pytest.approx(0.01 + offsets[k], abs=1e-12)
+    assert result["bush_angle"][0][k + 1] == pytest.approx(-0.01 + offsets[k + 1], abs=1e-12)

@@ -46,14 +46,6 @@ def _cross(omega, r):
     return np.stack([-omega * r[..., 1], omega * r[..., 0]], axis=-1)
 
 
-def _law_key(component):
-    """What decides the component's present load law (its values; None for none)."""
-    law = getattr(component, "law", None)
-    if law is None or not hasattr(law, "__slots__"):
-        return id(law)  # none, or a law that never changes (a Kelvin element)
-    return tuple(getattr(law, name) for name in law.__slots__)
-
-
 def _penalty(depth, closing, stiffness, damping):
     """A penalty contact with a smooth onset: the spring's force k d^2 / (2 e) over the
     first CONTACT_ONSET e of depth d, then k (d - e / 2), and the damper's taken up over the
@@ -110,11 +102,15 @@ class Contacts:
         self.reference = np.array([v.mbs.GetNodeParameter(n, "referenceCoordinates")
                                    for n in self.nodes], dtype=float)
         size = 3 * len(self.nodes)
+        # sparse (triplets): a dense matrix of this size made exudyn's sparse solver factor
+        # a dense block at every Newton iteration
+        massless = exu.MatrixContainer()
+        massless.SetWithSparseMatrix(np.zeros((0, 3)), size, size)
         v.mbs.AddObject(ObjectGenericODE2(
-            nodeNumbers=self.nodes, massMatrix=np.zeros((size, size)),
+            nodeNumbers=self.nodes, massMatrix=massless,
             forceUserFunction=lambda mbs, t, item, q, qd: self._generalized(t, q, qd),
             jacobianUserFunction=lambda mbs, t, item, q, qd, f, f_t:
-                self._jacobian(t, q, qd, f, f_t)))
+                self._sparse_jacobian(t, q, qd, f, f_t)))
 
     def index(self):
         """After Assemble: where the object's coordinates sit in the system's vectors."""
@@ -143,8 +139,7 @@ class Contacts:
     def _update(self, t, q, qd):
         q, qd = np.asarray(q), np.asarray(qd)
         # the tyres' load laws change between the coupling's passes at the same state
-        laws = tuple(_law_key(tyre) for pair in self.v.tyres for tyre in pair)
-        key = (t, q.tobytes(), qd.tobytes(), self.v.settling, laws)
+        key = (t, q.tobytes(), qd.tobytes(), self.v.settling, self.v.tyre_laws_key())
         if key == self._key:
             return
         self._key = key
@@ -157,43 +152,110 @@ class Contacts:
         self._update(t, q, qd)
         return self.generalized
 
-    def _jacobian(self, t, q, qd, factor, factor_t):
+    def _sparse_jacobian(self, t, q, qd, factor, factor_t):
+        """The Jacobian as exudyn takes it from this object: (row, column, value)
+        triplets, repeated entries summed."""
         self._update(t, q, qd)
         size = 3 * len(self.nodes)
-        jacobian = np.zeros((size, size))
-        for stiffness, damping, members in self.springs:
-            block = factor * stiffness + factor_t * damping
-            rows = [(3 * b, *[w * g for g in self._g(b, point)]) for b, point, w in members]
-            for ia, force_g, _ in rows:
-                left = force_g.T @ block
-                for ib, _, motion_g in rows:
-                    jacobian[ia:ia + 3, ib:ib + 3] += left @ motion_g
-        for w, force, slope in self.tyre_terms:
-            self._add_tyre_jacobian(jacobian, factor, w, force, slope)
-        return jacobian
+        matrix = exu.MatrixContainer()
+        matrix.SetWithSparseMatrix(np.stack(self._triplets(factor, factor_t), axis=1),
+                                   size, size)
+        return matrix
 
-    def _add_tyre_jacobian(self, jacobian, factor, w, force, slope):
-        """Adds d(generalized tyre force)/dq of wheel w, from the blend's gradient D (a row
-        per link beneath) and weights p: F' (p.D)^T (p.D) + F/b D^T (diag(p) - p p^T) D
-        (b TYRE_BLEND; the second derivatives of each link's own term left out), on the
-        few coordinates D touches."""
-        weights, gradient = self.tyre_share[w]
-        used = np.flatnonzero(np.any(gradient != 0.0, axis=0))
-        gradient = gradient[:, used]
-        mean = weights @ gradient
-        spread = gradient.T @ (weights[:, None] * gradient) - np.outer(mean, mean)
-        jacobian[np.ix_(used, used)] += factor * (slope * np.outer(mean, mean)
-                                                  + force / TYRE_BLEND * spread)
+    def _jacobian(self, t, q, qd, factor, factor_t):
+        """The Jacobian as a dense matrix (for checks)."""
+        self._update(t, q, qd)
+        size = 3 * len(self.nodes)
+        rows, columns, values = self._triplets(factor, factor_t)
+        return np.bincount((rows * size + columns).astype(int), values,
+                           minlength=size * size).reshape(size, size)
 
-    def _g(self, body, point):
-        """(how a force at the point loads the body, how the point moves with it): both
-        d(point)/d(body's x, y, angle) for a point fixed on the body; `point` may give the
-        pair of 2 x 3 matrices instead."""
-        if isinstance(point, tuple):
-            return point
-        r = point - self.body_pos[body]
-        g = np.array([[1.0, 0.0, -r[1]], [0.0, 1.0, r[0]]])
-        return g, g
+    def _triplets(self, factor, factor_t):
+        """Every spring's block (its members a, b: w_a G_a^T (factor K + factor_t C) w_b H_b,
+        G how a force at the member's point loads its body, H how the point moves with
+        it) at once, then the tyres'."""
+        stiffness, damping, bodies, force_g, motion_g, weights = (
+            np.concatenate(part) for part in zip(*self.springs))
+        block = factor * stiffness + factor_t * damping
+        left = weights[:, :, None, None] * force_g
+        right = weights[:, :, None, None] * motion_g
+        blocks = np.einsum("saji,sjk,sbkl->sabil", left, block, right)
+        first = 3 * bodies[:, :, None] + np.arange(3)  # (spring, member, coordinate)
+        parts = [(np.broadcast_to(first[:, :, None, :, None], blocks.shape).ravel(),
+                  np.broadcast_to(first[:, None, :, None, :], blocks.shape).ravel(),
+                  blocks.ravel())]
+        parts += self._tyre_triplets(factor)
+        return tuple(np.concatenate(part).astype(float) for part in zip(*parts))
+
+    def _tyre_triplets(self, factor):
+        """d(generalized tyre force)/dq of each wheel in contact, from the blend's
+        gradient D (a row per link beneath) and weights p: F' (p.D)^T (p.D) +
+        F/b D^T (diag(p) - p p^T) D (b TYRE_BLEND; the second derivatives of each link's
+        own term left out), on the few coordinates D touches (the wheel's, the links')."""
+        count = len(self.wheels)
+        force, slope = np.zeros(count), np.zeros(count)
+        for w, f, k in self.tyre_terms:
+            force[w], slope[w] = f, k
+        pairs = np.flatnonzero(force[self.pair_wheel] > 0.0)
+        wheel, weights = self.pair_wheel[pairs], self.pair_weight[pairs]
+        gradient = self.pair_gradient[pairs]
+        coordinates = np.concatenate([3 * (1 + wheel)[:, None] + np.arange(3),
+                                      3 * (self.link0 + self.pair_link[pairs])[:, None]
+                                      + np.arange(3)], axis=1)
+        # F/b sum_k p_k D_k^T D_k, a 6 x 6 block per pair
+        scale = factor * force[wheel] / TYRE_BLEND * weights
+        own = (np.broadcast_to(coordinates[:, :, None], (len(pairs), 6, 6)).ravel(),
+               np.broadcast_to(coordinates[:, None, :], (len(pairs), 6, 6)).ravel(),
+               (scale[:, None, None] * gradient[:, :, None] * gradient[:, None, :]).ravel())
+        # (F' - F/b) (p.D)^T (p.D): p.D's entries, the wheel's summed over its links
+        wheels = np.flatnonzero(force > 0.0)
+        by_wheel = np.stack([np.bincount(wheel, weights * gradient[:, j], minlength=count)
+                             for j in range(3)], axis=1)[wheels]
+        entry_wheel = np.concatenate([np.repeat(wheels, 3), np.repeat(wheel, 3)])
+        entry_coordinate = np.concatenate([(3 * (1 + wheels)[:, None] + np.arange(3)).ravel(),
+                                           coordinates[:, 3:].ravel()])
+        entry_value = np.concatenate([by_wheel.ravel(),
+                                      (weights[:, None] * gradient[:, 3:]).ravel()])
+        first, second = np.nonzero(entry_wheel[:, None] == entry_wheel[None, :])
+        w = entry_wheel[first]
+        mean = (entry_coordinate[first], entry_coordinate[second],
+                factor * (slope[w] - force[w] / TYRE_BLEND) * entry_value[first]
+                * entry_value[second])
+        return [own, mean]
+
+    def _point_g(self, bodies, points):
+        """d(point)/d(body's x, y, angle), one 2 x 3 matrix per point fixed on its body:
+        how a force there loads the body, and how the point moves with it."""
+        r = points - self.body_pos[bodies]
+        g = np.zeros((len(r), 2, 3))
+        g[:, 0, 0] = g[:, 1, 1] = 1.0
+        g[:, 0, 2], g[:, 1, 2] = -r[:, 1], r[:, 0]
+        return g
+
+    def _add_springs(self, stiffness, damping, members):
+        """Springs (their 2 x 2 stiffness and damping, one per row) for the Jacobian, each
+        between up to three members, given as (bodies, force_g, motion_g, weights) per
+        member slot (a weight 0: no member)."""
+        count = len(stiffness)
+        if not count:
+            return
+        bodies = np.zeros((count, 3), dtype=int)
+        force_g, motion_g = np.zeros((count, 3, 2, 3)), np.zeros((count, 3, 2, 3))
+        weights = np.zeros((count, 3))
+        for slot, (body, g_force, g_motion, weight) in enumerate(members):
+            bodies[:, slot], weights[:, slot] = body, weight
+            force_g[:, slot], motion_g[:, slot] = g_force, g_motion
+        self.springs.append((stiffness, damping, bodies, force_g, motion_g, weights))
+
+    def _pin_springs(self, pins, stiffness, damping, third=None):
+        """Springs on pins (indices): each pin the two seats that make it, half each; and
+        a third member (bodies, force_g, motion_g, weights) if given."""
+        behind = (pins - 1) % len(self.pins)
+        members = []
+        for links, seats in ((behind, self.seats[behind, 1]), (pins, self.seats[pins, 0])):
+            g = self._point_g(self.link0 + links, seats)
+            members.append((self.link0 + links, g, g, 0.5))
+        self._add_springs(stiffness, damping, members + ([third] if third else []))
 
     def _kinematics(self, state, rates):
         half = 0.5 * lay.LINK_PITCH
@@ -220,68 +282,53 @@ class Contacts:
     def _tyre_kinematics(self):
         """Per wheel: the tyre's compression, blended smoothly over the links beneath it
         (a smooth maximum of their overlaps, TYRE_BLEND wide, each link's term faded in and
-        out over HANDOVER of its ends), its rate, each link's share of the contact and
-        the compression's gradient (Contacts._tyre_jacobian)."""
+        out over HANDOVER of its ends), its rate; per (wheel, link beneath) pair: the
+        link's weight in the blend and the gradient of its term (the wheel's three
+        coordinates, then the link's), for the forces and the Jacobian. All wheels at
+        once."""
         count = len(self.wheels)
-        self.compression = np.full(count, -np.inf)
-        self.compression_rate = np.zeros(count)
-        self.tyre_share = []  # per wheel: (weights, the blend's gradient), or None
-        half = 0.5 * lay.LINK_PITCH
-        for w in range(count):
-            r = self.wheels[w] - self.link_pos
-            along = np.einsum("ij,ij->i", r, self.u)
-            height = np.einsum("ij,ij->i", r, self.n)
-            beneath = np.flatnonzero((np.abs(along) < half + 0.5 * HANDOVER) & (height > 0.0)
-                                     & (height < 2 * lay.WHEEL_RADIUS))
-            if not len(beneath):
-                self.tyre_share.append(None)
-                continue
-            overlap = lay.WHEEL_RADIUS - (height[beneath] - lay.LINK_INNER)
-            window = _smoothstep((half + 0.5 * HANDOVER - np.abs(along[beneath])) / HANDOVER)
-            top = overlap.max()
-            terms = window * np.exp((overlap - top) / TYRE_BLEND)
-            total = terms.sum()
-            if total <= 0.0:
-                self.tyre_share.append(None)
-                continue
-            weights = terms / total
-            self.compression[w] = top + TYRE_BLEND * math.log(total)
-            relative = self.wheels_v[w] - self.link_v[beneath]
-            rates = -(np.einsum("ij,ij->i", relative, self.n[beneath])
-                      - self.link_omega[beneath] * along[beneath])
-            self.compression_rate[w] = weights @ rates
-            self.tyre_share.append((weights, self._blend_gradient(
-                w, beneath, along[beneath], height[beneath], window)))
-
-    def _blend_gradient(self, w, links, along, height, window):
-        """A row per link beneath wheel w: the gradient, by the object's coordinates, of
-        that link's term in the blend, its overlap plus TYRE_BLEND ln(its window)."""
-        rows = np.zeros((len(links), 3 * len(self.nodes)))
-        wheel_g = self._g(1 + w, self.wheels[w])[1]
-        x = (0.5 * lay.LINK_PITCH + 0.5 * HANDOVER - np.abs(along)) / HANDOVER
-        # d ln(window) / d along: the smoothstep's slope over its value, zero once full
+        reach = 0.5 * lay.LINK_PITCH + 0.5 * HANDOVER
+        r = self.wheels[:, None, :] - self.link_pos[None, :, :]
+        along = r[..., 0] * self.u[:, 0] + r[..., 1] * self.u[:, 1]
+        height = r[..., 0] * self.n[:, 0] + r[..., 1] * self.n[:, 1]
+        wheel, link = np.nonzero((np.abs(along) < reach) & (height > 0.0)
+                                 & (height < 2 * lay.WHEEL_RADIUS))
+        along, height = along[wheel, link], height[wheel, link]
+        overlap = lay.WHEEL_RADIUS - (height - lay.LINK_INNER)
+        x = (reach - np.abs(along)) / HANDOVER
+        window = _smoothstep(x)
+        top = np.full(count, -np.inf)
+        np.maximum.at(top, wheel, overlap)
+        terms = window * np.exp((overlap - top[wheel]) / TYRE_BLEND)
+        total = np.bincount(wheel, terms, minlength=count)
+        self.in_contact = total > 0.0
+        with np.errstate(divide="ignore"):
+            self.compression = np.where(self.in_contact,
+                                        top + TYRE_BLEND * np.log(total), -np.inf)
+        weights = terms / np.where(self.in_contact, total, 1.0)[wheel]
+        n, u = self.n[link], self.u[link]
+        relative = self.wheels_v[wheel] - self.link_v[link]
+        rates = -(np.einsum("ij,ij->i", relative, n) - self.link_omega[link] * along)
+        self.compression_rate = np.bincount(wheel, weights * rates, minlength=count)
+        # the gradient of each term, its overlap plus TYRE_BLEND ln(its window), by the
+        # wheel's coordinates and the link's (overlap R + inner - (wheel - link) . n;
+        # along (wheel - link) . u; d ln(window)/d along: the smoothstep's slope over its
+        # value, zero once full)
         slope = np.where(x < 1.0, 6 * x * (1 - x) / np.maximum(window, 1e-300), 0.0)
         log_window = -TYRE_BLEND * slope * np.sign(along) / HANDOVER
-        for row, k in enumerate(links):
-            n, u = self.n[k], self.u[k]
-            # overlap R + inner - (wheel - link) . n; along (wheel - link) . u
-            by_wheel = -n + log_window[row] * u
-            rows[row, 3 * (1 + w):3 * (2 + w)] = by_wheel @ wheel_g
-            body = 3 * (self.link0 + k)
-            rows[row, body:body + 2] = -by_wheel
-            rows[row, body + 2] = along[row] + log_window[row] * height[row]
-        return rows
-
-    def _pin_members(self, j, weight=1.0):
-        """Pin j as (body, point, weight) of the two seats that make it."""
-        n = len(self.pins)
-        behind = (j - 1) % n
-        return [(self.link0 + behind, self.seats[behind, 1], 0.5 * weight),
-                (self.link0 + j, self.seats[j, 0], 0.5 * weight)]
+        by_wheel = -n + log_window[:, None] * u
+        arm = self.wheels[wheel] - self.body_pos[1 + wheel]
+        gradient = np.empty((len(wheel), 6))
+        gradient[:, :2] = by_wheel
+        gradient[:, 2] = -by_wheel[:, 0] * arm[:, 1] + by_wheel[:, 1] * arm[:, 0]
+        gradient[:, 3:5] = -by_wheel
+        gradient[:, 5] = along + log_window * height
+        self.pair_wheel, self.pair_link = wheel, link
+        self.pair_weight, self.pair_gradient = weights, gradient
 
     def tyre_state(self, w):
         self.evaluate(self.v.mbs.systemData.GetTime())
-        if self.tyre_share[w] is None:
+        if not self.in_contact[w]:
             return -HORN_HEIGHT, 0.0
         return float(self.compression[w]), float(self.compression_rate[w])
 
@@ -291,17 +338,19 @@ class Contacts:
         pin = np.zeros((count, 2))  # forces on the pins
         seat = np.zeros((count, 2, 2))  # forces on the links' seats, besides the pins'
         bodies = np.zeros((len(self.nodes), 3))
-        springs = []
+        self.springs = [(np.zeros((0, 2, 2)), np.zeros((0, 2, 2)), np.zeros((0, 3), dtype=int),
+                         np.zeros((0, 3, 2, 3)), np.zeros((0, 3, 2, 3)), np.zeros((0, 3)))]
         hull_pos, hull_theta = self.hull[:2], self.hull[2]
         hull_vel, hull_omega = self.hull_v[:2], self.hull_v[2]
 
-        def on_body(body, point, force):
-            bodies[body, :2] += force
-            r = point - self.body_pos[body]
-            bodies[body, 2] += r[0] * force[1] - r[1] * force[0]
+        def on_body(body, points, forces):
+            bodies[body, :2] += forces.sum(axis=0)
+            r = points - self.body_pos[body]
+            bodies[body, 2] += np.sum(r[:, 0] * forces[:, 1] - r[:, 1] * forces[:, 0])
 
-        def normal_spring(k, c, normal):
-            return k * np.outer(normal, normal), c * np.outer(normal, normal)
+        def normal_springs(k, c, normals):
+            outer = normals[:, :, None] * normals[:, None, :]
+            return k[:, None, None] * outer, c[:, None, None] * outer
 
         # ground (frictionless, vertical)
         ground = v.course.height(self.pins[:, 0])
@@ -310,10 +359,9 @@ class Contacts:
                                             GROUND_DAMPING)
         pin[:, 1] += load
         self.ground_load = load
-        vertical = np.array([0.0, 1.0])
-        for j in np.flatnonzero(load > 0.0):
-            springs.append((*normal_spring(stiffness[j], damping[j], vertical),
-                            self._pin_members(j)))
+        on = np.flatnonzero(load > 0.0)
+        self._pin_springs(on, *normal_springs(stiffness[on], damping[on],
+                                              np.tile([0.0, 1.0], (len(on), 1))))
 
         # sprocket teeth
         centre = hull_pos + _rotate(hull_theta, self.sprocket_local)
@@ -336,18 +384,18 @@ class Contacts:
                                          + SPROCKET_DAMPING * (slot_v - self.pins_v))
         pin += tooth_force
         self.tooth_gap = np.where(weight > 0, np.hypot(*(slot - self.pins).T), 0.0)
-        self.drive_torque = 0.0
-        for j in np.flatnonzero(weight > 0.0):
-            on_body(0, slot[j], -tooth_force[j])
-            r = slot[j] - centre
-            self.drive_torque -= r[0] * tooth_force[j, 1] - r[1] * tooth_force[j, 0]
-            # the tooth space turns back as the hull travels forward
-            slot_g = self._g(0, slot[j])[0]
-            motion_g = slot_g.copy()
-            motion_g[:, 0] += [math.sin(slot_angle[j]), -math.cos(slot_angle[j])]
-            springs.append((weight[j] * SPROCKET_STIFFNESS * np.eye(2),
-                            weight[j] * SPROCKET_DAMPING * np.eye(2),
-                            self._pin_members(j) + [(0, (slot_g, motion_g), -1.0)]))
+        on = np.flatnonzero(weight > 0.0)
+        on_body(0, slot[on], -tooth_force[on])
+        r = slot[on] - centre
+        self.drive_torque = -np.sum(r[:, 0] * tooth_force[on, 1] - r[:, 1] * tooth_force[on, 0])
+        # the tooth space turns back as the hull travels forward
+        slot_g = self._point_g(np.zeros(len(on), dtype=int), slot[on])
+        motion_g = slot_g.copy()
+        motion_g[:, 0, 0] += np.sin(slot_angle[on])
+        motion_g[:, 1, 0] -= np.cos(slot_angle[on])
+        identity = weight[on, None, None] * np.eye(2)
+        self._pin_springs(on, SPROCKET_STIFFNESS * identity, SPROCKET_DAMPING * identity,
+                          (0, slot_g, motion_g, -1.0))
 
         # idler (on its crank) and support roller (on the hull)
         roller = hull_pos + _rotate(hull_theta, self.roller_local)
@@ -361,30 +409,27 @@ class Contacts:
             closing = -np.einsum("ij,ij->i", self.pins_v - centre_v, normal)
             force, stiffness, damping = _penalty(radius - distance, closing, WHEEL_STIFFNESS,
                                                  WHEEL_DAMPING)
-            for j in np.flatnonzero(force > 0.0):
-                pin[j] += force[j] * normal[j]
-                on_body(body, centre, -force[j] * normal[j])
-                springs.append((*normal_spring(stiffness[j], damping[j], normal[j]),
-                                self._pin_members(j) + [(body, centre, -1.0)]))
+            on = np.flatnonzero(force > 0.0)
+            pushed = force[on, None] * normal[on]
+            pin[on] += pushed
+            on_body(body, np.tile(centre, (len(on), 1)), -pushed)
+            centre_g = self._point_g(np.full(len(on), body), np.tile(centre, (len(on), 1)))
+            self._pin_springs(on, *normal_springs(stiffness[on], damping[on], normal[on]),
+                              (body, centre_g, centre_g, -1.0))
 
         # tyres: both half-wheels at the wheel's compression, the generalized force minus
         # the load times the compression's gradient (shared among the links beneath by
         # their weights in the blend, each along its own normal)
-        self.tyre_force = np.zeros(len(self.wheels))
-        self.tyre_terms = []
-        tyres = np.zeros(3 * len(self.nodes))
-        for w, pair in enumerate(v.tyres):
-            share = self.tyre_share[w]
-            if share is None:
-                continue
-            weights, gradient = share
-            compression = self.compression[w]
-            force = sum(v.load(tyre, compression, self.compression_rate[w]) for tyre in pair)
-            self.tyre_force[w] = force
-            tyres -= force * (weights @ gradient)  # pushes the compression back
-            if force > 0.0:
-                slope = sum(v.tangent(tyre, compression) for tyre in pair)
-                self.tyre_terms.append((w, force, slope))
+        loads, slopes = v.tyre_loads(self.compression, self.compression_rate)
+        self.tyre_force = np.where(self.in_contact, loads, 0.0)
+        self.tyre_terms = [(w, self.tyre_force[w], slopes[w])
+                           for w in np.flatnonzero(self.tyre_force > 0.0)]
+        # pushes the compression back: minus the load times the gradient, by weight
+        share = -(self.tyre_force[self.pair_wheel] * self.pair_weight)[:, None] * self.pair_gradient
+        coordinates = np.concatenate([3 * (1 + self.pair_wheel)[:, None] + np.arange(3),
+                                      3 * (self.link0 + self.pair_link)[:, None] + np.arange(3)],
+                                     axis=1)
+        tyres = np.bincount(coordinates.ravel(), share.ravel(), minlength=3 * len(self.nodes))
 
         # pins onto the seats of the links either side
         seat[:, 0] += 0.5 * pin
@@ -392,28 +437,31 @@ class Contacts:
 
         if v.settling:  # to rest: damping of every body's velocity
             seat -= SETTLE_DAMPING["seat"] * self.seats_v
-            self._settle_damping(bodies, springs)
+            self._settle_damping(bodies)
         links = slice(self.link0, None)
         r0, r1 = self.seats[:, 0] - self.link_pos, self.seats[:, 1] - self.link_pos
         bodies[links, :2] += seat[:, 0] + seat[:, 1]
         bodies[links, 2] += (r0[:, 0] * seat[:, 0, 1] - r0[:, 1] * seat[:, 0, 0]
                              + r1[:, 0] * seat[:, 1, 1] - r1[:, 1] * seat[:, 1, 0])
         self.generalized = bodies.reshape(-1) + tyres
-        self.springs = springs
 
-    def _settle_damping(self, bodies, springs):
+    def _settle_damping(self, bodies):
         c = SETTLE_DAMPING
         bodies[0, :2] -= np.array(c["hull"]) * self.hull_v[:2]
         bodies[0, 2] -= c["hull_pitch"] * self.hull_v[2]
-        zero = np.zeros((2, 2))
-        springs.append((zero, np.diag(c["hull"]), [(0, self.body_pos[0], 1.0)]))
-        for w in range(len(self.wheels)):
-            bodies[1 + w, :2] -= c["arm"] * self.wheels_v[w]
-            springs.append((zero, c["arm"] * np.eye(2), [(1 + w, self.wheels[w], 1.0)]))
-        for k in range(len(self.seats)):
-            for side in (0, 1):
-                springs.append((zero, c["seat"] * np.eye(2),
-                                [(self.link0 + k, self.seats[k, side], 1.0)]))
+
+        def dampers(body, points, damping):
+            g = self._point_g(body, points)
+            count = len(points)
+            self._add_springs(np.zeros((count, 2, 2)), np.broadcast_to(damping, (count, 2, 2)),
+                              [(body, g, g, 1.0)])
+
+        dampers(np.zeros(1, dtype=int), self.body_pos[:1], np.diag(c["hull"]))
+        wheels = len(self.wheels)
+        bodies[1:1 + wheels, :2] -= c["arm"] * self.wheels_v
+        dampers(1 + np.arange(wheels), self.wheels, c["arm"] * np.eye(2))
+        links = self.link0 + np.repeat(np.arange(len(self.seats)), 2)
+        dampers(links, self.seats.reshape(-1, 2), c["seat"] * np.eye(2))
 
     # --- checks and records ---------------------------------------------------------------
 

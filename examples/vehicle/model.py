@@ -26,7 +26,7 @@ import numpy as np
 import exudyn as exu
 from exudyn.itemInterface import (LoadMassProportional, MarkerBodyMass, MarkerBodyPosition,
                                   MarkerNodeCoordinate, NodePointGround, NodeRigidBody2D,
-                                  ObjectConnectorCartesianSpringDamper,
+                                  ObjectConnectorSpringDamper,
                                   ObjectConnectorCoordinateSpringDamper, ObjectJointRevolute2D,
                                   ObjectRigidBody2D)
 
@@ -34,6 +34,7 @@ from fmu_components.coupling import Coupling, FmuComponent
 from fmu_components.coupling.exudyn_host import connector_state, solve
 from fmu_components.coupling.kelvin import KelvinElement, harmonic_kelvin_equivalent
 
+import bank_path
 from example_fmus import fmu_path
 
 from . import layout as lay
@@ -144,8 +145,15 @@ class Linear:
 
 class Vehicle:
     def __init__(self, course, speed, fmu_dir=None, linear=None, coupling="corrected",
-                 statics=None):
+                 statics=None, path=bank_path.DEFAULT_PATH):
+        """path: "compiled", the coupling's bank (examples/bank_path.py: the FMUs' per-step
+        work in C, the load laws in exudyn's compiled symbolic functions; compiled.py), or
+        "python", the readable reference (a Python force function per connector); the
+        linear vehicle (no FMUs) takes the Python path."""
         self.course, self.speed = course, speed
+        self.compiled = linear is None and bank_path.compiled(path, coupling)
+        self.bank = None  # the compiled path's, while it runs
+        self.compiled_path = None  # compiled.CompiledPath, made by prepare()
         self.fmu_dir, self.linear = fmu_dir, linear
         self.statics = statics or static_points(fmu_dir)
         compression, stretch, _ = self.statics
@@ -158,6 +166,9 @@ class Vehicle:
         self.coupling = Coupling(coupling, record=self._record)
         self.records = []
         self.settling = False
+        # every instance in one list (the bank's order); rows of it by kind
+        self.components = []
+        self.rows = {"tyre": [], "damper": [], "radial": [], "torsion": []}
 
         tables = {}
 
@@ -169,6 +180,7 @@ class Vehicle:
             if fmu not in tables:
                 tables[fmu] = RelaxedTable(component, fmu)
             component.relaxed = tables[fmu]
+            self.components.append(component)
             return component
 
         ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
@@ -195,13 +207,15 @@ class Vehicle:
                 return stiffness * displacement + damping * velocity
             return stiffness * (displacement - speed * t) + damping * (velocity - speed)
 
-        mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
+        self.surge = (stiffness, damping)
+        self.surge_connector = mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
             markerNumbers=[coordinate(ground, 0), coordinate(self.hull_node, 0)],
             springForceUserFunction=surge))
         hull_rotation = coordinate(self.hull_node, 2)
 
         # --- stations: arm with its wheel, torsion bar, damper, two tyres --------------------
         self.arm_nodes, self.arm_bodies, self.tyres, self.dampers = [], [], [], {}
+        self.damper_connectors = []
         arm_com = (lay.ARM_MASS * 0.5 + lay.WHEEL_MASS) * lay.ARM_LENGTH / (
             lay.ARM_MASS + lay.WHEEL_MASS)
         arm_inertia = (lay.ARM_MASS * lay.ARM_LENGTH ** 2 / 12
@@ -233,10 +247,13 @@ class Vehicle:
                     springForceUserFunction=lambda mbs, t, item, x, v, *_, d=damper:
                         self.load(d, x, v)))
                 self.dampers[i] = damper
+                self.damper_connectors.append(connector)
+                self.rows["damper"].append(len(self.components) - 1)
                 self.coupling.add(damper, self._connector_reader(connector))
             pair = [make("RoadWheelTyre", f"tyre_{i}_{side}", unilateral=True)
                     for side in ("left", "right")]
             self.tyres.append(pair)
+            self.rows["tyre"].append([len(self.components) - 2, len(self.components) - 1])
             for tyre in pair:
                 self.coupling.add(tyre, lambda w=i - 1: self.contacts.tyre_state(w))
             self.arm_nodes.append(node)
@@ -292,10 +309,13 @@ class Vehicle:
             radial = make("TrackBushRadial", f"radial_{j}")
             torsion = make("TrackBushTorsion", f"torsion_{j}")
             offset = float(np.angle(np.exp(1j * (angles[ahead_] - angles[behind]))))
-            rc = mbs.AddObject(ObjectConnectorCartesianSpringDamper(
+            # a scalar force along the line between the seats (exudyn's own geometry, as
+            # the track-span example): a tension pulls them together (its Cartesian
+            # spring-damper with the force as a vector cost a fifth more CPU)
+            rc = mbs.AddObject(ObjectConnectorSpringDamper(
                 markerNumbers=[self.link_markers[behind][1], self.link_markers[ahead_][0]],
-                springForceUserFunction=lambda mbs, t, item, d, v, *_, b=radial:
-                    self._radial_force(b, d, v)))
+                springForceUserFunction=lambda mbs, t, item, length, rate, *_, b=radial:
+                    self.load(b, length, rate)))
             tc = mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
                 markerNumbers=[coordinate(self.link_nodes[behind], 2),
                                coordinate(self.link_nodes[ahead_], 2)],
@@ -303,6 +323,8 @@ class Vehicle:
                     self.load(b, x + o, v)))
             self.radial.append(radial)
             self.torsion.append(torsion)
+            self.rows["radial"].append(len(self.components) - 2)
+            self.rows["torsion"].append(len(self.components) - 1)
             self.radial_connectors.append(rc)
             self.torsion_connectors.append((tc, offset))
             self.coupling.add(radial, lambda c=rc: _seat_deflection(*connector_state(mbs, c)))
@@ -327,18 +349,42 @@ class Vehicle:
             return component.relaxed(deflection)
         return component.host_load(deflection, rate)
 
-    def tangent(self, component, deflection, step=1e-7):
-        """The slope of what `load` applies at the deflection (for the contacts' Jacobian):
-        the load law's tangent, not its secant."""
-        return (self.load(component, deflection + step, 0.0)
-                - self.load(component, deflection - step, 0.0)) / (2 * step)
+    def tyre_loads(self, compression, rate):
+        """Each wheel's tyre load (both half-wheels) at its compression and rate, and its
+        slope by the compression (for the contacts' Jacobian: the load law's tangent, not
+        its secant; central differences as the bank's law_loads takes them). On the
+        compiled path the bank's laws, in one call for every tyre."""
+        compression = np.where(np.isfinite(compression), compression, -HORN_HEIGHT)
+        rows = np.array(self.rows["tyre"])
+        if self.bank is not None:
+            deflection = np.zeros(len(self.components))
+            deflection[rows] = compression[:, None]
+            loads, slopes = self.bank.law_loads(deflection, slopes=True)
+            return loads[rows].sum(axis=1), slopes[rows].sum(axis=1)
+        loads, slopes = np.zeros(len(rows)), np.zeros(len(rows))
+        for w, pair in enumerate(self.tyres):
+            x = float(compression[w])
+            step = 1e-9 * (abs(x) if abs(x) > 1e-6 else 1e-6)
+            for tyre in pair:
+                loads[w] += self.load(tyre, x, float(rate[w]))
+                slopes[w] += ((self.load(tyre, x + step, 0.0) - self.load(tyre, x - step, 0.0))
+                              / (2.0 * step))
+        return loads, slopes
 
-    def _radial_force(self, bush, displacement, velocity):
-        deflection, rate = _seat_deflection(displacement, velocity)
-        if deflection == 0.0:
-            return [0.0, 0.0, 0.0]
-        scale = self.load(bush, deflection, rate) / deflection
-        return [scale * displacement[0], scale * displacement[1], 0.0]
+    def tyre_laws_key(self):
+        """What decides the tyres' present load laws (they change between the coupling's
+        passes at the same state)."""
+        if self.bank is not None:
+            return self.bank.laws[np.array(self.rows["tyre"]).ravel()].tobytes()
+        return tuple(_law_key(tyre) for pair in self.tyres for tyre in pair)
+
+    def accepted(self):
+        """(load, deflection) of every instance at the last accepted step, in the order
+        of `components`."""
+        if self.bank is not None:
+            return self.bank.loads.copy(), self.bank.accepted[:, 1].copy()
+        return (np.array([c.load for c in self.components]),
+                np.array([c.deflection for c in self.components]))
 
     def _connector_reader(self, connector, offset=0.0):
         def read():
@@ -348,7 +394,7 @@ class Vehicle:
 
     @property
     def instances(self):
-        return len(self.coupling.entries)
+        return len(self.components)
 
     # --- static state, run, records ---------------------------------------------------------
 
@@ -363,12 +409,34 @@ class Vehicle:
         self.contacts.check(t)
         self.records.append(snapshot(self, t))
 
+    def prepare(self):
+        """What the run sets up before its first step (after the settling, which runs on
+        the Python functions): on the compiled path the bank and the compiled functions
+        (compiled.py); the outputs' modules."""
+        from . import outputs  # noqa: F401 (scipy's import: a few seconds)
+        if self.compiled and self.compiled_path is None:
+            from .compiled import CompiledPath
+            self.compiled_path = CompiledPath(self)
+
     def run(self, end_time, step, settle=True):
         if settle:
             self.settle()
+        self.prepare()
+        # the components start relaxed at the host's current state (their readers read
+        # it before exudyn's solve makes the initial state current): the initial one, not
+        # the laid-out geometry nor the settling's last state at rest
+        data = self.mbs.systemData
+        for get, put in ((data.GetODE2Coordinates, data.SetODE2Coordinates),
+                         (data.GetODE2Coordinates_t, data.SetODE2Coordinates_t)):
+            put(get(exu.ConfigurationType.Initial), exu.ConfigurationType.Current)
         self.host_steps = math.ceil(end_time / step - 1e-9)
         try:
-            self.host = solve(self.mbs, self.coupling, end_time, step, settings=run_settings())
+            if self.compiled:
+                from .compiled import solve_compiled
+                self.host = solve_compiled(self, end_time, step, run_settings())
+            else:
+                self.host = solve(self.mbs, self.coupling, end_time, step,
+                                  settings=run_settings())
         except exu.SolverError:
             raise VehicleError(f"exudyn's solver gave up at t = {self.coupling.time:.4f} s "
                                f"(its Newton did not converge even on shortened steps; "
@@ -406,8 +474,17 @@ def configure(settings):
     settings.linearSolver.solverType = exu.LinearSolverType.EigenSparse
 
 
+def _law_key(component):
+    """What decides the component's present load law (its values; None for none)."""
+    law = getattr(component, "law", None)
+    if law is None or not hasattr(law, "__slots__"):
+        return id(law)  # none, or a law that never changes (a Kelvin element)
+    return tuple(getattr(law, name) for name in law.__slots__)
+
+
 def _seat_deflection(displacement, velocity):
-    distance = math.hypot(displacement[0], displacement[1])
+    # the distance as the compiled path's deflections (compiled.py) have it
+    distance = math.sqrt(displacement[0] * displacement[0] + displacement[1] * displacement[1])
     if distance == 0.0:
         return 0.0, 0.0
     return distance, (displacement[0] * velocity[0] + displacement[1] * velocity[1]) / distance

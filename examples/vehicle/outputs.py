@@ -26,6 +26,8 @@ def snapshot(vehicle, t):
                      math.sin(theta) * lay.SEAT[0] + math.cos(theta) * lay.SEAT[1]])
     seat_vertical = acceleration[1] + angular * seat[0] - omega ** 2 * seat[1]
     sprocket_joint, idler_joint = contacts.tension_joints()
+    loads, deflections = vehicle.accepted()
+    rows = {kind: np.array(rows) for kind, rows in vehicle.rows.items()}
     return {
         "time": t,
         "hull_vertical_acceleration": acceleration[1],
@@ -34,16 +36,16 @@ def snapshot(vehicle, t):
         "seat_vertical_acceleration": seat_vertical,
         "hull_x": contacts.hull[0], "hull_y": contacts.hull[1], "hull_pitch": theta,
         "hull_surge_velocity": contacts.hull_v[0],
-        "tyre_force": np.array([sum(t_.load for t_ in pair) for pair in vehicle.tyres]),
+        "tyre_force": loads[rows["tyre"]].sum(axis=1),
         "tyre_compression": contacts.compression.copy(),
-        "damper_torque": np.array([d.load for d in vehicle.dampers.values()]),
-        "damper_angle": np.array([d.deflection for d in vehicle.dampers.values()]),
-        "bush_radial_force": np.array([b.load for b in vehicle.radial]),
-        "bush_radial_deflection": np.array([b.deflection for b in vehicle.radial]),
-        "bush_torque": np.array([b.load for b in vehicle.torsion]),
-        "bush_angle": np.array([b.deflection for b in vehicle.torsion]),
-        "track_tension_sprocket": vehicle.radial[sprocket_joint].load,
-        "track_tension_idler": vehicle.radial[idler_joint].load,
+        "damper_torque": loads[rows["damper"]],
+        "damper_angle": deflections[rows["damper"]],
+        "bush_radial_force": loads[rows["radial"]],
+        "bush_radial_deflection": deflections[rows["radial"]],
+        "bush_torque": loads[rows["torsion"]],
+        "bush_angle": deflections[rows["torsion"]],
+        "track_tension_sprocket": loads[rows["radial"][sprocket_joint]],
+        "track_tension_idler": loads[rows["radial"][idler_joint]],
         "drive_torque": contacts.drive_torque,
         "ground_load": contacts.ground_load.sum(),
         "pins": contacts.pins.copy(),

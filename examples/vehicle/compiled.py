@@ -1,0 +1,134 @@
+"""The vehicle on the coupling's compiled path (examples/bank_path.py, docs/coupling.md "The
+bank"): every FMU instance (tyres, dampers, bushes) in one bank, whose per-step work is in
+C; each connector's force the compiled symbolic expression of its instance's load law,
+read from the matrix the bank sets once per pass; the contacts read the tyres' laws from
+the bank's arrays (Vehicle.tyre_loads). The same operations, in the same order, as the
+Python path's (model.py), so that the two give the same numbers.
+
+Installed after the settling to the static point, which runs on the relaxed components'
+Python functions (model.RelaxedTable).
+"""
+
+import numpy as np
+
+from fmu_components.coupling import exudyn_host
+from fmu_components.coupling.bank_exudyn import ExudynBank
+
+import bank_path
+
+from . import layout as lay
+from .model import HORN_HEIGHT
+
+
+class CompiledPath:
+    def __init__(self, vehicle):
+        self.v = v = vehicle
+        mbs = v.mbs
+        self.bank = bank_path.Bank(v.components, v.coupling.scheme.name, record=v._record)
+        self.laws = bank_path.SymbolicLaws(self.bank)
+        self._symbolic = []  # the compiled user functions live as long as the system
+        rows = v.rows
+        self.tyre_rows = np.array(rows["tyre"])
+        self.damper_rows, self.radial_rows, self.torsion_rows = (
+            np.array(rows[kind]) for kind in ("damper", "radial", "torsion"))
+        links = v.link_nodes
+        self.link_index = np.array([mbs.GetNodeODE2Index(n) for n in links])[:, None] + [0, 1, 2]
+        self.link_reference = np.array([mbs.GetNodeParameter(n, "referenceCoordinates")
+                                        for n in links], dtype=float)
+        self.hull_rotation = mbs.GetNodeODE2Index(v.hull_node) + 2
+        self.arm_rotation = np.array([mbs.GetNodeODE2Index(v.arm_nodes[i - 1]) + 2
+                                      for i in v.dampers])
+        self.torsion_offset = np.array([offset for _, offset in v.torsion_connectors])
+        self._compile_forces()
+
+    def _compile_forces(self):
+        """Each connector's force the symbolic law of its instance (the Python path's
+        functions in model.py, term for term), and the speed hold's."""
+        laws, v, mbs = self.laws, self.v, self.v.mbs
+
+        def radial(i):
+            # the law of the seats' distance, along their line (exudyn's spring-damper)
+            def radial_force(mbs, t, itemNumber, deltaL, deltaL_t, stiffness, damping, force):
+                return laws.load(i, deltaL)
+            return radial_force
+
+        def coordinate(i, offset=None):
+            def coordinate_force(mbs, t, itemNumber, displacement, velocity, stiffness,
+                                 damping, offset_):
+                return laws.load(i, displacement if offset is None else displacement + offset)
+            return coordinate_force
+
+        stiffness, damping = v.surge
+        speed = v.speed
+
+        def surge(mbs, t, itemNumber, displacement, velocity, stiffness_, damping_, offset_):
+            return stiffness * (displacement - speed * t) + damping * (velocity - speed)
+
+        functions = [(v.surge_connector, surge)]
+        functions += [(c, coordinate(int(i))) for c, i in zip(v.damper_connectors,
+                                                               self.damper_rows)]
+        functions += [(c, radial(int(i))) for c, i in zip(v.radial_connectors,
+                                                          self.radial_rows)]
+        functions += [(c, coordinate(int(i), offset)) for (c, offset), i in
+                      zip(v.torsion_connectors, self.torsion_rows)]
+        for connector, function in functions:
+            self._symbolic.append(bank_path.symbolic_function(mbs, connector, function))
+
+    def deflections(self):
+        """Every instance's deflection from the system's coordinates, in one pass (the
+        Python path's readers, vectorised): a tyre's compression (contacts.py), a radial
+        bush's distance between its pin seats, a torsion bush's and a damper's relative
+        rotation."""
+        v = self.v
+        data = v.mbs.systemData
+        q = np.asarray(data.GetODE2Coordinates())
+        deflection = np.empty(self.bank.n)
+        v.contacts.evaluate(data.GetTime())
+        compression = np.where(v.contacts.in_contact, v.contacts.compression, -HORN_HEIGHT)
+        deflection[self.tyre_rows] = compression[:, None]
+        deflection[self.damper_rows] = q[self.hull_rotation] - q[self.arm_rotation]
+        moved = q[self.link_index]
+        x, y, angle = (self.link_reference + moved).T
+        # joint j: link j - 1's front seat to link j's rear seat (as exudyn places them:
+        # the node's position plus the rotated local position), their distance as
+        # model._seat_deflection has it
+        half = 0.5 * lay.LINK_PITCH
+        cos, sin = np.cos(angle), np.sin(angle)
+        front_x, front_y = x + cos * half, y + sin * half
+        rear_x, rear_y = x + cos * -half, y + sin * -half
+        dx = rear_x - np.roll(front_x, 1)
+        dy = rear_y - np.roll(front_y, 1)
+        deflection[self.radial_rows] = np.sqrt(dx * dx + dy * dy)
+        rotation = moved[:, 2]
+        deflection[self.torsion_rows] = (rotation - np.roll(rotation, 1)) + self.torsion_offset
+        return deflection
+
+
+class _Starting:
+    """What exudyn_host.solve starts and frees: the bank relaxed at the host's deflections
+    and rates (the Python path's readers, once), its laws in the symbolic matrix."""
+
+    def __init__(self, path):
+        self.path = path
+
+    def start(self, time):
+        states = np.array([read() for _, read in self.path.v.coupling.entries], dtype=float)
+        self.path.bank.start(time, states[:, 0], states[:, 1])
+        self.path.laws.update()
+
+    def free(self):
+        self.path.bank.free()
+
+
+def solve_compiled(vehicle, end_time, step, settings):
+    """The run on the compiled path; returns exudyn_host.solve's host. The bank stands in
+    for the Python coupling afterwards (its counts: Vehicle.solver_statistics)."""
+    path = vehicle.compiled_path
+    vehicle.bank = path.bank
+    try:
+        host = ExudynBank(vehicle.mbs, path.bank, path.laws, path.deflections)
+        return exudyn_host.solve(vehicle.mbs, _Starting(path), end_time, step,
+                                 settings=settings, host=host)
+    finally:
+        vehicle.bank = None
+        vehicle.coupling = path.bank
