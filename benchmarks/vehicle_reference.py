@@ -110,7 +110,7 @@ def study_course(args, name, linear):
                        ("total_damper_work", "work on the dampers, J"),
                        ("peak_tyre_force", "peak tyre force (wheel), N")):
         print(f"| {label} | {nonlinear[key]:.4g} | {linear_run[key]:.4g} |")
-    print(f"| work on each damper (stations 1, 2, 6), J | "
+    print("| work on each damper (stations 1, 2, 6), J | "
           + ", ".join(f"{w:.4g}" for w in nonlinear["damper_work"]) + " | "
           + ", ".join(f"{w:.4g}" for w in linear_run["damper_work"]) + " |", flush=True)
 

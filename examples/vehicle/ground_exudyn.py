@@ -23,7 +23,7 @@ from exudyn.itemInterface import (CoordinateConstraint, LoadForceVector, MarkerB
                                   ObjectJointRevolute2D, ObjectRigidBody2D)
 
 from fmu_components.coupling import DEFAULT_SCHEME, Coupling, FmuComponent
-from fmu_components.coupling.exudyn_host import connector_state, solve
+from fmu_components.coupling.exudyn_host import connector_state
 
 import bank_path
 from example_fmus import fmu_path
@@ -249,12 +249,7 @@ class GroundVehicle:
 
     def run(self, end_time, step):
         """Integrate to end_time at a fixed host step; the recorded histories."""
-        if self.compiled:
-            self.host = bank_path.solve(self.mbs, self.bank, self.laws, self._deflections,
-                                        end_time, step)
-            self.coupling = self.bank
-        else:
-            self.host = solve(self.mbs, self.coupling, end_time, step)
+        bank_path.run(self, end_time, step)
         return histories(self.records, self.reduced)
 
 
