@@ -12,7 +12,7 @@ the default coupling and with `converged` (compiled path), their errors against 
 reference in hull vertical and pitch acceleration, tyre force (the worst wheel) and damper
 torque (the worst damper), max on a 4 ms grid in % of the reference's range, the
 coupling's own error (default against `converged` at the same step) and the CPU seconds
-per simulated second; the Python path's cost at 1 ms; the equations of motion checked
+per simulated second (the run's, without the set-up); the Python path's cost at 1 ms; the equations of motion checked
 with the Kelvin elements (exudyn against the reference's ODE, no FMU in either); and the
 ride figures, FMUs against Kelvin elements. CPU figures are this machine's under its load
 at the time: compare them within one run only.
@@ -89,8 +89,8 @@ def study_course(args, name, linear):
     _, python, python_cpu = simulate(make_course(name, args.start), args.speed,
                                      args.end_time, 1e-3, path="python")
     print(f"\nat 1 ms ({DEFAULT_SCHEME}): compiled path {compiled_cpu / args.end_time:.2f}, "
-          f"Python path {python_cpu / args.end_time:.2f} CPU s per simulated s (set-up "
-          f"included); they differ by {history_error(python, compiled, COMPARED[0]):.2g} % "
+          f"Python path {python_cpu / args.end_time:.2f} CPU s per simulated s (the runs, "
+          f"without their set-up); they differ by {history_error(python, compiled, COMPARED[0]):.2g} % "
           f"in hull vertical acceleration", flush=True)
 
     kelvin_ref = reference(args, name, args.rtol, linear)

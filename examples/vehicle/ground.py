@@ -49,6 +49,18 @@ def perp(v):
     return np.stack([-v[..., 1], v[..., 0]], axis=-1)
 
 
+def nominal_wheel_load():
+    """What each wheel carries with the hull level: the hull and the arms over six (N)."""
+    return (lay.side_masses(TRACK_LINKS)[0] + N * ARM_BODY_MASS) * GRAVITY / N
+
+
+def nominal_compression(tyre_relaxed):
+    """The compression at which a wheel's two relaxed tyre halves carry the nominal load."""
+    load = nominal_wheel_load()
+    return brentq(lambda x: lay.TYRES_PER_WHEEL * tyre_relaxed(x) - load, 1e-5, 9e-3,
+                  xtol=1e-13)
+
+
 def course_height_and_slope(course, x):
     height = course.height(x)
     slope = (course.height(x + SLOPE_STEP) - course.height(x - SLOPE_STEP)) / (2 * SLOPE_STEP)
@@ -64,10 +76,8 @@ class Reduced:
     def __init__(self, course, speed, tyre_relaxed, damper_relaxed):
         self.course, self.speed = course, speed
         self.hull_mass, self.hull_inertia = lay.side_masses(TRACK_LINKS)
-        self.wheel_load = (self.hull_mass + N * ARM_BODY_MASS) * GRAVITY / N  # nominal
-        self.nominal_compression = brentq(
-            lambda x: lay.TYRES_PER_WHEEL * tyre_relaxed(x) - self.wheel_load, 1e-5, 9e-3,
-            xtol=1e-13)
+        self.wheel_load = nominal_wheel_load()
+        self.nominal_compression = nominal_compression(tyre_relaxed)
         geometry = lay.Layout(self.nominal_compression, lay.LINK_PITCH)
         self.cg = geometry.cg
         self.pivot_offsets = geometry.pivots - geometry.cg  # in the hull's frame

@@ -47,11 +47,7 @@ def linearisation(fmu_dir=None):
     """The Kelvin elements about the reduced vehicle's nominal tyre compression."""
     tyre = FmuComponent(fmu_path("RoadWheelTyre", fmu_dir), "tyre_nominal")
     try:
-        load = (lay.side_masses(ground.TRACK_LINKS)[0] + N * ground.ARM_BODY_MASS) \
-            * lay.GRAVITY / N / lay.TYRES_PER_WHEEL
-        from scipy.optimize import brentq
-        compression = brentq(lambda x: tyre.relaxed_outputs(x)[tyre.load_name] - load,
-                             1e-5, 9e-3, xtol=1e-13)
+        compression = ground.nominal_compression(relaxed(tyre))
     finally:
         tyre.free()
     return GroundLinear((compression, 0.0, 0.0), fmu_dir)
