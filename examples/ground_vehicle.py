@@ -14,6 +14,7 @@ the work done on the dampers, the peak tyre force. Plots (and --csv) go to --out
 """
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
@@ -27,6 +28,7 @@ from example_fmus import add_fmu_arguments, fmu_dir_of
 from vehicle import layout as lay
 from vehicle.course import COURSES
 from vehicle.ground_exudyn import GroundVehicle, linearisation
+from vehicle.model import VehicleError
 from vehicle.ride import ride_figures
 
 DEFAULT_STEP = 1e-3
@@ -121,8 +123,11 @@ def main(argv=None):
     args.out.mkdir(parents=True, exist_ok=True)
     course = make_course(args.course)
     wall = time.perf_counter()
-    vehicle, result, cpu = simulate(course, args.speed, args.end_time, args.step,
-                                    args.coupling, args.path, fmu_dir=fmu_dir)
+    try:
+        vehicle, result, cpu = simulate(course, args.speed, args.end_time, args.step,
+                                        args.coupling, args.path, fmu_dir=fmu_dir)
+    except VehicleError as error:
+        sys.exit(f"ground_vehicle: {error}")
     print(f"{vehicle.instances} FMU instances ({'compiled' if vehicle.compiled else 'Python'}"
           f" path, {args.coupling}, host step {args.step * 1e3:g} ms); {course.describe()} at "
           f"{args.speed:g} m/s: {cpu / args.end_time:.2f} s CPU per simulated second "

@@ -105,6 +105,20 @@ def test_coupling_own_error_is_below_the_target_at_1_ms():
                  "hull_vertical_acceleration") < 1e-6
 
 
+def test_a_course_too_rough_for_the_speed_stops_naming_the_wheel_and_the_time():
+    """A bump that compresses the front wheel's tyre beyond the range its model was
+    measured to ends the run with the wheel, the time and what to do, not with nonsense
+    past it (the FMU clamps there)."""
+    from ground_vehicle import FRONT, simulate
+    from vehicle.course import Bump
+    from vehicle.model import VehicleError
+
+    course = Bump(FRONT, height=0.3, length=0.5)
+    course.start = START
+    with pytest.raises(VehicleError, match=r"wheel 1's tyre .* at t = 0\.0\d+ s.*--speed"):
+        simulate(course, 10.0, 0.1, 1e-3)
+
+
 def test_monolithic_solve_takes_a_discarded_trial_state_as_a_failed_iteration():
     """A Model Exchange damper at a trial state outside its region (the FMU discards the
     call) answers NaN derivatives and outputs, which Radau takes as a failed Newton

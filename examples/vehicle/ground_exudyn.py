@@ -32,9 +32,10 @@ from . import ground
 from . import layout as lay
 from .course import Bump, Sine
 from .ground import DAMPED, N, Reduced
-from .model import Linear
+from .model import Linear, RelaxedTable, VehicleError
 
 SIDES = ("left", "right")
+TYRE_RANGE = RelaxedTable.RANGES["RoadWheelTyre"][1]  # m
 
 
 class GroundLinear(Linear):
@@ -237,6 +238,14 @@ class GroundVehicle:
         else:
             loads = np.array([c.load for c in self.components])
             deflections = np.array([c.deflection for c in self.components])
+        compression = deflections[:2 * N:2]
+        if np.max(compression) > TYRE_RANGE:
+            w = int(np.argmax(compression))
+            raise VehicleError(f"wheel {w + 1}'s tyre is compressed {compression[w] * 1e3:.1f} "
+                               f"mm at t = {t:.4f} s, beyond the {TYRE_RANGE * 1e3:g} mm its "
+                               f"model was measured to (the FMU clamps there): the course is "
+                               f"too rough for {self.speed:g} m/s; lower --speed or choose "
+                               f"another --course")
         if self.reached is not None:
             self.reached(t)
         self.records.append((t, acceleration[1], acceleration[2], position[2], velocity[2],
