@@ -10,6 +10,7 @@ import warnings
 from fmu_components.coupling.bank import SCHEME_CODES, Bank  # noqa: F401
 from fmu_components.coupling.bank_build import NoCompiler, library_path
 from fmu_components.coupling.bank_exudyn import SymbolicLaws, solve, symbolic_function  # noqa: F401
+from fmu_components.coupling.exudyn_host import solve as solve_python
 
 PATHS = ("compiled", "python")
 DEFAULT_PATH = "compiled"
@@ -33,3 +34,15 @@ def add_argument(parser):
     parser.add_argument("--path", choices=PATHS, default=DEFAULT_PATH,
                         help="the coupling's compiled path (its bank, default) or its "
                              "Python path")
+
+
+def run(model, end_time, step):
+    """Integrate an example's model (its `mbs` and `coupling`; on the compiled path its
+    `bank`, `laws` and `_deflections`) to end_time at a fixed host step; its `host` and
+    `coupling` are then the run's (the bank's costs on the compiled path)."""
+    if model.compiled:
+        model.host = solve(model.mbs, model.bank, model.laws, model._deflections, end_time,
+                           step)
+        model.coupling = model.bank
+    else:
+        model.host = solve_python(model.mbs, model.coupling, end_time, step)

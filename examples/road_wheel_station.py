@@ -44,7 +44,7 @@ from exudyn.itemInterface import (CoordinateConstraint, MarkerBodyPosition,
                                   ObjectJointRevolute2D, ObjectRigidBody2D)
 
 from fmu_components.coupling import DEFAULT_SCHEME, Coupling, FmuComponent
-from fmu_components.coupling.exudyn_host import connector_state, solve
+from fmu_components.coupling.exudyn_host import connector_state
 from fmu_components.coupling.kelvin import KelvinElement, harmonic_kelvin_equivalent
 
 import bank_path
@@ -348,12 +348,7 @@ class Station:
 
     def run(self, end_time, step):
         """Integrate to end_time with a fixed host step; returns the recorded histories."""
-        if self.compiled:
-            self.host = bank_path.solve(self.mbs, self.bank, self.laws, self._deflections,
-                                        end_time, step)
-            self.coupling = self.bank
-        else:
-            self.host = solve(self.mbs, self.coupling, end_time, step)
+        bank_path.run(self, end_time, step)
         names = ("time", "hull_acceleration", "hull_force", "arm_angle", "damper_torque",
                  "dashpot_torque", "rotor_rate", "tyre_compression", "tyre_force")
         data = np.array(self.records)

@@ -9,9 +9,12 @@ the integration where it crosses zero; the FMU's mode is switched in event mode
 FMI 2.0 or 3.0 (coupling/instance.py drives both).
 """
 
+import math
+
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from ..coupling.errors import CouplingError
 from ..coupling.instance import MODEL_EXCHANGE, FmuInstance
 
 
@@ -55,17 +58,31 @@ class ModelExchangeComponent:
         fmu.set_states(states)
         fmu.set(self._inputs, [deflection, rate])
 
+    # Where the solver tries states outside the model's region the FMU discards the call:
+    # NaN then, which scipy's Radau takes as a failed Newton iteration (it shortens its step).
+
     def derivatives(self):
-        return self._fmu.derivatives()
+        return _unless_discarded(self._fmu.derivatives, [math.nan] * self.n)
 
     def outputs(self):
-        return dict(zip(self.output_names, self._fmu.get(self._outputs)))
+        values = _unless_discarded(lambda: self._fmu.get(self._outputs),
+                                   [math.nan] * len(self.output_names))
+        return dict(zip(self.output_names, values))
 
     def event_indicator(self):
         return self._fmu.event_indicators()[0]
 
     def free(self):
         self._fmu.close()
+
+
+def _unless_discarded(call, discarded):
+    try:
+        return call()
+    except CouplingError as refused:
+        if "Discard" not in str(refused):
+            raise
+        return discarded
 
 
 class MonolithicSystem:
