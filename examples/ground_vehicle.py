@@ -20,13 +20,14 @@ from pathlib import Path
 
 import numpy as np
 
-from fmu_components.coupling import DEFAULT_SCHEME, SCHEMES
+from fmu_components.coupling import DEFAULT_SCHEME
 
 import bank_path
 from coupling_study import history_error, write_csv
 from example_fmus import add_fmu_arguments, fmu_dir_of
 from vehicle import layout as lay
 from vehicle.course import COURSES
+from vehicle.flags import add_run_arguments
 from vehicle.ground_exudyn import GroundVehicle, linearisation
 from vehicle.model import VehicleError
 from vehicle.ride import ride_figures
@@ -103,12 +104,7 @@ def plot(path, course, runs):
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--speed", type=float, default=5.0, help="m/s (default 5)")
-    parser.add_argument("--course", choices=sorted(COURSES), default="bump")
-    parser.add_argument("--end-time", type=float, default=1.5, help="s of driving")
-    parser.add_argument("--step", type=float, default=DEFAULT_STEP, help="host step, s")
-    parser.add_argument("--coupling", choices=sorted(SCHEMES), default=DEFAULT_SCHEME)
-    bank_path.add_argument(parser)
+    add_run_arguments(parser, end_time=1.5, step=DEFAULT_STEP)
     parser.add_argument("--reference", action="store_true",
                         help="also solve the monolithic reference (Radau with the Model "
                              "Exchange FMUs: minutes per simulated tenth of a second)")

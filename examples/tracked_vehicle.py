@@ -21,12 +21,13 @@ import time
 import warnings
 from pathlib import Path
 
-from fmu_components.coupling import DEFAULT_SCHEME, SCHEMES
+from fmu_components.coupling import DEFAULT_SCHEME
 
 import bank_path
 from coupling_study import write_csv
 from vehicle import outputs
 from vehicle.course import COURSES
+from vehicle.flags import add_run_arguments
 from vehicle.model import Linear, Vehicle, VehicleError, static_points
 
 DEFAULT_STEP = 1e-3  # s
@@ -50,12 +51,7 @@ def simulate(course_name, speed, end_time, step, coupling=DEFAULT_SCHEME, linear
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--speed", type=float, default=5.0, help="m/s (default 5)")
-    parser.add_argument("--course", choices=sorted(COURSES), default="bump")
-    parser.add_argument("--end-time", type=float, default=1.0, help="s of driving")
-    parser.add_argument("--step", type=float, default=DEFAULT_STEP, help="host step, s")
-    parser.add_argument("--coupling", choices=sorted(SCHEMES), default=DEFAULT_SCHEME,
-                        help=f"coupling scheme (default {DEFAULT_SCHEME}; docs/coupling.md)")
+    add_run_arguments(parser, end_time=1.0, step=DEFAULT_STEP)
     parser.add_argument("--settle-time", type=float, default=3.0,
                         help="longest damped settling to the static point, s (solved once, "
                              "then stored; 0: start from the laid-out geometry)")
@@ -63,7 +59,6 @@ def main(argv=None):
                         help="also run the vehicle with linear Kelvin elements")
     parser.add_argument("--csv", action="store_true", help="write the histories (SI) as CSV")
     parser.add_argument("--animate", action="store_true", help="write an animated GIF")
-    bank_path.add_argument(parser)
     parser.add_argument("--fmu-dir", type=Path, help="default: fmus/")
     parser.add_argument("--out", type=Path, default=Path("reports") / "tracked_vehicle")
     args = parser.parse_args(argv)

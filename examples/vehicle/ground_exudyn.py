@@ -16,8 +16,8 @@ import warnings
 import numpy as np
 
 import exudyn as exu
-from exudyn.itemInterface import (CoordinateConstraint, LoadForceVector, MarkerBodyPosition,
-                                  MarkerNodeCoordinate, NodePointGround, NodeRigidBody2D,
+from exudyn.itemInterface import (CoordinateConstraint, LoadForceVector, NodePointGround,
+                                  NodeRigidBody2D,
                                   ObjectConnectorCartesianSpringDamper,
                                   ObjectConnectorCoordinateSpringDamper, ObjectGround,
                                   ObjectJointRevolute2D, ObjectRigidBody2D)
@@ -32,7 +32,7 @@ from . import ground
 from . import layout as lay
 from .course import Bump, Sine
 from .ground import DAMPED, N, Reduced
-from .model import Linear, RelaxedTable, VehicleError
+from .model import Linear, RelaxedTable, VehicleError, markers
 
 SIDES = ("left", "right")
 TYRE_RANGE = RelaxedTable.RANGES["RoadWheelTyre"][1]  # m
@@ -99,12 +99,7 @@ class GroundVehicle:
         mbs = SC.AddSystem()
         self.SC, self.mbs = SC, mbs
 
-        def coordinate(node, index):
-            return mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=index))
-
-        def at(body, local):
-            return mbs.AddMarker(MarkerBodyPosition(bodyNumber=body,
-                                                    localPosition=[local[0], local[1], 0.0]))
+        coordinate, at = markers(mbs)
 
         q0 = red.q0
         ground_node = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))

@@ -54,6 +54,18 @@ HORN_HEIGHT = 0.05
 VERBOSE = 0  # exudyn's solver output while settling (1: per step)
 
 
+def markers(mbs):
+    """(coordinate(node, index), at(body, local)): markers in `mbs` on a node's coordinate
+    and at a point of a body (local x, y), the two kinds the vehicles' elements attach to."""
+    def coordinate(node, index):
+        return mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=index))
+
+    def at(body, local):
+        return mbs.AddMarker(MarkerBodyPosition(bodyNumber=body,
+                                                localPosition=[local[0], local[1], 0.0]))
+    return coordinate, at
+
+
 class VehicleError(RuntimeError):
     """The run left what the model can represent: names the part and the time."""
 
@@ -185,12 +197,7 @@ class Vehicle:
 
         ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
 
-        def coordinate(node, index):
-            return mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=index))
-
-        def at(body, local):
-            return mbs.AddMarker(MarkerBodyPosition(bodyNumber=body,
-                                                    localPosition=[local[0], local[1], 0.0]))
+        coordinate, at = markers(mbs)
 
         # --- hull and its speed hold -------------------------------------------------------
         cg = geo.cg

@@ -3,12 +3,14 @@
 
 class CouplingError(RuntimeError):
     """An FMU refused a call or returned something a host cannot use. The message names
-    the component, the time and what the FMU logged."""
+    the component, the time and what the FMU logged; `status` is the FMI status the call
+    answered (2 Discard, 3 Error, 4 Fatal), None where the error is not a call's status."""
 
-    def __init__(self, component, time, message):
+    def __init__(self, component, time, message, status=None):
         super().__init__(f"{component} at t = {time:.9g} s: {message}")
         self.component = component
         self.time = time
+        self.status = status
 
 
 class StepDiscarded(Exception):

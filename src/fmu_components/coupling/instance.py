@@ -310,7 +310,7 @@ class FmuInstance:
                                 self.messages[-1] if self.messages else "no message")
         step = f" by {step:.6g} s" if step is not None else ""
         raise CouplingError(self.name, self.time, f"{function}{step} returned "
-                            f"{status_name(self.version, status)}{self.said()}")
+                            f"{status_name(self.version, status)}{self.said()}", status)
 
     def call(self, method, *args):
         """A call through fmpy's own wrapper (the calls made once, not per step): its

@@ -15,7 +15,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from ..coupling.errors import CouplingError
-from ..coupling.instance import MODEL_EXCHANGE, FmuInstance
+from ..coupling.instance import DISCARD, MODEL_EXCHANGE, FmuInstance
 
 
 class ModelExchangeComponent:
@@ -80,7 +80,7 @@ def _unless_discarded(call, discarded):
     try:
         return call()
     except CouplingError as refused:
-        if "Discard" not in str(refused):
+        if refused.status != DISCARD:
             raise
         return discarded
 

@@ -1,0 +1,18 @@
+"""The flags both vehicle scripts take (tracked_vehicle.py, ground_vehicle.py): speed,
+course, how long, the host step, the coupling's scheme and its path."""
+
+from fmu_components.coupling import DEFAULT_SCHEME, SCHEMES
+
+import bank_path
+
+from .course import COURSES
+
+
+def add_run_arguments(parser, end_time, step):
+    parser.add_argument("--speed", type=float, default=5.0, help="m/s (default 5)")
+    parser.add_argument("--course", choices=sorted(COURSES), default="bump")
+    parser.add_argument("--end-time", type=float, default=end_time, help="s of driving")
+    parser.add_argument("--step", type=float, default=step, help="host step, s")
+    parser.add_argument("--coupling", choices=sorted(SCHEMES), default=DEFAULT_SCHEME,
+                        help=f"coupling scheme (default {DEFAULT_SCHEME}; docs/coupling.md)")
+    bank_path.add_argument(parser)
