@@ -11,9 +11,6 @@ Python functions (model.RelaxedTable).
 
 import numpy as np
 
-from fmu_components.coupling import exudyn_host
-from fmu_components.coupling.bank_exudyn import ExudynBank
-
 import bank_path
 
 from . import layout as lay
@@ -74,6 +71,12 @@ class CompiledPath:
         for connector, function in functions:
             self._symbolic.append(bank_path.symbolic_function(mbs, connector, function))
 
+    def initial_state(self):
+        """(deflections, rates) at the run's start, from the Python path's readers (once):
+        the bank starts relaxed there."""
+        states = np.array([read() for _, read in self.v.coupling.entries], dtype=float)
+        return states[:, 0], states[:, 1]
+
     def deflections(self):
         """Every instance's deflection from the system's coordinates, in one pass (the
         Python path's readers, vectorised): a tyre's compression (contacts.py), a radial
@@ -104,31 +107,14 @@ class CompiledPath:
         return deflection
 
 
-class _Starting:
-    """What exudyn_host.solve starts and frees: the bank relaxed at the host's deflections
-    and rates (the Python path's readers, once), its laws in the symbolic matrix."""
-
-    def __init__(self, path):
-        self.path = path
-
-    def start(self, time):
-        states = np.array([read() for _, read in self.path.v.coupling.entries], dtype=float)
-        self.path.bank.start(time, states[:, 0], states[:, 1])
-        self.path.laws.update()
-
-    def free(self):
-        self.path.bank.free()
-
-
 def solve_compiled(vehicle, end_time, step, settings):
     """The run on the compiled path; returns exudyn_host.solve's host. The bank stands in
     for the Python coupling afterwards (its counts: Vehicle.solver_statistics)."""
     path = vehicle.compiled_path
     vehicle.bank = path.bank
     try:
-        host = ExudynBank(vehicle.mbs, path.bank, path.laws, path.deflections)
-        return exudyn_host.solve(vehicle.mbs, _Starting(path), end_time, step,
-                                 settings=settings, host=host)
+        return bank_path.solve(vehicle.mbs, path.bank, path.laws, path.deflections, end_time,
+                               step, settings=settings, initial=path.initial_state)
     finally:
         vehicle.bank = None
         vehicle.coupling = path.bank

@@ -101,24 +101,27 @@ class ExudynBank(ExudynCoupling):
 
 
 class _Starting:
-    """What exudyn_host.solve starts and frees: the bank at the host's deflections, its
-    laws in the symbolic matrix."""
+    """What exudyn_host.solve starts and frees: the bank at the host's initial state
+    (`initial()`: deflections, or (deflections, rates)), its laws in the symbolic matrix."""
 
-    def __init__(self, bank, laws, deflections):
-        self.bank, self.laws, self.deflections = bank, laws, deflections
+    def __init__(self, bank, laws, initial):
+        self.bank, self.laws, self.initial = bank, laws, initial
 
     def start(self, time):
-        self.bank.start(time, self.deflections())
+        state = self.initial()
+        self.bank.start(time, *(state if isinstance(state, tuple) else (state,)))
         self.laws.update()
 
     def free(self):
         self.bank.free()
 
 
-def solve(mbs, bank, laws, deflections, end_time, step, start_time=0.0, settings=None):
-    """exudyn_host.solve for a bank: start its components at the host's initial state,
-    integrate with generalized-alpha at `step` to the first multiple of it at or after
-    end_time. Frees the bank. Returns the ExudynBank."""
-    return exudyn_host.solve(mbs, _Starting(bank, laws, deflections), end_time, step,
-                             start_time, settings,
+def solve(mbs, bank, laws, deflections, end_time, step, start_time=0.0, settings=None,
+          initial=None):
+    """exudyn_host.solve for a bank: start its components at the host's initial state
+    (`initial()`, (deflections, rates), where the host has the rates; else `deflections()`
+    at rest), integrate with generalized-alpha at `step` to the first multiple of it at or
+    after end_time. Frees the bank. Returns the ExudynBank."""
+    return exudyn_host.solve(mbs, _Starting(bank, laws, initial or deflections), end_time,
+                             step, start_time, settings,
                              host=ExudynBank(mbs, bank, laws, deflections))
