@@ -109,6 +109,12 @@ def parting(run, reference):
     return apart[0] * 1e-9 if apart else None
 
 
+def before(run, time):
+    """The run's hull acceleration before `time`."""
+    kept = np.asarray(run["time"]) < time - 1e-9
+    return {key: np.asarray(run[key])[kept] for key in ("time", KEY)}
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=float, nargs="+", default=[1.0], help="ms")
@@ -139,16 +145,21 @@ def main(argv=None):
           + " | ".join(LOADS) + f" | steps part at | converged's unconverged steps | "
           f"against converged at {min(runs):g} ms | CPU s / s | Newton per solve | "
           f"solves per step |")
-    print("|---" * (10 + len(LOADS)) + "|")
+    print("|---" * (8 + len(LOADS)) + "|")
     for step, (default, converged) in sorted(runs.items(), reverse=True):
         if default is None or converged is None:
-            print(f"| {step:g} | stopped (above) |" + " |" * (8 + len(LOADS)))
+            print(f"| {step:g} | stopped (above) |" + " |" * (6 + len(LOADS)))
             continue
         error, at = difference(default, converged)
         loads = " | ".join(f"{difference(default, converged, key)[0]:.3g}"
                            for key in LOADS.values())
         part = parting(default, converged)
-        print(f"| {step:g} | {error:.3g} (at {at * 1e3:.1f} ms) | {loads} | "
+        if part is not None:
+            error = f"{error:.3g} (at {at * 1e3:.1f} ms; before the steps part " \
+                    f"{difference(before(default, part), before(converged, part))[0]:.3g})"
+        else:
+            error = f"{error:.3g} (at {at * 1e3:.1f} ms)"
+        print(f"| {step:g} | {error} | {loads} | "
               f"{'-' if part is None else f'{part * 1e3:.3f} ms'} | "
               f"{converged['unconverged']} of {converged['steps']} | "
               f"{difference(default, finest)[0]:.3g} | {default['cpu']:.0f} | "
