@@ -109,6 +109,17 @@ def parting(run, reference):
     return apart[0] * 1e-9 if apart else None
 
 
+def by_window(run, reference, width):
+    """The hull error (% of the reference's whole range) in each window of `width` s,
+    at the times both runs reached: where in the run it grows."""
+    i, j = common_times(run, reference)
+    times = np.asarray(reference["time"])[j]
+    error = 100 * np.abs(np.asarray(run[KEY])[i] - np.asarray(reference[KEY])[j]) / (
+        np.ptp(reference[KEY]) or 1.0)
+    window = np.floor(times / width + 1e-9).astype(int)
+    return [(k * width, float(error[window == k].max())) for k in np.unique(window)]
+
+
 def before(run, time):
     """The run's hull acceleration before `time`."""
     kept = np.asarray(run["time"]) < time - 1e-9
@@ -123,6 +134,8 @@ def main(argv=None):
     parser.add_argument("--course", default="bump")
     parser.add_argument("--scheme", default=DEFAULT_SCHEME)
     parser.add_argument("--settle-time", type=float, default=3.0)
+    parser.add_argument("--window", type=float, default=0.025,
+                        help="s, the windows the hull error is also given in")
     parser.add_argument("--newton-iterations", type=int, default=NEWTON_ITERATIONS,
                         help=f"exudyn's Newton iterations per solve at most (default "
                              f"{NEWTON_ITERATIONS}: no step halved; exudyn's own, 25, halves "
@@ -164,6 +177,11 @@ def main(argv=None):
               f"{converged['unconverged']} of {converged['steps']} | "
               f"{difference(default, finest)[0]:.3g} | {default['cpu']:.0f} | "
               f"{default['newton_per_pass']:.1f} | {default['passes_per_step']:.2f} |")
+    for step, (default, converged) in sorted(runs.items(), reverse=True):
+        if default is not None and converged is not None:
+            print(f"\n{step:g} ms, hull error by {args.window * 1e3:g} ms from: " + ", ".join(
+                f"{start * 1e3:g} ms {error:.2g} %"
+                for start, error in by_window(default, converged, args.window)))
 
 
 if __name__ == "__main__":

@@ -60,6 +60,9 @@ def test_a_difference_is_found_where_and_in_the_units_it_is(study):
     error, at = study.difference(run, reference)
     assert error == pytest.approx(1.0)
     assert at == pytest.approx(0.020)
+    windows = dict(study.by_window(run, reference, 0.01))
+    assert windows[0.02] == pytest.approx(1.0)
+    assert windows[0.0] == windows[0.03] == 0.0
     # each instance in % of its own range: the second wheel's 2 %
     assert study.difference(run, reference, "tyre_force") == (pytest.approx(2.0),
                                                               pytest.approx(0.030))
