@@ -12,7 +12,8 @@ each damper's torque and each joint's radial and torsion bush load, the largest 
 instances of a kind, each in % of its own range), the error against the finest step's
 converged run (the step study), CPU seconds per simulated second, exudyn's Newton
 iterations per solve and solves per host step, and the steps where `converged` stopped at
-its pass limit before its loads agreed (its own error there).
+its pass limit before its loads agreed (its own error there); then the hull error by
+time window (--window), where in the run it grows.
 
 Like for like: runs are compared at the times both reached, never interpolated. exudyn
 halves a step where its Newton fails, and where it does depends on the smallest
@@ -144,6 +145,8 @@ def main(argv=None):
     args = parser.parse_args(argv)
     if args.newton_iterations < 1:
         parser.error(f"--newton-iterations {args.newton_iterations}: give 1 or more")
+    if not args.window > 0:
+        parser.error(f"--window {args.window}: give a length in s, more than 0")
     model.run_settings = newton_limit(args.newton_iterations)
     statics = model.static_points()
     runs = {}
