@@ -2,16 +2,28 @@
 docs/vehicle.md): a benchmark, not a test (minutes to hours of CPU).
 
     python benchmarks/vehicle_study.py --end-time 0.05            # coupling's own error
-    python benchmarks/vehicle_study.py --steps 4 2 1 0.5 --end-time 0.2
+    python benchmarks/vehicle_study.py --steps 4 2 1 0.5 --end-time 0.05
     python benchmarks/vehicle_study.py --path python    # the coupling's Python path
 
 For each host step: the run with the default coupling and with `converged` at the same
 step (the coupling's own error: the largest difference in hull vertical acceleration, in
-% of the converged run's range), the error against the finest step's converged run (the
-step study), CPU seconds per simulated second, exudyn's Newton iterations per solve and
-solves per host step. All runs start from the same stored static point (one settling
-first, excluded from the costs). CPU figures are this machine's, in one run, under
-whatever load it carries: compare them within a table only.
+% of the converged run's range, and where it is; the same for each wheel's tyre force,
+each damper's torque and each joint's radial and torsion bush load, the largest over the
+instances of a kind, each in % of its own range), the error against the finest step's
+converged run (the step study), CPU seconds per simulated second, exudyn's Newton
+iterations per solve and solves per host step, and the steps where `converged` stopped at
+its pass limit before its loads agreed (its own error there); then the hull error by
+time window (--window), where in the run it grows.
+
+Like for like: runs are compared at the times both reached, never interpolated. exudyn
+halves a step where its Newton fails, and where it does depends on the smallest
+difference: two `converged` runs differing only in their tolerance (1e-9 and 1e-6, bump
+at 5 m/s, 1 ms) halved different steps from 31.75 ms on and then differed by 1.9 % of
+the range, as much as the coupling's own error. So the study lets exudyn's Newton take
+up to --newton-iterations iterations (exudyn's default is 25), and says where two runs'
+steps part if they still do. All runs start from the same stored static point (one
+settling first, excluded from the costs). CPU figures are this machine's, in one run,
+under whatever load it carries: compare them within a table only.
 """
 
 import argparse
@@ -28,29 +40,91 @@ from fmu_components.coupling import DEFAULT_SCHEME  # noqa: E402
 
 import bank_path  # noqa: E402
 from tracked_vehicle import simulate  # noqa: E402
-from vehicle.model import static_points  # noqa: E402
+from vehicle import model  # noqa: E402
 
 KEY = "hull_vertical_acceleration"
+# each kind's loads, compared instance by instance (docs/vehicle.md, Outputs)
+LOADS = {"tyre force": "tyre_force", "damper torque": "damper_torque",
+         "radial bush force": "bush_radial_force", "torsion bush torque": "bush_torque"}
+NEWTON_ITERATIONS = 100
+
+
+def newton_limit(iterations):
+    """The vehicle's run settings (model.run_settings) with exudyn's Newton allowed
+    `iterations` per solve."""
+    settings = model.run_settings
+
+    def run_settings():
+        chosen = settings()
+        chosen.timeIntegration.newton.maxIterations = iterations
+        return chosen
+    return run_settings
 
 
 def run(args, step, scheme, statics):
+    """The run's histories and costs; None where the run stopped (its message printed)."""
     cpu = time.process_time()
-    vehicle, result, _, run_cpu = simulate(args.course, args.speed, args.end_time, step,
-                                           scheme, None, statics, args.settle_time,
-                                           path=args.path)
+    try:
+        vehicle, result, _, run_cpu = simulate(args.course, args.speed, args.end_time, step,
+                                               scheme, None, statics, args.settle_time,
+                                               path=args.path)
+    except model.VehicleError as error:
+        print(f"  {scheme} at {step * 1e3:g} ms stopped: {error}", flush=True)
+        return None
     solver = vehicle.solver_statistics()
     print(f"  {scheme} at {step * 1e3:g} ms: {run_cpu:.1f} s CPU "
-          f"({time.process_time() - cpu:.1f} with the set-up)", flush=True)
-    return {"time": result["time"], "value": result[KEY],
-            "cpu": run_cpu / (result["time"][-1] - result["time"][0]), **solver}
+          f"({time.process_time() - cpu:.1f} with the set-up), {solver['steps']} steps "
+          f"for {solver['host_steps']}", flush=True)
+    return {"time": result["time"], **{key: result[key] for key in (KEY, *LOADS.values())},
+            "cpu": run_cpu / (result["time"][-1] - result["time"][0]),
+            "unconverged": vehicle.coupling.unconverged_steps, **solver}
 
 
-def difference(run, reference):
-    """Largest |difference| on the reference's times (the run interpolated), in % of the
-    reference's range."""
-    value = np.interp(reference["time"], run["time"], run["value"])
-    span = np.ptp(reference["value"]) or 1.0
-    return 100 * np.max(np.abs(value - reference["value"])) / span
+def common_times(run, reference):
+    """Indices into run and reference of the times both reached (to the nanosecond)."""
+    mine, theirs = (np.round(np.asarray(r["time"]) * 1e9).astype(np.int64)
+                    for r in (run, reference))
+    _, i, j = np.intersect1d(mine, theirs, return_indices=True)
+    return i, j
+
+
+def difference(run, reference, key=KEY):
+    """(largest |difference| at the times both reached, in % of the reference's range
+    there, and its time). For a history of several instances, each in % of its own
+    range, the largest over them."""
+    i, j = common_times(run, reference)
+    if not len(i):
+        return float("nan"), float("nan")
+    mine, theirs = np.asarray(run[key])[i], np.asarray(reference[key])[j]
+    span = np.ptp(theirs, axis=0)
+    error = 100 * np.abs(mine - theirs) / np.where(span > 0, span, 1.0)
+    at = np.unravel_index(np.argmax(error), error.shape)[0]
+    return float(np.max(error)), float(np.asarray(reference["time"])[j][at])
+
+
+def parting(run, reference):
+    """The first time one run reached that the other did not (None: the same steps)."""
+    mine, theirs = (set(np.round(np.asarray(r["time"]) * 1e9).astype(np.int64))
+                    for r in (run, reference))
+    apart = sorted(mine ^ theirs)
+    return apart[0] * 1e-9 if apart else None
+
+
+def by_window(run, reference, width):
+    """The hull error (% of the reference's whole range) in each window of `width` s,
+    at the times both runs reached: where in the run it grows."""
+    i, j = common_times(run, reference)
+    times = np.asarray(reference["time"])[j]
+    error = 100 * np.abs(np.asarray(run[KEY])[i] - np.asarray(reference[KEY])[j]) / (
+        np.ptp(reference[KEY]) or 1.0)
+    window = np.floor(times / width + 1e-9).astype(int)
+    return [(k * width, float(error[window == k].max())) for k in np.unique(window)]
+
+
+def before(run, time):
+    """The run's hull acceleration before `time`."""
+    kept = np.asarray(run["time"]) < time - 1e-9
+    return {key: np.asarray(run[key])[kept] for key in ("time", KEY)}
 
 
 def main(argv=None):
@@ -61,23 +135,56 @@ def main(argv=None):
     parser.add_argument("--course", default="bump")
     parser.add_argument("--scheme", default=DEFAULT_SCHEME)
     parser.add_argument("--settle-time", type=float, default=3.0)
+    parser.add_argument("--window", type=float, default=0.025,
+                        help="s, the windows the hull error is also given in")
+    parser.add_argument("--newton-iterations", type=int, default=NEWTON_ITERATIONS,
+                        help=f"exudyn's Newton iterations per solve at most (default "
+                             f"{NEWTON_ITERATIONS}: no step halved; exudyn's own, 25, halves "
+                             f"some)")
     bank_path.add_argument(parser)
     args = parser.parse_args(argv)
-    statics = static_points()
+    if args.newton_iterations < 1:
+        parser.error(f"--newton-iterations {args.newton_iterations}: give 1 or more")
+    if not args.window > 0:
+        parser.error(f"--window {args.window}: give a length in s, more than 0")
+    model.run_settings = newton_limit(args.newton_iterations)
+    statics = model.static_points()
     runs = {}
     for step in sorted(args.steps, reverse=True):
         h = step * 1e-3
         runs[step] = (run(args, h, args.scheme, statics), run(args, h, "converged", statics))
-    finest = runs[min(runs)][1]
+    finest = runs[min(runs)][1] or {"time": [], KEY: []}
     print(f"\n{args.course} at {args.speed:g} m/s, {args.end_time:g} s, the coupling's "
-          f"{args.path} path; errors in hull vertical acceleration, % of range\n")
-    print(f"| step (ms) | {args.scheme} against converged | against converged at "
-          f"{min(runs):g} ms | CPU s / s | Newton per solve | solves per step |")
-    print("|---|---|---|---|---|---|")
+          f"{args.path} path, exudyn's Newton up to {args.newton_iterations} iterations; "
+          f"errors in % of range at the times both runs reached\n")
+    print(f"| step (ms) | {args.scheme} against converged: hull vertical acceleration | "
+          + " | ".join(LOADS) + f" | steps part at | converged's unconverged steps | "
+          f"against converged at {min(runs):g} ms | CPU s / s | Newton per solve | "
+          f"solves per step |")
+    print("|---" * (8 + len(LOADS)) + "|")
     for step, (default, converged) in sorted(runs.items(), reverse=True):
-        print(f"| {step:g} | {difference(default, converged):.3g} | "
-              f"{difference(default, finest):.3g} | {default['cpu']:.0f} | "
+        if default is None or converged is None:
+            print(f"| {step:g} | stopped (above) |" + " |" * (6 + len(LOADS)))
+            continue
+        error, at = difference(default, converged)
+        loads = " | ".join(f"{difference(default, converged, key)[0]:.3g}"
+                           for key in LOADS.values())
+        part = parting(default, converged)
+        if part is not None:
+            error = f"{error:.3g} (at {at * 1e3:.1f} ms; before the steps part " \
+                    f"{difference(before(default, part), before(converged, part))[0]:.3g})"
+        else:
+            error = f"{error:.3g} (at {at * 1e3:.1f} ms)"
+        print(f"| {step:g} | {error} | {loads} | "
+              f"{'-' if part is None else f'{part * 1e3:.3f} ms'} | "
+              f"{converged['unconverged']} of {converged['steps']} | "
+              f"{difference(default, finest)[0]:.3g} | {default['cpu']:.0f} | "
               f"{default['newton_per_pass']:.1f} | {default['passes_per_step']:.2f} |")
+    for step, (default, converged) in sorted(runs.items(), reverse=True):
+        if default is not None and converged is not None:
+            print(f"\n{step:g} ms, hull error by {args.window * 1e3:g} ms from: " + ", ".join(
+                f"{start * 1e3:g} ms {error:.2g} %"
+                for start, error in by_window(default, converged, args.window)))
 
 
 if __name__ == "__main__":

@@ -1,0 +1,74 @@
+"""The vehicle's accuracy study (benchmarks/vehicle_study.py): it compares two runs at
+the times both reached, never across different step sequences by interpolation, and
+lets exudyn's Newton iterate long enough that a step is not halved in one run only. The
+study itself is a benchmark; these check its comparison on made-up histories."""
+
+import importlib.util
+
+import numpy as np
+import pytest
+
+from conftest import ROOT
+
+NO_EXUDYN = 'exudyn is not installed: pip install -e ".[examples]"'
+
+
+@pytest.fixture(scope="module")
+def study():
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    spec = importlib.util.spec_from_file_location("vehicle_study",
+                                                  ROOT / "benchmarks" / "vehicle_study.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def history(times, signal):
+    times = np.asarray(times, dtype=float)
+    return {"time": times, "hull_vertical_acceleration": signal(times),
+            "tyre_force": np.stack([signal(times), 2 * signal(times)], axis=1)}
+
+
+def oscillation(t):
+    # about the link-passing frequency at 5 m/s (33 Hz) and a tenth of a millisecond
+    # wide features, which a 1 ms history interpolated onto 0.5 ms times misses
+    return np.sin(2 * np.pi * 33 * t) + 0.5 * np.sin(2 * np.pi * 700 * t)
+
+
+def test_the_same_motion_on_a_halved_step_sequence_differs_by_nothing(study):
+    """One run took 1 ms steps, the other halved some (exudyn does where its Newton
+    fails): where both reached the same time with the same value, there is no error,
+    whatever the values between."""
+    microseconds = np.arange(0, 50_001, 1000)
+    coarse = history(microseconds / 1e6, oscillation)
+    halved = np.concatenate([microseconds[microseconds < 30_000],
+                             np.arange(30_000, 50_001, 500)])
+    fine = history(halved / 1e6, oscillation)
+    error, _ = study.difference(coarse, fine)
+    assert error == 0.0
+    assert study.difference(coarse, fine, "tyre_force")[0] == 0.0
+    assert study.parting(coarse, fine) == pytest.approx(0.0305)
+    assert study.parting(coarse, coarse) is None
+
+
+def test_a_difference_is_found_where_and_in_the_units_it_is(study):
+    reference = history(np.arange(0, 0.0505, 1e-3), oscillation)
+    run = {key: np.array(value, dtype=float) for key, value in reference.items()}
+    span = np.ptp(reference["hull_vertical_acceleration"])
+    run["hull_vertical_acceleration"][20] += 0.01 * span  # 1 % of the range at 20 ms
+    run["tyre_force"][30, 1] += 0.02 * np.ptp(reference["tyre_force"][:, 1])
+    error, at = study.difference(run, reference)
+    assert error == pytest.approx(1.0)
+    assert at == pytest.approx(0.020)
+    windows = dict(study.by_window(run, reference, 0.01))
+    assert windows[0.02] == pytest.approx(1.0)
+    assert windows[0.0] == windows[0.03] == 0.0
+    # each instance in % of its own range: the second wheel's 2 %
+    assert study.difference(run, reference, "tyre_force") == (pytest.approx(2.0),
+                                                              pytest.approx(0.030))
+
+
+def test_the_study_lets_newton_iterate_longer_than_exudyns_default(study):
+    settings = study.newton_limit(100)()
+    assert settings.timeIntegration.newton.maxIterations == 100
+    assert study.model.run_settings().timeIntegration.newton.maxIterations == 25
