@@ -272,7 +272,7 @@ static int begin(Bank *bank, double time) {
 /* The host begins a step to the call's time. */
 EXPORT int bank_begin_step(Bank *bank) {
     if (__sync_lock_test_and_set(&bank->busy, 1)) return BUSY;
-    bank->call->begun = 0.0;
+    bank->call->begun = NAN;
     bank->call->pass = 0;
     int result = begin(bank, bank->call->time);
     __sync_lock_release(&bank->busy);
@@ -366,10 +366,10 @@ EXPORT int bank_end_pass(Bank *bank) {
     BankCall *call = bank->call;
     double time = call->time;
     /* the first pass of a step accept began, or the next of this one */
-    int pass = call->begun != 0.0 ? (call->pass = 1) : ++call->pass;
+    int pass = !isnan(call->begun) ? (call->pass = 1) : ++call->pass;
     int max_pieces = call->max_pieces;
     call->total_passes++;
-    call->begun = 0.0;
+    call->begun = NAN;
     int *cut = &call->cut;
     int verdict = ACCEPT;
     double worst = 0.0;
@@ -420,14 +420,14 @@ done:
 }
 
 /* The host accepted its step (to the call's time): every instance's last trial becomes
-   its accepted point. Where the host gives the next step's end (the call's `next`, a later
-   time), the next step begins in the same call (`begun` is then its time): a host step's
-   calls are three, not four. A begin that fails or lists instances for Python is undone
-   in effect (begun 0): the host's begin_step does it again and reports. */
+   its accepted point. Where the host gives the next step's end (the call's `next`, a
+   later time; NaN: none), the next step begins in the same call (`begun` is then its
+   time): a host step's calls are three, not four. A begin that fails or lists instances
+   for Python leaves `begun` NaN: the host's begin_step does it again and reports. */
 EXPORT int bank_accept(Bank *bank) {
     BankCall *call = bank->call;
     double time = call->time;
-    call->begun = 0.0;
+    call->begun = NAN;
     for (int i = 0; i < bank->n; i++) {
         Instance *c = &bank->instances[i];
         if (!c->tried) return fail(bank, i, FAILED_NO_STEP, 0, time, 0.0);
@@ -449,7 +449,7 @@ EXPORT int bank_accept(Bank *bank) {
 
 /* The host gave its step up: every instance back to its last accepted point. */
 EXPORT int bank_reject(Bank *bank) {
-    bank->call->begun = 0.0;
+    bank->call->begun = NAN;
     for (int i = 0; i < bank->n; i++) {
         Instance *c = &bank->instances[i];
         if (c->stepped && restore(bank, i) != 0) return FAILED;

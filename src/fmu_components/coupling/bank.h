@@ -92,8 +92,8 @@ typedef struct {
 typedef struct {
     double time;     /* in: the time the step reaches */
     double mismatch; /* out: the pass's mismatch (end_pass) */
-    double next;     /* in (accept): the next step's end where the host knows it, or 0 */
-    double begun;    /* out: the time of a step accept began (0: none) */
+    double next;     /* in (accept): the next step's end where the host knows it, or NaN */
+    double begun;    /* out: the time of the step accept began, or NaN */
     int64_t total_passes; /* out: passes since the bank was made */
     int pass;        /* out: the step's passes so far (begin_step: 0, end_pass: + 1) */
     int max_pieces;  /* in: 1, or a discarded step's most pieces for a host that cannot retry */

@@ -27,6 +27,7 @@ path). A bank is used by the thread that made it: another thread's call is refus
 """
 
 import ctypes
+import math
 import threading
 
 import numpy as np
@@ -167,7 +168,8 @@ class Bank:
         # a host step's calls: their arguments and results in a block bound once, the
         # functions and the bank's pointer looked up once (a fixed few microseconds of
         # Python per host step, whatever the number of instances)
-        self._call = _Call(max_pieces=1 if host_can_retry else 64)
+        self._call = _Call(max_pieces=1 if host_can_retry else 64, next=math.nan,
+                           begun=math.nan)  # NaN: no step begun early
         lib.bank_bind_call(self._handle, ctypes.byref(self._call))
         self._bank = ctypes.c_void_p(self._handle)
         self._begin, self._end, self._accept = lib.bank_begin_step, lib.bank_end_pass, \
@@ -321,7 +323,7 @@ class Bank:
         if time > self.time:
             call = self._call
             call.time = time
-            call.next = next_time if next_time is not None and self._early else 0.0
+            call.next = next_time if next_time is not None and self._early else math.nan
             if self._accept(self._bank):
                 self._raise()
             self.time = time
