@@ -101,10 +101,10 @@ def run_bank(fmus, names, x, second, steps):
     wall, cpu = time.perf_counter(), time.process_time()
     for k in range(1, steps + 1):
         t = k * STEP
-        bank.begin_step(t)
+        bank.begin_step(t)  # begun already by the accept before it, but for the first
         bank.end_pass(t, columns[k])
         bank.end_pass(t, seconds[k])
-        bank.accept(t)
+        bank.accept(t, t + STEP if k < steps else None)  # the next step begins in its call
     wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
     bank.free()
     return wall / steps, cpu / steps
@@ -134,7 +134,7 @@ def long_run(fmus, steps):
         bank.begin_step(t)
         bank.end_pass(t, columns[j])
         bank.end_pass(t, seconds[j])
-        bank.accept(t)
+        bank.accept(t, t + STEP if k < steps else None)
         if k == 10_000:
             early = rss_mib()
     wall = time.perf_counter() - started

@@ -302,15 +302,25 @@ class Station:
             bank_path.symbolic_function(self.mbs, self.damper_connector, damper_torque)]
 
     def _deflections(self):
-        return np.array([self._tyre_state()[0], self._damper_state()[0]])
+        """Both instances' deflections now (the post-Newton hook's, each pass): the
+        connectors' displacements alone, not the rates _tyre_state and _damper_state read
+        too (exudyn's GetObjectOutput is most of this function's cost)."""
+        mbs, displacement = self.mbs, exu.OutputVariableType.Displacement
+        return np.array([
+            self._compression(mbs.systemData.GetTime(),
+                              mbs.GetObjectOutput(self.tyre_connector, displacement)),
+            float(mbs.GetObjectOutput(self.damper_connector, displacement))])
 
     # --- kinematics shared by the force functions and the post-step hook ------------------
 
-    def _compression(self, t, displacement, velocity):
-        """Tyre compression and its rate from the wheel centre's displacement from static."""
+    def _compression(self, t, displacement, velocity=None):
+        """Tyre compression and its rate from the wheel centre's displacement from static
+        (without its velocity: the compression alone)."""
         dx, dy = displacement[0], displacement[1]
         height, slope = self.profile.height_and_slope(self.speed * t + dx)
         compression = self.static_compression - dy + height
+        if velocity is None:
+            return compression
         rate = -velocity[1] + slope * (self.speed + velocity[0])
         return compression, rate
 

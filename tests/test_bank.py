@@ -139,6 +139,55 @@ def test_the_track_span_compiled_path_gives_the_python_paths_numbers(native_fmus
     assert all(0.0 < run["solve_cpu"] < 60.0 for run in runs.values())
 
 
+def announced_run(fmus, announce, steps=120):
+    """A corrected bank of the four FMUs over `steps` host steps of 1 ms, the damper turned
+    0.1 rad within step 60 (a Discard: the host retries it shorter), the host announcing each next
+    step's end at accept where `announce`. Per step the laws after begin_step and after the
+    last pass, the accepted loads, the passes and the mismatch; the number of C
+    begin_step calls; the costs."""
+    bank = Bank(mix(fmus), "corrected")
+    calls = []
+    begin = bank._begin
+    bank._begin = lambda handle: calls.append(1) or begin(handle)
+    bank.start(0.0, motion(0.0))
+    rows, t = [], 0.0
+    try:
+        for k in range(1, steps + 1):
+            end = t + 1e-3
+            bank.begin_step(end)
+            first_laws = list(bank.law_loads(1.01 * motion(end)))
+            while True:
+                x = motion(end)
+                x[3] += 0.1 * min(max((end - 0.059) / 1e-3, 0.0), 1.0)  # 0.1 rad in step 60
+                verdict = bank.end_pass(end, x)
+                if verdict.retry_step:
+                    end = t + verdict.retry_step
+                    bank.begin_step(end)
+                    first_laws = list(bank.law_loads(1.01 * motion(end)))
+                elif not verdict.repeat:
+                    break
+            t = end
+            last_laws = list(bank.law_loads(1.01 * motion(t)))
+            bank.accept(t, t + 1e-3 if announce and k < steps else None)
+            rows.append(first_laws + last_laws + list(bank.loads)
+                        + [bank.passes, bank.total_passes, bank.last_mismatch])
+        costs = bank.costs()
+    finally:
+        bank.free()
+    return np.array(rows), len(calls), costs
+
+
+def test_a_host_that_announces_its_next_step_saves_a_call_and_changes_no_number(native_fmus):
+    """accept(t, next_time) begins the next step in the same C call: the same loads,
+    laws, passes and costs to the bit as begin_step's own, a C begin_step only for the
+    first step and where the host begins another step than it announced (a retry)."""
+    expected, calls, costs = announced_run(native_fmus, announce=False)
+    got, announced_calls, announced_costs = announced_run(native_fmus, announce=True)
+    assert np.array_equal(got, expected)
+    assert announced_costs == costs
+    assert calls >= 121 and announced_calls == calls - 119
+
+
 def serialized(bank):
     return [c.serialized_state() for c in bank.components]
 

@@ -241,11 +241,10 @@ static int restore(Bank *bank, int i) {
     return 0;
 }
 
-/* Every instance: undo a trial of a step given up, save the state, and the first law.
-   Instances whose first law is their linearised step are listed in `flagged`. */
-EXPORT int bank_begin_step(Bank *bank) {
-    if (__sync_lock_test_and_set(&bank->busy, 1)) return BUSY;
-    double time = bank->call->time;
+/* Every instance: undo a trial of a step given up, save the state, and the first law of
+   the step to `time`. Instances whose first law is their linearised step and which have no
+   Model Exchange instance here are listed in `flagged` (their number returned). */
+static int begin(Bank *bank, double time) {
     int result = 0;
     bank->n_flagged = 0;
     for (int i = 0; i < bank->n && result == 0; i++) {
@@ -267,8 +266,17 @@ EXPORT int bank_begin_step(Bank *bank) {
                 break;
         }
     }
-    __sync_lock_release(&bank->busy);
     return result == 0 ? bank->n_flagged : result;
+}
+
+/* The host begins a step to the call's time. */
+EXPORT int bank_begin_step(Bank *bank) {
+    if (__sync_lock_test_and_set(&bank->busy, 1)) return BUSY;
+    bank->call->begun = NAN;
+    bank->call->pass = 0;
+    int result = begin(bank, bank->call->time);
+    __sync_lock_release(&bank->busy);
+    return result;
 }
 
 /* fmu.py's trial: from the last accepted point along the secant to (time, x), in `pieces`
@@ -357,7 +365,11 @@ EXPORT int bank_end_pass(Bank *bank) {
     if (__sync_lock_test_and_set(&bank->busy, 1)) return BUSY;
     BankCall *call = bank->call;
     double time = call->time;
-    int pass = call->pass, max_pieces = call->max_pieces;
+    /* the first pass of a step accept began, or the next of this one */
+    int pass = !isnan(call->begun) ? (call->pass = 1) : ++call->pass;
+    int max_pieces = call->max_pieces;
+    call->total_passes++;
+    call->begun = NAN;
     int *cut = &call->cut;
     int verdict = ACCEPT;
     double worst = 0.0;
@@ -401,16 +413,21 @@ EXPORT int bank_end_pass(Bank *bank) {
             break;
         }
 done:
-    call->mismatch = worst;
+    if (verdict == ACCEPT || verdict == REPEAT) call->mismatch = worst;
     call->n_flagged = bank->n_flagged;
     __sync_lock_release(&bank->busy);
     return verdict;
 }
 
 /* The host accepted its step (to the call's time): every instance's last trial becomes
-   its accepted point. */
+   its accepted point. Where the host gives the next step's end (the call's `next`, a
+   later time; NaN: none), the next step begins in the same call (`begun` is then its
+   time): a host step's calls are three, not four. A begin that fails or lists instances
+   for Python leaves `begun` NaN: the host's begin_step does it again and reports. */
 EXPORT int bank_accept(Bank *bank) {
-    double time = bank->call->time;
+    BankCall *call = bank->call;
+    double time = call->time;
+    call->begun = NAN;
     for (int i = 0; i < bank->n; i++) {
         Instance *c = &bank->instances[i];
         if (!c->tried) return fail(bank, i, FAILED_NO_STEP, 0, time, 0.0);
@@ -422,11 +439,17 @@ EXPORT int bank_accept(Bank *bank) {
                bank->trial_outputs + (size_t)i * MAX_OUTPUTS, sizeof(double) * MAX_OUTPUTS);
         c->stepped = c->saved = c->tried = 0;
     }
+    if (call->next > time) {
+        if (__sync_lock_test_and_set(&bank->busy, 1)) return 0;
+        if (begin(bank, call->next) == 0) call->begun = call->next;
+        __sync_lock_release(&bank->busy);
+    }
     return 0;
 }
 
 /* The host gave its step up: every instance back to its last accepted point. */
 EXPORT int bank_reject(Bank *bank) {
+    bank->call->begun = NAN;
     for (int i = 0; i < bank->n; i++) {
         Instance *c = &bank->instances[i];
         if (c->stepped && restore(bank, i) != 0) return FAILED;

@@ -92,7 +92,10 @@ typedef struct {
 typedef struct {
     double time;     /* in: the time the step reaches */
     double mismatch; /* out: the pass's mismatch (end_pass) */
-    int pass;        /* in: the pass's number, from 1 (end_pass) */
+    double next;     /* in (accept): the next step's end where the host knows it, or NaN */
+    double begun;    /* out: the time of the step accept began, or NaN */
+    int64_t total_passes; /* out: passes since the bank was made */
+    int pass;        /* out: the step's passes so far (begin_step: 0, end_pass: + 1) */
     int max_pieces;  /* in: 1, or a discarded step's most pieces for a host that cannot retry */
     int n_flagged;   /* out: instances whose law Python makes (listed in `flagged`) */
     int cut;         /* out: steps cut into pieces in the pass */

@@ -27,6 +27,7 @@ path). A bank is used by the thread that made it: another thread's call is refus
 """
 
 import ctypes
+import math
 import threading
 
 import numpy as np
@@ -93,8 +94,24 @@ def library():
 class _Call(ctypes.Structure):
     """bank.h's BankCall: the arguments and results of a host step's calls."""
     _fields_ = [("time", ctypes.c_double), ("mismatch", ctypes.c_double),
-                ("pass_", ctypes.c_int), ("max_pieces", ctypes.c_int),
-                ("n_flagged", ctypes.c_int), ("cut", ctypes.c_int)]
+                ("next", ctypes.c_double), ("begun", ctypes.c_double),
+                ("total_passes", ctypes.c_int64), ("pass_", ctypes.c_int),
+                ("max_pieces", ctypes.c_int), ("n_flagged", ctypes.c_int),
+                ("cut", ctypes.c_int)]
+
+
+_thread = threading.get_ident
+_new = object.__new__
+
+
+def _verdict(mismatch, repeat=False):
+    """Verdict(repeat=repeat, mismatch=mismatch), made at a third of the dataclass's
+    cost (its defaults are class attributes): two per host step."""
+    verdict = _new(Verdict)
+    verdict.mismatch = mismatch
+    if repeat:
+        verdict.repeat = True
+    return verdict
 
 
 def _address(array):
@@ -144,21 +161,27 @@ class Bank:
                             self.scheme.tolerance)
         self.unilateral = np.array([c.unilateral for c in self.components], dtype=bool)
         self.load_index = np.zeros(n, dtype=int)
+        self._python_laws = 0  # instances whose first law Python makes (_predicted_law)
         for i, component in enumerate(self.components):
             self._hand_over(i, component)
         self._load_cells = np.arange(n) * MAX_OUTPUTS + self.load_index  # in outputs, flat
         # a host step's calls: their arguments and results in a block bound once, the
         # functions and the bank's pointer looked up once (a fixed few microseconds of
         # Python per host step, whatever the number of instances)
-        self._call = _Call(max_pieces=1 if host_can_retry else 64)
+        self._call = _Call(max_pieces=1 if host_can_retry else 64, next=math.nan,
+                           begun=math.nan)  # NaN: no step begun early
         lib.bank_bind_call(self._handle, ctypes.byref(self._call))
         self._bank = ctypes.c_void_p(self._handle)
         self._begin, self._end, self._accept = lib.bank_begin_step, lib.bank_end_pass, \
             lib.bank_accept
+        # accept(time, next_time) begins the next step in its call, where no instance's
+        # first law is made in Python
+        self._early = not self._python_laws
+        self._warn_above = (self.scheme.tolerance if self.scheme.warn_unconverged
+                            else float("inf"))
         self.time = None
-        self.passes = self.steps = self.total_passes = self.retries = 0
+        self.steps = self.retries = 0
         self.unconverged_steps = 0
-        self.last_mismatch = 0.0
 
     def _hand_over(self, i, component):
         """Give the C bank the instance pointer and its library's function addresses."""
@@ -186,6 +209,8 @@ class Bank:
         if self.linearise == "c" and component._linearisable and (
                 component.step_model == "linearised" or component._curvature):
             self._hand_over_model(i, component)
+        elif component.step_model == "linearised":
+            self._python_laws += 1
 
     def _hand_over_model(self, i, component):
         """The Model Exchange side instance that linearises the component's step
@@ -227,12 +252,30 @@ class Bank:
         self.time = time
         self._lib.bank_lagged_laws(self._handle)
 
+    @property
+    def passes(self):
+        """Passes of the current step so far."""
+        return self._call.pass_
+
+    @property
+    def total_passes(self):
+        return self._call.total_passes
+
+    @property
+    def last_mismatch(self):
+        """The last pass's mismatch (a retried pass leaves the one before)."""
+        return self._call.mismatch
+
     def begin_step(self, time):
-        """The host starts a step to `time` from the last accepted point."""
-        if threading.get_ident() != self._owner:
+        """The host starts a step to `time` from the last accepted point (where
+        accept(..., next_time=time) began it already, nothing is left to do)."""
+        if _thread() != self._owner:
             self._self_check()
-        self.passes = 0
-        self._call.time = time
+        call = self._call
+        if time == call.begun:
+            call.pass_ = 0
+            return
+        call.time = time
         flagged = self._begin(self._bank)
         if flagged:
             if flagged < 0:
@@ -243,21 +286,20 @@ class Bank:
     def end_pass(self, time, deflection):
         """After the host's solve to `time`, its deflections: step each FMU along the
         secant to them and judge the pass (master.py's Verdict)."""
-        if threading.get_ident() != self._owner:
+        if _thread() != self._owner:
             self._self_check()
-        self.passes += 1
-        self.total_passes += 1
-        self.deflection[...] = deflection
+        if deflection is not self.deflection:
+            self.deflection[...] = deflection
         call = self._call
-        call.time, call.pass_ = time, self.passes
+        call.time = time
         verdict = self._end(self._bank)
         if call.cut:
             self.retries += call.cut
         if verdict == ACCEPT:
-            self.last_mismatch = mismatch = call.mismatch
-            if mismatch > self.scheme.tolerance and self.scheme.warn_unconverged:
+            mismatch = call.mismatch
+            if mismatch > self._warn_above:
                 count_unconverged(self, time, mismatch)
-            return Verdict(mismatch=mismatch)
+            return _verdict(mismatch)
         if verdict in (FAILED, BUSY):
             self._raise(busy=verdict == BUSY)
         if verdict == RETRY:
@@ -265,18 +307,23 @@ class Bank:
                 self._raise(cut_too=True)
             self.retries += 1
             return Verdict(retry_step=0.5 * (time - self.time))
-        self.last_mismatch = call.mismatch
         if call.n_flagged:
             for i in self._flagged[:call.n_flagged]:
                 self._corrected_law(i, time)
-        return Verdict(repeat=True, mismatch=call.mismatch)
+        return _verdict(call.mismatch, repeat=True)
 
-    def accept(self, time):
-        """The host accepted its step to `time` (at the time reached: only records)."""
-        if threading.get_ident() != self._owner:
+    def accept(self, time, next_time=None):
+        """The host accepted its step to `time` (at the time reached: only records).
+        `next_time`, the end of the host's next step where it knows it: that step begins
+        in the same call (its saves and first laws now; `laws` are then the next step's),
+        and begin_step(next_time) has nothing left to do (one C call fewer per host
+        step). Leave it out on the last step."""
+        if _thread() != self._owner:
             self._self_check()
         if time > self.time:
-            self._call.time = time
+            call = self._call
+            call.time = time
+            call.next = next_time if next_time is not None and self._early else math.nan
             if self._accept(self._bank):
                 self._raise()
             self.time = time
