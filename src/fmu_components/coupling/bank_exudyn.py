@@ -86,18 +86,15 @@ class ExudynBank(ExudynCoupling):
         self.laws, self.deflections = laws, deflections
 
     def _pre_step(self, t):
-        self.attempts += 1
-        self.coupling.begin_step(t)
+        super()._pre_step(t)
         self.laws.update()
         return True
 
-    def _post_newton(self, t):
+    def _end_pass(self, t):
         verdict = self.coupling.end_pass(t, self.deflections())
-        if verdict.retry_step is not None:
-            return [1.0, verdict.retry_step]
-        if verdict.repeat:
+        if verdict.repeat and verdict.retry_step is None:
             self.laws.update()
-        return [1.0 if verdict.repeat else 0.0, -1.0]
+        return verdict
 
 
 class _Starting:

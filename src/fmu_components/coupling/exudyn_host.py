@@ -10,6 +10,8 @@ function, which may ask for the step to be solved again from its start (a
     post-Newton user function   Coupling.end_pass: [0, -1] accepts, [1, -1] solves the
                                 step again, [1, h] retries it with step h
     post-step user function     Coupling.accept
+    pre-Newton-residual user    a step solved again starts from the last pass's solution
+    function                    (where the settings give Newton an absolute tolerance)
 
 exudyn is imported here only, and only when these functions run.
 """
@@ -43,6 +45,8 @@ class ExudynCoupling:
         self.failure = None
         self.attempts = 0  # steps begun, retries included
         self.solve_cpu = 0.0  # CPU seconds of the process in the dynamic solve (solve())
+        self.warm_start = False  # a step's next pass starts from the last's solution
+        self._solved = None  # the step's last solution, where it is solved again
 
     def _guarded(self, hook, failed_value):
         def run(mbs, t):
@@ -57,14 +61,45 @@ class ExudynCoupling:
 
     def _pre_step(self, t):
         self.attempts += 1
+        self._solved = None
         self.coupling.begin_step(t)
         return True
 
+    def _end_pass(self, t):
+        return self.coupling.end_pass(t)
+
     def _post_newton(self, t):
-        verdict = self.coupling.end_pass(t)
+        verdict = self._end_pass(t)
         if verdict.retry_step is not None:
             return [1.0, verdict.retry_step]
+        if verdict.repeat and self.warm_start:
+            self._solved = self._state()
         return [1.0 if verdict.repeat else 0.0, -1.0]
+
+    def _state(self):
+        """The current coordinates, velocities, accelerations and Lagrange multipliers."""
+        import exudyn as exu
+
+        data, current = self.mbs.systemData, exu.ConfigurationType.Current
+        return (data.GetODE2Coordinates(current), data.GetODE2Coordinates_t(current),
+                data.GetODE2Coordinates_tt(current), data.GetAECoordinates(current))
+
+    def _pre_newton_residual(self, mbs, t, newton_iteration, discontinuous_iteration):
+        """A step solved again (the coupling's next pass) starts from the last pass's
+        solution instead of exudyn's predictor, so that its Newton iterations solve only
+        what the laws' change moved. exudyn calls this after its predictor, before each
+        residual; generalized-alpha's update is linear in the Newton increment (q, v, a
+        move by d, gamma' d, beta' d), so that solution is a consistent start."""
+        if newton_iteration != 0 or discontinuous_iteration == 0 or self._solved is None:
+            return
+        import exudyn as exu
+
+        data, current = mbs.systemData, exu.ConfigurationType.Current
+        q, v, a, multipliers = self._solved
+        data.SetODE2Coordinates(q, current)
+        data.SetODE2Coordinates_t(v, current)
+        data.SetODE2Coordinates_tt(a, current)
+        data.SetAECoordinates(multipliers, current)
 
     def _post_step(self, t):
         self.coupling.accept(t)
@@ -73,11 +108,21 @@ class ExudynCoupling:
     def install(self, settings):
         """Set the hooks, and the solver settings they need: up to `passes` solves of a
         step (one more, so that the last pass can still ask for a retry), and adaptive
-        steps, so that a retry can shorten one."""
+        steps, so that a retry can shorten one. Where the settings give Newton an
+        absolute tolerance (above exudyn's default), a step's next pass starts from the
+        last pass's solution (`_pre_newton_residual`); without one exudyn's relative test
+        alone would ask that pass for 1e-8 of its own, much smaller, first residual, below
+        what round-off allows."""
+        import exudyn as exu
+
         mbs = self.mbs
         mbs.SetPreStepUserFunction(self._guarded(self._pre_step, False))
         mbs.SetPostNewtonUserFunction(self._guarded(self._post_newton, [0.0, -1.0]))
         mbs.SetPostStepUserFunction(self._guarded(self._post_step, False))
+        default = exu.SimulationSettings().timeIntegration.newton.absoluteTolerance
+        self.warm_start = settings.timeIntegration.newton.absoluteTolerance > default
+        if self.warm_start:
+            mbs.SetPreNewtonResidualUserFunction(self._pre_newton_residual)
         discontinuous = settings.timeIntegration.discontinuous
         discontinuous.iterationTolerance = self._TOLERANCE
         discontinuous.maxIterations = self.coupling.scheme.passes + 1
@@ -87,7 +132,8 @@ class ExudynCoupling:
 
     def uninstall(self):
         for setter in (self.mbs.SetPreStepUserFunction, self.mbs.SetPostNewtonUserFunction,
-                       self.mbs.SetPostStepUserFunction):
+                       self.mbs.SetPostStepUserFunction,
+                       self.mbs.SetPreNewtonResidualUserFunction):
             setter(0)
 
 

@@ -1,0 +1,105 @@
+"""The coupling in exudyn (src/fmu_components/coupling/exudyn_host.py): where the settings
+give Newton an absolute tolerance, a step's second pass starts from the first pass's
+solution. Needs the `examples` extra (exudyn); without it skipped with that reason."""
+
+import math
+
+import numpy as np
+import pytest
+
+from fmu_components.coupling import Coupling, FmuComponent
+
+exudyn = pytest.importorskip("exudyn", reason='exudyn is not installed: pip install -e '
+                                              '".[examples]"')
+
+# a light mass (a wheel's share) pressed onto the tyre by a load about a half-wheel's
+# static one (section 5.1.1), so that the springs' stiffness is comparable with the mass's
+# term in exudyn's Newton matrix at 1 ms, and the cube's curvature matters
+MASS, LOAD = 10.0, 9.81e3  # kg, N
+
+
+def quarter_wheel(fmu, settings, step=1e-4):
+    """A mass on a RoadWheelTyre, released off its static point, the ground beneath it a
+    2 mm, 15 Hz sine; 30 steps, `corrected`; returns ((pass, Newton iterations) of every
+    pass, the mass's accelerations)."""
+    from exudyn.itemInterface import (LoadCoordinate, MarkerNodeCoordinate, NodeGenericODE2,
+                                      NodePointGround, ObjectConnectorCoordinateSpringDamper,
+                                      ObjectGenericODE2)
+
+    from fmu_components.coupling.exudyn_host import connector_state, solve
+
+    mbs = exudyn.SystemContainer().AddSystem()
+    ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
+    # the mass's height: the tyre compressed by its static 3.1 mm at the start
+    node = mbs.AddNode(NodeGenericODE2(referenceCoordinates=[0.0],
+                                       initialCoordinates=[-3.1e-3],
+                                       initialCoordinates_t=[0.0], numberOfODE2Coordinates=1))
+    mbs.AddObject(ObjectGenericODE2(nodeNumbers=[node], massMatrix=[[MASS]],
+                                    stiffnessMatrix=[[0.0]], dampingMatrix=[[0.0]]))
+    road = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
+    body = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=0))
+    mbs.AddLoad(LoadCoordinate(markerNumber=body, load=-LOAD))
+    tyre = FmuComponent(fmu, "tyre", unilateral=True)
+
+    def compression(u, v, t):
+        # the ground's height minus the mass's: u is the mass's coordinate less the
+        # ground marker's (zero)
+        return (2e-3 * math.sin(2 * math.pi * 15.0 * t) - u,
+                2e-3 * 2 * math.pi * 15.0 * math.cos(2 * math.pi * 15.0 * t) - v)
+
+    connector = mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
+        markerNumbers=[road, body],
+        springForceUserFunction=lambda mbs, t, item, u, v, *_:
+            -tyre.host_load(*compression(u, v, t))))
+    # and a hardening spring beside it (a suspension's bump stop, 10 kN at 3 mm), whose
+    # cube takes exudyn's Newton several iterations from its predictor
+    mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
+        markerNumbers=[road, body],
+        springForceUserFunction=lambda mbs, t, item, u, v, *_: 1e4 * (u / 3e-3) ** 3))
+    accelerations = []
+    coupling = Coupling("corrected", record=lambda t: accelerations.append(
+        float(mbs.GetNodeOutput(node, exudyn.OutputVariableType.Coordinates_tt))))
+    coupling.add(tyre, lambda: compression(*(float(x) for x in connector_state(mbs, connector)),
+                                           mbs.systemData.GetTime()))
+    mbs.Assemble()
+    iterations = []
+    end_pass = coupling.end_pass
+
+    def counted(t):
+        solver = mbs.sys["dynamicSolver"].it
+        iterations.append((solver.discontinuousIteration, solver.newtonSteps))
+        return end_pass(t)
+
+    coupling.end_pass = counted
+    solve(mbs, coupling, 30 * step, step, settings=settings)
+    return np.array(iterations), np.array(accelerations)
+
+
+def settings(absolute_tolerance=None):
+    settings = exudyn.SimulationSettings()
+    settings.timeIntegration.verboseMode = 0
+    settings.solution.file.write = False
+    settings.solution.sensors.active = False
+    settings.timeIntegration.newton.useModifiedNewton = False
+    if absolute_tolerance is not None:
+        settings.timeIntegration.newton.absoluteTolerance = absolute_tolerance
+    return settings
+
+
+def test_a_steps_second_pass_starts_from_the_first_passs_solution(native_fmus):
+    """With an absolute tolerance (1e-6 N, 1e-10 of the load), each step's second pass
+    starts where the first ended and converges in one Newton iteration where the first
+    takes two; from exudyn's predictor (no absolute tolerance: the relative test alone,
+    as before) it takes as many as the first. Both runs give the same accelerations, to
+    what the tolerances allow."""
+    fmu = native_fmus["RoadWheelTyre"]
+    warm, warm_accelerations = quarter_wheel(fmu, settings(1e-6))
+    cold, cold_accelerations = quarter_wheel(fmu, settings())
+    for passes in (warm, cold):
+        assert np.sum(passes[:, 0] == 0) == np.sum(passes[:, 0] == 1) == 30
+    first, second = (warm[warm[:, 0] == p, 1] for p in (0, 1))
+    assert np.all(second == 1) and np.all(first >= 2)
+    assert np.all(cold[cold[:, 0] == 1, 1] >= 2)
+    scale = np.ptp(cold_accelerations)
+    assert scale > 100.0  # the mass moves (m/s2)
+    assert np.max(np.abs(warm_accelerations - cold_accelerations)) < 1e-6 * scale
