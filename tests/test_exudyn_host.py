@@ -127,3 +127,25 @@ def test_exudyn_calls_the_warm_start_in_a_steps_repeated_passes_only(native_fmus
     calls.clear()
     passes, _ = quarter_wheel(native_fmus["RoadWheelTyre"], settings(1e-6), scheme="explicit")
     assert len(passes) == 30 and calls == []
+
+
+def test_the_newton_tolerance_benchmark_prints_both_tables():
+    """benchmarks/coupling_newton.py --quick: for each example a row for exudyn's default
+    and one per tolerance, each with its iteration counts, fewer in the warm-started
+    second solve (its other figures are the benchmark's, not a test's)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = Path(__file__).resolve().parents[1] / "benchmarks" / "coupling_newton.py"
+    run = subprocess.run([sys.executable, str(script), "--quick", "--tolerances", "0.1"],
+                         capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, run.stderr
+    rows = [line.split("|")[1:-1] for line in run.stdout.splitlines()
+            if line.startswith("| ") and not line.startswith("| Newton")]
+    assert [row[0].strip() for row in rows] == ["default", "0.1"] * 2
+    for row in rows:
+        first, second = (float(x) for x in row[-1].split("/"))
+        assert first >= 1.0 and second >= 1.0
+        if row[0].strip() != "default":  # the second solve starts from the first's end
+            assert second < first
