@@ -3,7 +3,8 @@ compiled path (docs/coupling.md, "What it costs").
 
     python benchmarks/coupling_exudyn.py              # the station and the 40-link span
     python benchmarks/coupling_exudyn.py --quick      # seconds: checks that it runs
-    python benchmarks/coupling_exudyn.py --only station --path compiled --newton-tolerance 1e-4
+    python benchmarks/coupling_exudyn.py --only station --path compiled \
+        --newton-tolerance 1e-4                       # one example, one path, a tolerance
 
 Each run is timed by CPU (process time) over the dynamic solve alone (its exudyn solve,
 timed inside): the same run to two end times, and the difference over the difference of

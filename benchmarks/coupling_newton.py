@@ -61,6 +61,17 @@ def example(name, quick):
         step, links=10, end_time=end, coupling=scheme)), module.STUDY_KEYS
 
 
+def figures(runs, run, reference, keys):
+    """history_error of run against reference ((tolerance, scheme) each) for every key
+    ("a / b / c"), at every host step ("...; ...")."""
+    (tolerance, scheme), (base, base_scheme) = run, reference
+    cells = []
+    for step in STEPS:
+        got, expected = runs[tolerance, step, scheme], runs[base, step, base_scheme]
+        cells.append(" / ".join(f"{history_error(got, expected, key):.2g}" for key in keys))
+    return "; ".join(cells)
+
+
 def measure(name, tolerances, quick):
     module, run, keys = example(name, quick)
     kept = module.NEWTON_TOLERANCE
@@ -87,13 +98,9 @@ def measure(name, tolerances, quick):
           "| Newton iterations, first / second solve (1 ms) |")
     print("|---|---|---|---|---|")
     for tolerance in (None,) + tuple(tolerances):
-        own = "; ".join(" / ".join(
-            f"{history_error(runs[tolerance, step, 'corrected'], runs[tolerance, step, 'converged'], k):.2g}"
-            for k in keys) for step in STEPS)
-        moved = ["; ".join(" / ".join(
-            f"{history_error(runs[tolerance, step, scheme], runs[None, step, scheme], k):.2g}"
-            for k in keys) for step in STEPS) if tolerance is not None else "-"
-            for scheme in ("corrected", "converged")]
+        own = figures(runs, (tolerance, "corrected"), (tolerance, "converged"), keys)
+        moved = [figures(runs, (tolerance, scheme), (None, scheme), keys)
+                 if tolerance is not None else "-" for scheme in ("corrected", "converged")]
         first, second = iterations[tolerance]
         print(f"| {tolerance if tolerance is not None else 'default'} | {own} | {moved[0]} "
               f"| {moved[1]} | {first:.2f} / {second:.2f} |")
