@@ -3,6 +3,8 @@ compiled path (docs/coupling.md, "What it costs").
 
     python benchmarks/coupling_exudyn.py              # the station and the 40-link span
     python benchmarks/coupling_exudyn.py --quick      # seconds: checks that it runs
+    python benchmarks/coupling_exudyn.py --only station --path compiled \
+        --newton-tolerance 1e-4                       # one example, one path, a tolerance
 
 Each run is timed by CPU (process time) over the dynamic solve alone (its exudyn solve,
 timed inside): the same run to two end times, and the difference over the difference of
@@ -10,6 +12,9 @@ the end times, so that exudyn's start drops out too; each in a process of its ow
 8 m/s over the bump (`explicit` and `corrected`), the span (examples/track_span.py) has
 40 links, 82 instances, `corrected`; 1 ms host steps. The real-time factor by CPU is
 simulated time over CPU time. The machine may be loaded: the load average is printed.
+--newton-tolerance sets both examples' NEWTON_TOLERANCE (exudyn's Newton's absolute
+tolerance; "default", exudyn's own), which decides whether a step's second solve starts
+from the first's solution (exudyn_host).
 """
 
 import argparse
@@ -43,25 +48,35 @@ def cpu_per_simulated_second(run, start, end):
 # Each example is imported only in the process that runs it: importing the station's
 # (scipy's modules with it) made the span's run in the same process half as costly again.
 
-def station_run(fmu_dir, scheme, path):
+def station_run(fmu_dir, scheme, path, newton_tolerance):
     import road_wheel_station as station
 
+    if newton_tolerance is not None:
+        station.NEWTON_TOLERANCE = _tolerance(newton_tolerance)
     profile = station.RoadProfile()
     return lambda end_time: station.simulate(8.0, profile, STEP, fmu_dir, end_time=end_time,
                                              coupling=scheme, path=path)
 
 
-def span_run(fmu_dir, links, path):
+def span_run(fmu_dir, links, path, newton_tolerance):
     import track_span as span
 
+    if newton_tolerance is not None:
+        span.NEWTON_TOLERANCE = _tolerance(newton_tolerance)
     return lambda end_time: span.simulate(STEP, links=links, fmu_dir=fmu_dir,
                                           end_time=end_time, coupling="corrected", path=path)
+
+
+def _tolerance(text):
+    return None if text == "default" else float(text)
 
 
 def measure(args, kind, scheme, path):
     """CPU seconds per simulated second of one run, in a fresh process."""
     run = subprocess.run([sys.executable, __file__, "--fmus", str(args.fmus), "--links",
                           str(args.links), *(["--quick"] if args.quick else []),
+                          *(["--newton-tolerance", args.newton_tolerance]
+                            if args.newton_tolerance is not None else []),
                           "--one", kind, scheme, path],
                          capture_output=True, text=True, timeout=3600)
     if run.returncode != 0:
@@ -73,10 +88,11 @@ def measure_one(args, kind, scheme, path):
     fmu_dir = Path(native_fmus(args.fmus)["TrackBushRadial"]).parent
     # the station from before the bump to its end; the span from its start
     if kind == "station":
-        run = station_run(fmu_dir, scheme, path)
+        run = station_run(fmu_dir, scheme, path, args.newton_tolerance)
         times = (0.05, 0.1) if args.quick else (0.1, 0.6)
     else:
-        run = span_run(fmu_dir, 3 if args.quick else args.links, path)
+        run = span_run(fmu_dir, 3 if args.quick else args.links, path,
+                       args.newton_tolerance)
         times = (0.01, 0.03) if args.quick else (0.05, 0.3)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the bushes' range warnings, once per instance
@@ -88,6 +104,10 @@ def main(argv=None):
     parser.add_argument("--fmus", type=Path, default=ROOT / "fmus")
     parser.add_argument("--links", type=int, default=40)
     parser.add_argument("--quick", action="store_true", help="seconds: short runs")
+    parser.add_argument("--newton-tolerance", help="both examples' Newton tolerance "
+                        "(exudyn's absolute tolerance, or 'default'); else each one's own")
+    parser.add_argument("--only", choices=("station", "span"))
+    parser.add_argument("--path", choices=("python", "compiled"), help="this path only")
     parser.add_argument("--one", nargs=3, metavar=("KIND", "SCHEME", "PATH"),
                         help="one run in this process (what the others spawn)")
     args = parser.parse_args(argv)
@@ -97,24 +117,34 @@ def main(argv=None):
     links = 3 if args.quick else args.links
     load_before = os.getloadavg()[0]
     rows = []
-    for scheme in ("explicit", "corrected"):
-        for path in ("python", "compiled"):
-            rows.append((f"station at 8 m/s, `{scheme}`", path,
-                         measure(args, "station", scheme, path)))
-    for path in ("python", "compiled"):
-        rows.append((f"track span, {links} links ({2 * (links + 1)} instances), `corrected`",
-                     path, measure(args, "span", "corrected", path)))
+    paths = (args.path,) if args.path else ("python", "compiled")
+    if args.only in (None, "station"):
+        for scheme in ("explicit", "corrected"):
+            for path in paths:
+                rows.append((f"station at 8 m/s, `{scheme}`", path,
+                             measure(args, "station", scheme, path)))
+    if args.only in (None, "span"):
+        for path in paths:
+            rows.append((f"track span, {links} links ({2 * (links + 1)} instances), "
+                         f"`corrected`", path, measure(args, "span", "corrected", path)))
     print("# The coupling in exudyn: CPU seconds per simulated second (1 ms host steps)\n")
     print("| run | path | CPU s per simulated s | real-time factor by CPU |")
     print("|---|---|---|---|")
     for name, path, cpu in rows:
         print(f"| {name} | {path} | {cpu:.3f} | {1 / cpu:.2f} |")
     cost = {(name, path): cpu for name, path, cpu in rows}
-    explicit = cost[("station at 8 m/s, `explicit`", "compiled")]
-    corrected = cost[("station at 8 m/s, `corrected`", "compiled")]
-    print(f"\nstation, compiled path: `corrected` / `explicit` = {corrected / explicit:.2f}; "
-          f"compiled `corrected` / Python `explicit` = "
-          f"{corrected / cost[('station at 8 m/s, `explicit`', 'python')]:.2f}")
+    for path in paths:
+        explicit = cost.get(("station at 8 m/s, `explicit`", path))
+        if explicit:
+            corrected = cost[("station at 8 m/s, `corrected`", path)]
+            print(f"\nstation, {path} path: `corrected` / `explicit` = "
+                  f"{corrected / explicit:.2f}")
+    python_explicit = cost.get(("station at 8 m/s, `explicit`", "python"))
+    if python_explicit and ("station at 8 m/s, `corrected`", "compiled") in cost:
+        print(f"compiled `corrected` / Python `explicit` = "
+              f"{cost[('station at 8 m/s, `corrected`', 'compiled')] / python_explicit:.2f}")
+    if args.newton_tolerance is not None:
+        print(f"Newton tolerance: {args.newton_tolerance}")
     print(f"load average (1 min) {load_before:.2f} before, {os.getloadavg()[0]:.2f} after, "
           f"{os.cpu_count()} CPUs")
 

@@ -36,13 +36,15 @@ def add_argument(parser):
                              "Python path")
 
 
-def run(model, end_time, step):
+def run(model, end_time, step, settings=None):
     """Integrate an example's model (its `mbs` and `coupling`; on the compiled path its
-    `bank`, `laws` and `_deflections`) to end_time at a fixed host step; its `host` and
-    `coupling` are then the run's (the bank's costs on the compiled path)."""
+    `bank`, `laws` and `_deflections`) to end_time at a fixed host step, with exudyn's
+    `settings` (both paths the same); its `host` and `coupling` are then the run's (the
+    bank's costs on the compiled path)."""
     if model.compiled:
         model.host = solve(model.mbs, model.bank, model.laws, model._deflections, end_time,
-                           step)
+                           step, settings=settings)
         model.coupling = model.bank
     else:
-        model.host = solve_python(model.mbs, model.coupling, end_time, step)
+        model.host = solve_python(model.mbs, model.coupling, end_time, step,
+                                  settings=settings)

@@ -44,7 +44,7 @@ from exudyn.itemInterface import (CoordinateConstraint, MarkerBodyPosition,
                                   ObjectJointRevolute2D, ObjectRigidBody2D)
 
 from fmu_components.coupling import DEFAULT_SCHEME, Coupling, FmuComponent
-from fmu_components.coupling.exudyn_host import connector_state
+from fmu_components.coupling.exudyn_host import connector_state, quiet_settings
 from fmu_components.coupling.kelvin import KelvinElement, harmonic_kelvin_equivalent
 
 import bank_path
@@ -74,6 +74,12 @@ TRACK_PITCH = 0.15  # m
 # Model Exchange linearisation); "tangent", its `stiffness` output (for a host without a
 # second instance: benchmarks/coupling_study.py --damper-tangent measures what it costs).
 DAMPER_STEP_MODEL = None
+# exudyn's Newton's absolute tolerance (its residual, N and N.m); one lets a step's second
+# solve start from the first's solution (exudyn_host). None, exudyn's default: the
+# tolerance that keeps the coupling's own error (1e-4) saves the second solve one
+# iteration of six and costs more in the state's copies than it saves
+# (benchmarks/coupling_newton.py, docs/coupling.md).
+NEWTON_TOLERANCE = None
 DEFAULT_STEP = 1e-4  # s, host step: exudyn's own error small for the plots (0.3 % at 8 m/s)
 
 # The linear equivalents are fitted to each FMU's steady response to a sine about the
@@ -358,7 +364,7 @@ class Station:
 
     def run(self, end_time, step):
         """Integrate to end_time with a fixed host step; returns the recorded histories."""
-        bank_path.run(self, end_time, step)
+        bank_path.run(self, end_time, step, quiet_settings(NEWTON_TOLERANCE))
         names = ("time", "hull_acceleration", "hull_force", "arm_angle", "damper_torque",
                  "dashpot_torque", "rotor_rate", "tyre_compression", "tyre_force")
         data = np.array(self.records)

@@ -43,7 +43,7 @@ from exudyn.itemInterface import (CoordinateConstraint, LoadForceVector, MarkerB
 
 from fmu_components.coupling import DEFAULT_SCHEME, Coupling, FmuComponent
 from fmu_components.coupling.bank_exudyn import symbolic_function
-from fmu_components.coupling.exudyn_host import connector_state, solve
+from fmu_components.coupling.exudyn_host import connector_state, quiet_settings, solve
 
 import bank_path
 
@@ -58,6 +58,11 @@ LINK_MASS = 15.0  # kg (estimate for a steel link casting with its pads)
 LINK_DEPTH = 0.06  # m, for the link's inertia (estimate)
 LINK_INERTIA = LINK_MASS * (PITCH ** 2 + LINK_DEPTH ** 2) / 12
 WHEEL_MASS = 100.0  # kg, the lifting wheel's share moving along the span (estimate)
+# exudyn's Newton stops where its residual (N and N.m) is below this, which lets a step's
+# second solve start from the first's solution (exudyn_host): 1e-9 of the tension, as
+# 1e-4 already moved the coupling's own error at 0.5 ms (benchmarks/coupling_newton.py,
+# docs/coupling.md). None: exudyn's default.
+NEWTON_TOLERANCE = 1e-5
 DEFAULT_STEP = 5e-4  # s
 
 
@@ -284,12 +289,10 @@ class TrackSpan:
 
 
 def solver_settings():
-    """exudyn's settings for the dynamic solve: quiet, no files, and its sparse linear
-    solver, as a long span's Jacobian is a band (40 links: a fifth less CPU than dense)."""
-    settings = exu.SimulationSettings()
-    settings.timeIntegration.verboseMode = 0
-    settings.solution.file.write = False
-    settings.solution.sensors.active = False
+    """exudyn's settings for the dynamic solve: quiet, no files, its sparse linear solver,
+    as a long span's Jacobian is a band (40 links: a fifth less CPU than dense), and
+    Newton to NEWTON_TOLERANCE."""
+    settings = quiet_settings(NEWTON_TOLERANCE)
     settings.linearSolver.solverType = exu.LinearSolverType.EigenSparse
     return settings
 

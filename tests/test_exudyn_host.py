@@ -18,9 +18,9 @@ exudyn = pytest.importorskip("exudyn", reason='exudyn is not installed: pip inst
 MASS, LOAD = 10.0, 9.81e3  # kg, N
 
 
-def quarter_wheel(fmu, settings, step=1e-4):
+def quarter_wheel(fmu, settings, step=1e-4, scheme="corrected"):
     """A mass on a RoadWheelTyre, released off its static point, the ground beneath it a
-    2 mm, 15 Hz sine; 30 steps, `corrected`; returns ((pass, Newton iterations) of every
+    2 mm, 15 Hz sine; 30 steps of `scheme`; returns ((pass, Newton iterations) of every
     pass, the mass's accelerations)."""
     from exudyn.itemInterface import (LoadCoordinate, MarkerNodeCoordinate, NodeGenericODE2,
                                       NodePointGround, ObjectConnectorCoordinateSpringDamper,
@@ -57,7 +57,7 @@ def quarter_wheel(fmu, settings, step=1e-4):
         markerNumbers=[road, body],
         springForceUserFunction=lambda mbs, t, item, u, v, *_: 1e4 * (u / 3e-3) ** 3))
     accelerations = []
-    coupling = Coupling("corrected", record=lambda t: accelerations.append(
+    coupling = Coupling(scheme, record=lambda t: accelerations.append(
         float(mbs.GetNodeOutput(node, exudyn.OutputVariableType.Coordinates_tt))))
     coupling.add(tyre, lambda: compression(*(float(x) for x in connector_state(mbs, connector)),
                                            mbs.systemData.GetTime()))
@@ -103,3 +103,49 @@ def test_a_steps_second_pass_starts_from_the_first_passs_solution(native_fmus):
     scale = np.ptp(cold_accelerations)
     assert scale > 100.0  # the mass moves (m/s2)
     assert np.max(np.abs(warm_accelerations - cold_accelerations)) < 1e-6 * scale
+
+
+def test_exudyn_calls_the_warm_start_in_a_steps_repeated_passes_only(native_fmus, monkeypatch):
+    """exudyn calls the pre-Newton-residual function before every residual of every solve
+    where it is set: it is set for a step's repeated pass alone, and never for a scheme
+    that does not repeat a step."""
+    from fmu_components.coupling.exudyn_host import ExudynCoupling
+
+    calls = []
+    warm_start = ExudynCoupling._pre_newton_residual
+
+    def counted(self, mbs, t, newton_iteration, discontinuous_iteration):
+        calls.append(discontinuous_iteration)
+        warm_start(self, mbs, t, newton_iteration, discontinuous_iteration)
+
+    monkeypatch.setattr(ExudynCoupling, "_pre_newton_residual", counted)
+    passes, _ = quarter_wheel(native_fmus["RoadWheelTyre"], settings(1e-6))
+    # one call before each residual of the 30 second passes: the first, and one per
+    # Newton iteration
+    assert sorted(set(calls)) == [1]
+    assert len(calls) == np.sum(passes[passes[:, 0] == 1, 1] + 1)
+    calls.clear()
+    passes, _ = quarter_wheel(native_fmus["RoadWheelTyre"], settings(1e-6), scheme="explicit")
+    assert len(passes) == 30 and calls == []
+
+
+def test_the_newton_tolerance_benchmark_prints_both_tables():
+    """benchmarks/coupling_newton.py --quick: for each example a row for exudyn's default
+    and one per tolerance, each with its iteration counts, fewer in the warm-started
+    second solve (its other figures are the benchmark's, not a test's)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = Path(__file__).resolve().parents[1] / "benchmarks" / "coupling_newton.py"
+    run = subprocess.run([sys.executable, str(script), "--quick", "--tolerances", "0.1"],
+                         capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, run.stderr
+    rows = [line.split("|")[1:-1] for line in run.stdout.splitlines()
+            if line.startswith("| ") and not line.startswith("| Newton")]
+    assert [row[0].strip() for row in rows] == ["default", "0.1"] * 2
+    for row in rows:
+        first, second = (float(x) for x in row[-1].split("/"))
+        assert first >= 1.0 and second >= 1.0
+        if row[0].strip() != "default":  # the second solve starts from the first's end
+            assert second < first

@@ -46,7 +46,8 @@ class ExudynCoupling:
         self.attempts = 0  # steps begun, retries included
         self.solve_cpu = 0.0  # CPU seconds of the process in the dynamic solve (solve())
         self.warm_start = False  # a step's next pass starts from the last's solution
-        self._solved = None  # the step's last solution, where it is solved again
+        self._solved = None  # a pass's solution, where the step is solved again
+        self._warm_hook = False  # _pre_newton_residual is set in exudyn
 
     def _guarded(self, hook, failed_value):
         def run(mbs, t):
@@ -61,7 +62,8 @@ class ExudynCoupling:
 
     def _pre_step(self, t):
         self.attempts += 1
-        self._solved = None
+        if self._warm_hook:  # a step exudyn shortened itself (its Newton failed)
+            self._warm(False)
         self.coupling.begin_step(t)
         return True
 
@@ -71,26 +73,43 @@ class ExudynCoupling:
     def _post_newton(self, t):
         verdict = self._end_pass(t)
         if verdict.retry_step is not None:
+            self._warm(False)
             return [1.0, verdict.retry_step]
-        if verdict.repeat and self.warm_start:
-            self._solved = self._state()
+        self._warm(verdict.repeat)
         return [1.0 if verdict.repeat else 0.0, -1.0]
 
-    def _state(self):
-        """The current coordinates, velocities, accelerations and Lagrange multipliers."""
+    def _warm(self, repeat):
+        """Where the step is solved again, keep this pass's solution, and let exudyn call
+        _pre_newton_residual in the next pass only: it calls it before every residual,
+        and each call costs more than the function does where it has nothing to do."""
+        if not self.warm_start:
+            return
+        if repeat:
+            self._keep_state()
+            if not self._warm_hook:
+                self.mbs.SetPreNewtonResidualUserFunction(self._pre_newton_residual)
+        elif self._warm_hook:
+            self.mbs.SetPreNewtonResidualUserFunction(0)
+        self._warm_hook = repeat
+
+    def _keep_state(self):
+        """Keep the current coordinates, velocities, accelerations and Lagrange multipliers
+        (exudyn's copies; reading its vectors' views into arrays kept for the solve
+        measured no cheaper)."""
         import exudyn as exu
 
         data, current = self.mbs.systemData, exu.ConfigurationType.Current
-        return (data.GetODE2Coordinates(current), data.GetODE2Coordinates_t(current),
-                data.GetODE2Coordinates_tt(current), data.GetAECoordinates(current))
+        self._solved = (data.GetODE2Coordinates(current), data.GetODE2Coordinates_t(current),
+                        data.GetODE2Coordinates_tt(current), data.GetAECoordinates(current))
 
     def _pre_newton_residual(self, mbs, t, newton_iteration, discontinuous_iteration):
         """A step solved again (the coupling's next pass) starts from the last pass's
         solution instead of exudyn's predictor, so that its Newton iterations solve only
         what the laws' change moved. exudyn calls this after its predictor, before each
-        residual; generalized-alpha's update is linear in the Newton increment (q, v, a
-        move by d, gamma' d, beta' d), so that solution is a consistent start."""
-        if newton_iteration != 0 or discontinuous_iteration == 0 or self._solved is None:
+        residual (set only for a pass that follows another: _warm); generalized-alpha's
+        update is linear in the Newton increment (q, v, a move by d, gamma' d, beta' d),
+        so that solution is a consistent start."""
+        if newton_iteration != 0 or discontinuous_iteration == 0:
             return
         import exudyn as exu
 
@@ -109,10 +128,10 @@ class ExudynCoupling:
         """Set the hooks, and the solver settings they need: up to `passes` solves of a
         step (one more, so that the last pass can still ask for a retry), and adaptive
         steps, so that a retry can shorten one. Where the settings give Newton an
-        absolute tolerance (above exudyn's default), a step's next pass starts from the
-        last pass's solution (`_pre_newton_residual`); without one exudyn's relative test
-        alone would ask that pass for 1e-8 of its own, much smaller, first residual, below
-        what round-off allows."""
+        absolute tolerance (above exudyn's default) and the scheme repeats a step, a
+        step's next pass starts from the last pass's solution (`_pre_newton_residual`);
+        without one exudyn's relative test alone would ask that pass for 1e-8 of its own,
+        much smaller, first residual, below what round-off allows."""
         import exudyn as exu
 
         mbs = self.mbs
@@ -120,9 +139,10 @@ class ExudynCoupling:
         mbs.SetPostNewtonUserFunction(self._guarded(self._post_newton, [0.0, -1.0]))
         mbs.SetPostStepUserFunction(self._guarded(self._post_step, False))
         default = exu.SimulationSettings().timeIntegration.newton.absoluteTolerance
-        self.warm_start = settings.timeIntegration.newton.absoluteTolerance > default
-        if self.warm_start:
-            mbs.SetPreNewtonResidualUserFunction(self._pre_newton_residual)
+        self.warm_start = (settings.timeIntegration.newton.absoluteTolerance > default
+                           and self.coupling.scheme.passes > 1)
+        self._warm_hook = False
+        mbs.SetPreNewtonResidualUserFunction(0)
         discontinuous = settings.timeIntegration.discontinuous
         discontinuous.iterationTolerance = self._TOLERANCE
         discontinuous.maxIterations = self.coupling.scheme.passes + 1
@@ -137,6 +157,21 @@ class ExudynCoupling:
             setter(0)
 
 
+def quiet_settings(newton_tolerance=None):
+    """exudyn's simulation settings for a coupled solve: quiet, no files or sensors; Newton
+    to an absolute tolerance (its residual's units, N and N.m) where one is given, which
+    lets a step's next pass start from the last's solution (ExudynCoupling.install)."""
+    import exudyn as exu
+
+    settings = exu.SimulationSettings()
+    settings.timeIntegration.verboseMode = 0
+    settings.solution.file.write = False
+    settings.solution.sensors.active = False
+    if newton_tolerance is not None:
+        settings.timeIntegration.newton.absoluteTolerance = newton_tolerance
+    return settings
+
+
 def solve(mbs, coupling, end_time, step, start_time=0.0, settings=None, host=None):
     """Start the components at the host's initial state, then integrate with exudyn's
     implicit generalized-alpha at `step` (shortened only where a component asks for a
@@ -149,10 +184,7 @@ def solve(mbs, coupling, end_time, step, start_time=0.0, settings=None, host=Non
 
     host = host or ExudynCoupling(mbs, coupling)
     if settings is None:
-        settings = exu.SimulationSettings()
-        settings.timeIntegration.verboseMode = 0
-        settings.solution.file.write = False
-        settings.solution.sensors.active = False
+        settings = quiet_settings()
     steps = math.ceil((end_time - start_time) / step - 1e-9)
     settings.timeIntegration.startTime = start_time
     settings.timeIntegration.endTime = start_time + steps * step
