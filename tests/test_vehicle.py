@@ -252,3 +252,101 @@ def test_the_components_start_at_the_runs_initial_state(native_fmus):
     assert result["time"][0] == 0.0
     assert result["bush_angle"][0][k] == pytest.approx(0.01 + offsets[k], abs=1e-12)
     assert result["bush_angle"][0][k + 1] == pytest.approx(-0.01 + offsets[k + 1], abs=1e-12)
+
+
+def _carried_round(contacts, state, link, edges, points=200):
+    """The work the contacts' forces do on one link carried round a closed loop of its
+    coordinates (edges: functions of s in [0, 1] giving the link's (x, y, angle), each
+    edge starting where the last ended), everything else still: trapezoids on each edge."""
+    q = state.copy()
+    qd = np.zeros_like(q)
+    rows = 3 * (contacts.link0 + link) + np.arange(3)
+    work = travelled = 0.0
+    for edge in edges:
+        path = np.array([edge(s) for s in np.linspace(0.0, 1.0, points + 1)])
+        forces = []
+        for coordinates in path:
+            q[rows] = coordinates - contacts.reference[contacts.link0 + link]
+            forces.append(contacts._generalized(0.0, q, qd)[rows].copy())
+        forces, steps = np.array(forces), np.diff(path, axis=0)
+        pieces = 0.5 * np.einsum("ij,ij->i", forces[1:] + forces[:-1], steps)
+        work += pieces.sum()
+        travelled += np.abs(pieces).sum()
+    return work, travelled
+
+
+def test_the_sprocket_engagement_does_no_net_work_round_a_closed_motion(native_fmus):
+    """The teeth take up and let go of a pin over ENGAGEMENT_RAMP at the wrap's ends. A link
+    whose front pin lies just past the wrap's end, turned about the sprocket's centre until
+    that pin is inside the ramp, pushed out from the centre, turned back and let back in
+    (everything else still, at rest): the contacts' forces on it do no net work round the
+    loop, as a passive contact must (the engagement is the potential w k |gap|^2 / 2; a
+    pull k (tooth space - pin) scaled by w alone pumped energy into the track at every
+    passage)."""
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle.model import ENGAGEMENT_RAMP
+
+    vehicle = _laid_out(native_fmus, settling=True)  # the tyres' relaxed tables: no FMU calls
+    try:
+        contacts = vehicle.contacts
+        data = vehicle.mbs.systemData
+        state = np.asarray(data.GetODE2Coordinates(exu.ConfigurationType.Current))[
+            contacts.system_index]
+        contacts.evaluate(0.0)
+        centre = contacts.hull[:2] + contacts.sprocket_local
+        relative = contacts.pins - centre
+        into = (np.arctan2(relative[:, 1], relative[:, 0]) - contacts.wrap_start) % (2 * math.pi)
+        past = into - contacts.wrap_sweep
+        pin = int(np.argmin(np.where(past > 0.0, past, np.inf)))
+        assert 0.0 < past[pin] < 0.5 * ENGAGEMENT_RAMP  # just past the wrap's end
+        link = pin - 1  # its front seat is that pin
+        start = contacts.reference[contacts.link0 + link] + state[
+            3 * (contacts.link0 + link) + np.arange(3)]
+        # the pin moves by half its link's motion: turn the link by twice the angle that
+        # takes the pin a fifth of the ramp inside the wrap
+        turn = -2.0 * (past[pin] + 0.2 * ENGAGEMENT_RAMP)
+        push = 0.02
+
+        def placed(angle, out):
+            c, s = math.cos(angle), math.sin(angle)
+            r = start[:2] - centre
+            moved = centre + np.array([c * r[0] - s * r[1], s * r[0] + c * r[1]])
+            moved += out * (moved - centre) / np.hypot(*(moved - centre))
+            return np.array([*moved, start[2] + angle])
+
+        edges = [lambda s: placed(turn * s, 0.0), lambda s: placed(turn, push * s),
+                 lambda s: placed(turn * (1 - s), push), lambda s: placed(0.0, push * (1 - s))]
+        work, travelled = _carried_round(contacts, state, link, edges)
+        assert travelled > 10.0  # the teeth did work on the way (J)
+        assert abs(work) < 1e-4 * travelled, (work, travelled)
+    finally:
+        vehicle.coupling.free()
+
+
+def test_the_tyres_compression_rate_is_the_rate_of_their_compression(native_fmus):
+    """The rate each wheel's tyres are given (their damping acts on it) is the time
+    derivative of the blended compression their force works against, the links' windows
+    fading in and out included: against central differences along the run's initial
+    velocities (the track running at 5 m/s under the wheels), the links jostled by 1 mm so
+    that the overlaps beneath a wheel differ."""
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    vehicle = _laid_out(native_fmus, settling=True)
+    try:
+        contacts = vehicle.contacts
+        data = vehicle.mbs.systemData
+        index = contacts.system_index
+        q = np.asarray(data.GetODE2Coordinates(exu.ConfigurationType.Current))[index]
+        qd = np.asarray(data.GetODE2Coordinates_t(exu.ConfigurationType.Initial))[index]
+        q = q + np.random.default_rng(3).normal(0.0, 1e-3, q.shape)
+        h = 1e-7
+        compression = []
+        for sign in (1.0, -1.0):
+            contacts._update(0.0, q + sign * h * qd, qd)
+            compression.append(contacts.compression.copy())
+        contacts._update(0.0, q, qd)
+        assert np.all(contacts.in_contact)
+        rate = (compression[0] - compression[1]) / (2 * h)
+        assert np.max(np.abs(rate)) > 0.01  # the wheels' compressions change (m/s)
+        assert np.max(np.abs(contacts.compression_rate - rate)) < 1e-3 * np.max(np.abs(rate))
+    finally:
+        vehicle.coupling.free()

@@ -64,6 +64,13 @@ def _smoothstep(x):
     return x * x * (3.0 - 2.0 * x)
 
 
+def _smoothstep_derivatives(x):
+    """The smoothstep and its first and second derivatives."""
+    inside = (x > 0.0) & (x < 1.0)
+    return (_smoothstep(x), np.where(inside, 6.0 * x * (1.0 - x), 0.0),
+            np.where(inside, 6.0 - 12.0 * x, 0.0))
+
+
 def _rotate(angle, r):
     c, s = math.cos(angle), math.sin(angle)
     return np.array([c * r[0] - s * r[1], s * r[0] + c * r[1]])
@@ -90,6 +97,7 @@ class Contacts:
         self.tension_points = (geo.arc(2).point(0.0) - geo.cg,
                                geo.arc(4).point(0.0) - geo.cg)
         self._key = None
+        self.audit = None  # an energy.Audit: the power of each class of contact
 
     def add_object(self):
         """One exudyn object carries every contact force: a generic ODE2 object over the
@@ -145,6 +153,7 @@ class Contacts:
         self._key = key
         state = self.reference + q.reshape(-1, 3)
         rates = qd.reshape(-1, 3)
+        self.qd = qd
         self._kinematics(state, rates)
         self._forces(t)
 
@@ -259,7 +268,7 @@ class Contacts:
 
     def _kinematics(self, state, rates):
         half = 0.5 * lay.LINK_PITCH
-        self.body_pos = state[:, :2]
+        self.body_pos, self.rates = state[:, :2], rates
         self.hull, self.hull_v = state[0], rates[0]
         links, links_v = state[self.link0:], rates[self.link0:]
         self.link_pos, self.link_angle, self.link_omega = links[:, :2], links[:, 2], links_v[:, 2]
@@ -307,9 +316,6 @@ class Contacts:
                                         top + TYRE_BLEND * np.log(total), -np.inf)
         weights = terms / np.where(self.in_contact, total, 1.0)[wheel]
         n, u = self.n[link], self.u[link]
-        relative = self.wheels_v[wheel] - self.link_v[link]
-        rates = -(np.einsum("ij,ij->i", relative, n) - self.link_omega[link] * along)
-        self.compression_rate = np.bincount(wheel, weights * rates, minlength=count)
         # the gradient of each term, its overlap plus TYRE_BLEND ln(its window), by the
         # wheel's coordinates and the link's (overlap R + inner - (wheel - link) . n;
         # along (wheel - link) . u; d ln(window)/d along: the smoothstep's slope over its
@@ -325,6 +331,12 @@ class Contacts:
         gradient[:, 5] = along + log_window * height
         self.pair_wheel, self.pair_link = wheel, link
         self.pair_weight, self.pair_gradient = weights, gradient
+        # the compression's rate is its gradient times the velocities, the windows' fading
+        # included (the tyre's damping sees the rate its force does work against)
+        velocities = np.concatenate([self.rates[1 + wheel], self.rates[self.link0 + link]],
+                                    axis=1)
+        self.compression_rate = np.bincount(
+            wheel, weights * np.einsum("ij,ij->i", gradient, velocities), minlength=count)
 
     def tyre_state(self, w):
         self.evaluate(self.v.mbs.systemData.GetTime())
@@ -336,12 +348,13 @@ class Contacts:
         v = self.v
         count = len(self.pins)
         pin = np.zeros((count, 2))  # forces on the pins
-        seat = np.zeros((count, 2, 2))  # forces on the links' seats, besides the pins'
         bodies = np.zeros((len(self.nodes), 3))
         self.springs = [(np.zeros((0, 2, 2)), np.zeros((0, 2, 2)), np.zeros((0, 3), dtype=int),
                          np.zeros((0, 3, 2, 3)), np.zeros((0, 3, 2, 3)), np.zeros((0, 3)))]
         hull_pos, hull_theta = self.hull[:2], self.hull[2]
         hull_vel, hull_omega = self.hull_v[:2], self.hull_v[2]
+        if self.audit is not None:
+            self.audit.begin()
 
         def on_body(body, points, forces):
             bodies[body, :2] += forces.sum(axis=0)
@@ -359,6 +372,8 @@ class Contacts:
                                             GROUND_DAMPING)
         pin[:, 1] += load
         self.ground_load = load
+        if self.audit is not None:
+            self.audit.mark("ground", self, pin, bodies)
         on = np.flatnonzero(load > 0.0)
         self._pin_springs(on, *normal_springs(stiffness[on], damping[on],
                                               np.tile([0.0, 1.0], (len(on), 1))))
@@ -372,20 +387,30 @@ class Contacts:
         rel = self.pins - centre
         angle = np.arctan2(rel[:, 1], rel[:, 0])
         into = (angle - hull_theta - self.wrap_start) % (2 * math.pi)
-        weight = (np.clip(into / ENGAGEMENT_RAMP, 0, 1)
-                  * np.clip((self.wrap_sweep - into) / ENGAGEMENT_RAMP, 0, 1))
-        weight[np.hypot(rel[:, 0], rel[:, 1]) > lay.SPROCKET_PITCH_RADIUS + 0.08] = 0.0
+        weight, weight_slope, weight_curvature = self._engagement(into)
+        distance = np.hypot(rel[:, 0], rel[:, 1])
+        off = distance > lay.SPROCKET_PITCH_RADIUS + 0.08
+        weight[off], weight_slope[off], weight_curvature[off] = 0.0, 0.0, 0.0
         tooth = np.round((angle - turned) / TOOTH_SPACING)
         slot_angle = turned + tooth * TOOTH_SPACING
         radial = np.stack([np.cos(slot_angle), np.sin(slot_angle)], axis=1)
         slot = centre + lay.SPROCKET_PITCH_RADIUS * radial
         slot_v = centre_v + _cross(rate, lay.SPROCKET_PITCH_RADIUS * radial)
-        tooth_force = weight[:, None] * (SPROCKET_STIFFNESS * (slot - self.pins)
+        gap = slot - self.pins
+        tooth_force = weight[:, None] * (SPROCKET_STIFFNESS * gap
                                          + SPROCKET_DAMPING * (slot_v - self.pins_v))
-        pin += tooth_force
-        self.tooth_gap = np.where(weight > 0, np.hypot(*(slot - self.pins).T), 0.0)
+        # the engagement is the potential w(pin's angle) k |gap|^2 / 2: besides the pull,
+        # minus its gradient by the pin's angle (d angle / d pin = z x rel / |rel|^2),
+        # which resists a pin entering with a gap as much as it helps one leaving (a pull
+        # scaled by the ramp alone did net work round each passage: docs/vehicle.md)
+        stored = 0.5 * SPROCKET_STIFFNESS * np.sum(gap * gap, axis=1)
+        by_angle = _cross(1.0, rel) / (distance * distance)[:, None]
+        ramp_force = -(stored * weight_slope)[:, None] * by_angle
+        pin += tooth_force + ramp_force
+        self.tooth_gap = np.where(weight > 0, np.hypot(*gap.T), 0.0)
         on = np.flatnonzero(weight > 0.0)
         on_body(0, slot[on], -tooth_force[on])
+        on_body(0, self.pins[on], -ramp_force[on])  # w turns with the hull, not the teeth
         r = slot[on] - centre
         self.drive_torque = -np.sum(r[:, 0] * tooth_force[on, 1] - r[:, 1] * tooth_force[on, 0])
         # the tooth space turns back as the hull travels forward
@@ -396,6 +421,38 @@ class Contacts:
         identity = weight[on, None, None] * np.eye(2)
         self._pin_springs(on, SPROCKET_STIFFNESS * identity, SPROCKET_DAMPING * identity,
                           (0, slot_g, motion_g, -1.0))
+        # the ramp force's change: with the gap, -k w' m gap^T (m = d angle / d pin), its
+        # hull member the tooth space; with the angle, stored (w'' m m^T + w' dm/d pin),
+        # its hull member the hull's point at the pin (w turns with the hull)
+        ramp = np.flatnonzero(weight_slope != 0.0)
+        hull = np.zeros(len(ramp), dtype=int)
+        pin_g = self._point_g(hull, self.pins[ramp])
+        ramp_motion = self._point_g(hull, slot[ramp])
+        ramp_motion[:, 0, 0] += np.sin(slot_angle[ramp])
+        ramp_motion[:, 1, 0] -= np.cos(slot_angle[ramp])
+        m, r = by_angle[ramp], rel[ramp]
+        slope = weight_slope[ramp, None, None]
+        by_gap = -SPROCKET_STIFFNESS * slope * m[:, :, None] * gap[ramp, None, :]
+        self._pin_springs(ramp, by_gap, np.zeros_like(by_gap), (0, pin_g, ramp_motion, -1.0))
+        # the pull's (spring's and damper's) change with w: -w' (k gap + c gap') m^T
+        pull = SPROCKET_STIFFNESS * gap[ramp] + SPROCKET_DAMPING * (slot_v - self.pins_v)[ramp]
+        by_weight = -slope * pull[:, :, None] * m[:, None, :]
+        self._pin_springs(ramp, by_weight, np.zeros_like(by_weight),
+                          (0, self._point_g(hull, slot[ramp]), pin_g, -1.0))
+        turn = np.array([[0.0, -1.0], [1.0, 0.0]])
+        squared = (distance[ramp] ** 2)[:, None, None]
+        m_slope = (turn / squared
+                   - 2.0 * np.einsum("ij,nj,nk->nik", turn, r, r) / squared ** 2)
+        by_turn = stored[ramp, None, None] * (
+            weight_curvature[ramp, None, None] * m[:, :, None] * m[:, None, :]
+            + weight_slope[ramp, None, None] * m_slope)
+        self._pin_springs(ramp, by_turn, np.zeros_like(by_turn), (0, pin_g, pin_g, -1.0))
+        if self.audit is not None:
+            self.audit.mark("sprocket", self, pin, bodies)
+            self.audit.sprocket(tooth_force, weight * stored, weight * SPROCKET_DAMPING
+                                * np.sum((slot_v - self.pins_v) ** 2, axis=1),
+                                _cross(-hull_vel[0] / lay.SPROCKET_PITCH_RADIUS,
+                                       lay.SPROCKET_PITCH_RADIUS * radial))
 
         # idler (on its crank) and support roller (on the hull)
         roller = hull_pos + _rotate(hull_theta, self.roller_local)
@@ -416,6 +473,8 @@ class Contacts:
             centre_g = self._point_g(np.full(len(on), body), np.tile(centre, (len(on), 1)))
             self._pin_springs(on, *normal_springs(stiffness[on], damping[on], normal[on]),
                               (body, centre_g, centre_g, -1.0))
+            if self.audit is not None:
+                self.audit.mark("idler" if body else "roller", self, pin, bodies)
 
         # tyres: both half-wheels at the wheel's compression, the generalized force minus
         # the load times the compression's gradient (shared among the links beneath by
@@ -430,20 +489,38 @@ class Contacts:
                                       3 * (self.link0 + self.pair_link)[:, None] + np.arange(3)],
                                      axis=1)
         tyres = np.bincount(coordinates.ravel(), share.ravel(), minlength=3 * len(self.nodes))
+        if self.audit is not None:
+            self.audit.power["tyres"] = float(tyres @ self.qd)
 
-        # pins onto the seats of the links either side
-        seat[:, 0] += 0.5 * pin
-        seat[:, 1] += 0.5 * np.roll(pin, -1, axis=0)
-
+        seat = self.onto_seats(pin)
         if v.settling:  # to rest: damping of every body's velocity
             seat -= SETTLE_DAMPING["seat"] * self.seats_v
             self._settle_damping(bodies)
+        self.onto_links(bodies, seat)
+        self.generalized = bodies.reshape(-1) + tyres
+
+    @staticmethod
+    def onto_seats(pin):
+        """Forces on the pins as forces on the seats of the links either side, half each."""
+        return np.stack([0.5 * pin, 0.5 * np.roll(pin, -1, axis=0)], axis=1)
+
+    def onto_links(self, bodies, seat):
+        """Adds forces on the links' seats to the links' generalized forces in `bodies`."""
         links = slice(self.link0, None)
         r0, r1 = self.seats[:, 0] - self.link_pos, self.seats[:, 1] - self.link_pos
         bodies[links, :2] += seat[:, 0] + seat[:, 1]
         bodies[links, 2] += (r0[:, 0] * seat[:, 0, 1] - r0[:, 1] * seat[:, 0, 0]
                              + r1[:, 0] * seat[:, 1, 1] - r1[:, 1] * seat[:, 1, 0])
-        self.generalized = bodies.reshape(-1) + tyres
+
+    def _engagement(self, into):
+        """The teeth's hold w on a pin by its angle into the wrap, taken up and let go over
+        ENGAGEMENT_RAMP at the wrap's ends (smoothsteps: the ramp force has no jump), and
+        its first and second derivatives by that angle."""
+        rise = into / ENGAGEMENT_RAMP
+        fall = (self.wrap_sweep - into) / ENGAGEMENT_RAMP
+        (a, da, dda), (b, db, ddb) = _smoothstep_derivatives(rise), _smoothstep_derivatives(fall)
+        return (a * b, (da * b - a * db) / ENGAGEMENT_RAMP,
+                (dda * b - 2.0 * da * db + a * ddb) / ENGAGEMENT_RAMP ** 2)
 
     def _settle_damping(self, bodies):
         c = SETTLE_DAMPING
