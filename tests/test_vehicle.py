@@ -350,3 +350,43 @@ def test_the_tyres_compression_rate_is_the_rate_of_their_compression(native_fmus
         assert np.max(np.abs(contacts.compression_rate - rate)) < 1e-3 * np.max(np.abs(rate))
     finally:
         vehicle.coupling.free()
+
+
+def test_a_wheel_above_a_convex_joint_stays_on_the_track(native_fmus):
+    """Over a bump's crest the track bends convexly under a wheel (the 80 mm bump's crest:
+    about 14 deg a joint). Two links beneath road wheel 3 turned 7 deg each way about their
+    joint, the wheel moved onto the bisector above it: the wheel is still on the track,
+    its compression its overlap with either link's face (the two windows half each), not
+    lost because the wheel's centre lies beyond both links' ends along their own lines."""
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle import layout as lay
+
+    vehicle = _laid_out(native_fmus, settling=True)
+    try:
+        contacts = vehicle.contacts
+        data = vehicle.mbs.systemData
+        q = np.array(data.GetODE2Coordinates(exu.ConfigurationType.Current))[contacts.system_index]
+        contacts.evaluate(0.0)
+        wheel = 2
+        on_ground = np.flatnonzero(contacts.pins[:, 1] < 0.1)
+        joint = on_ground[np.argmin(np.abs(contacts.pins[on_ground, 0]
+                                           - contacts.wheels[wheel, 0]))]
+        state = contacts.reference + q.reshape(-1, 3)
+        half = math.radians(7.0)
+        for link, seat, turn in ((joint - 1, 1, half), (joint, 0, -half)):
+            body = contacts.link0 + link
+            pivot = contacts.seats[link, seat]
+            c, s = math.cos(turn), math.sin(turn)
+            r = state[body, :2] - pivot
+            state[body] = [pivot[0] + c * r[0] - s * r[1], pivot[1] + s * r[0] + c * r[1],
+                           state[body, 2] + turn]
+        pin = contacts.pins[joint]
+        above = 0.3  # m from the joint to the wheel's centre
+        state[1 + wheel, :2] += pin + [0.0, above] - contacts.wheels[wheel]
+        q = (state - contacts.reference).ravel()
+        contacts._update(0.0, q, np.zeros_like(q))
+        assert contacts.in_contact[wheel]
+        expected = lay.WHEEL_RADIUS + lay.LINK_INNER - above * math.cos(half)
+        assert contacts.compression[wheel] == pytest.approx(expected, abs=1e-4)
+    finally:
+        vehicle.coupling.free()

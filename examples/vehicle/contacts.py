@@ -200,7 +200,7 @@ class Contacts:
         """d(generalized tyre force)/dq of each wheel in contact, from the blend's
         gradient D (a row per link beneath) and weights p: F' (p.D)^T (p.D) +
         F/b D^T (diag(p) - p p^T) D (b TYRE_BLEND; the second derivatives of each link's
-        own term left out), on the few coordinates D touches (the wheel's, the links')."""
+        own term left out), on the few coordinates D touches (the arm's, the links')."""
         count = len(self.wheels)
         force, slope = np.zeros(count), np.zeros(count)
         for w, f, k in self.tyre_terms:
@@ -208,19 +208,18 @@ class Contacts:
         pairs = np.flatnonzero(force[self.pair_wheel] > 0.0)
         wheel, weights = self.pair_wheel[pairs], self.pair_weight[pairs]
         gradient = self.pair_gradient[pairs]
-        coordinates = np.concatenate([3 * (1 + wheel)[:, None] + np.arange(3),
-                                      3 * (self.link0 + self.pair_link[pairs])[:, None]
-                                      + np.arange(3)], axis=1)
-        # F/b sum_k p_k D_k^T D_k, a 6 x 6 block per pair
+        coordinates = self.pair_coordinates[pairs]
+        size = coordinates.shape[1]
+        # F/b sum_k p_k D_k^T D_k, a block per pair
         scale = factor * force[wheel] / TYRE_BLEND * weights
-        own = (np.broadcast_to(coordinates[:, :, None], (len(pairs), 6, 6)).ravel(),
-               np.broadcast_to(coordinates[:, None, :], (len(pairs), 6, 6)).ravel(),
+        own = (np.broadcast_to(coordinates[:, :, None], (len(pairs), size, size)).ravel(),
+               np.broadcast_to(coordinates[:, None, :], (len(pairs), size, size)).ravel(),
                (scale[:, None, None] * gradient[:, :, None] * gradient[:, None, :]).ravel())
         # (F' - F/b) (p.D)^T (p.D): p.D's entries, the wheel's summed over its links
         wheels = np.flatnonzero(force > 0.0)
         by_wheel = np.stack([np.bincount(wheel, weights * gradient[:, j], minlength=count)
                              for j in range(3)], axis=1)[wheels]
-        entry_wheel = np.concatenate([np.repeat(wheels, 3), np.repeat(wheel, 3)])
+        entry_wheel = np.concatenate([np.repeat(wheels, 3), np.repeat(wheel, size - 3)])
         entry_coordinate = np.concatenate([(3 * (1 + wheels)[:, None] + np.arange(3)).ravel(),
                                            coordinates[:, 3:].ravel()])
         entry_value = np.concatenate([by_wheel.ravel(),
@@ -291,21 +290,40 @@ class Contacts:
     def _tyre_kinematics(self):
         """Per wheel: the tyre's compression, blended smoothly over the links beneath it
         (a smooth maximum of their overlaps, TYRE_BLEND wide, each link's term faded in and
-        out over HANDOVER of its ends), its rate; per (wheel, link beneath) pair: the
-        link's weight in the blend and the gradient of its term (the wheel's three
-        coordinates, then the link's), for the forces and the Jacobian. All wheels at
-        once."""
-        count = len(self.wheels)
-        reach = 0.5 * lay.LINK_PITCH + 0.5 * HANDOVER
+        out over HANDOVER about its joints), its rate; per (wheel, link beneath) pair: the
+        link's weight in the blend and the gradient of its term by the coordinates of the
+        wheel's arm and of the links behind, beneath and ahead (its window's joints), for
+        the forces and the Jacobian. All wheels at once.
+
+        A link's window is bounded at each joint by the bisector of the two links' angle
+        there (the joint's pin, normal m the mean of their directions): where the track
+        bends, as over a bump's crest, each point above it is some link's (a window by the
+        distance along the link alone left a wheel above a convex joint bent by more than
+        about 5 deg with no link beneath it), and the two windows at a joint still sum to
+        one."""
+        count, links = len(self.wheels), len(self.u)
         r = self.wheels[:, None, :] - self.link_pos[None, :, :]
         along = r[..., 0] * self.u[:, 0] + r[..., 1] * self.u[:, 1]
         height = r[..., 0] * self.n[:, 0] + r[..., 1] * self.n[:, 1]
-        wheel, link = np.nonzero((np.abs(along) < reach) & (height > 0.0)
+        wheel, link = np.nonzero((np.abs(along) < lay.LINK_PITCH) & (height > 0.0)
                                  & (height < 2 * lay.WHEEL_RADIUS))
-        along, height = along[wheel, link], height[wheel, link]
+        behind, ahead = (link - 1) % links, (link + 1) % links
+        w = self.wheels[wheel]
+        # each end: its joint's pin, the bisector's normal m = (u_a + u_b) / |u_a + u_b|,
+        # the wheel's distance from it into the link, the smoothstep's argument
+        ends = []
+        for a, b, sign, pin in ((behind, link, 1.0, link), (link, ahead, -1.0, ahead)):
+            mean = self.u[a] + self.u[b]
+            size = np.hypot(mean[:, 0], mean[:, 1])
+            m = mean / size[:, None]
+            offset = w - self.pins[pin]
+            x = sign * np.einsum("ij,ij->i", offset, m) / HANDOVER + 0.5
+            ends.append((a, b, sign, m, size, offset, x))
+        window = _smoothstep(ends[0][6]) * _smoothstep(ends[1][6])
+        keep = window > 0.0
+        wheel, link, behind, ahead = wheel[keep], link[keep], behind[keep], ahead[keep]
+        along, height, window, w = along[wheel, link], height[wheel, link], window[keep], w[keep]
         overlap = lay.WHEEL_RADIUS - (height - lay.LINK_INNER)
-        x = (reach - np.abs(along)) / HANDOVER
-        window = _smoothstep(x)
         top = np.full(count, -np.inf)
         np.maximum.at(top, wheel, overlap)
         terms = window * np.exp((overlap - top[wheel]) / TYRE_BLEND)
@@ -315,28 +333,43 @@ class Contacts:
             self.compression = np.where(self.in_contact,
                                         top + TYRE_BLEND * np.log(total), -np.inf)
         weights = terms / np.where(self.in_contact, total, 1.0)[wheel]
-        n, u = self.n[link], self.u[link]
-        # the gradient of each term, its overlap plus TYRE_BLEND ln(its window), by the
-        # wheel's coordinates and the link's (overlap R + inner - (wheel - link) . n;
-        # along (wheel - link) . u; d ln(window)/d along: the smoothstep's slope over its
-        # value, zero once full)
-        slope = np.where(x < 1.0, 6 * x * (1 - x) / np.maximum(window, 1e-300), 0.0)
-        log_window = -TYRE_BLEND * slope * np.sign(along) / HANDOVER
-        by_wheel = -n + log_window[:, None] * u
-        arm = self.wheels[wheel] - self.body_pos[1 + wheel]
-        gradient = np.empty((len(wheel), 6))
-        gradient[:, :2] = by_wheel
-        gradient[:, 2] = -by_wheel[:, 0] * arm[:, 1] + by_wheel[:, 1] * arm[:, 0]
-        gradient[:, 3:5] = -by_wheel
-        gradient[:, 5] = along + log_window * height
-        self.pair_wheel, self.pair_link = wheel, link
-        self.pair_weight, self.pair_gradient = weights, gradient
+        # the gradient of each term, its overlap (R + inner - (wheel - link) . n) plus
+        # TYRE_BLEND ln(its window), by (x, y, angle) of the arm and of the links behind,
+        # beneath and ahead; each end's ln(smoothstep) changes with the wheel, the pin (half
+        # each of the two links' seats) and m (turning with the two links)
+        n = self.n[link]
+        gradient = np.zeros((len(wheel), 4, 3))
+        by_wheel = -n
+        gradient[:, 2, :2] = n
+        gradient[:, 2, 2] = along
+        half = 0.5 * lay.LINK_PITCH
+        for (a, b, sign, m, size, offset, x), slots in zip(ends, ((1, 2), (2, 3))):
+            m, size, offset, x = m[keep], size[keep], offset[keep], x[keep]
+            a, b = a[keep], b[keep]
+            value, slope, _ = _smoothstep_derivatives(x)
+            scale = sign * TYRE_BLEND * slope / np.maximum(value, 1e-300) / HANDOVER
+            by_wheel = by_wheel + scale[:, None] * m
+            across = offset - np.einsum("ij,ij->i", offset, m)[:, None] * m
+            for slot, body, seat in ((slots[0], a, half), (slots[1], b, -half)):
+                # the pin: half of link a's front seat and of link b's rear seat
+                gradient[:, slot, :2] -= 0.5 * scale[:, None] * m
+                turn = (-0.5 * seat * np.einsum("ij,ij->i", m, self.n[body])
+                        + np.einsum("ij,ij->i", across, self.n[body]) / size)
+                gradient[:, slot, 2] += scale * turn
+        arm = w - self.body_pos[1 + wheel]
+        gradient[:, 0, :2] = by_wheel
+        gradient[:, 0, 2] = -by_wheel[:, 0] * arm[:, 1] + by_wheel[:, 1] * arm[:, 0]
+        bodies = np.stack([1 + wheel, self.link0 + behind, self.link0 + link,
+                           self.link0 + ahead], axis=1)
+        self.pair_wheel, self.pair_weight = wheel, weights
+        self.pair_coordinates = (3 * bodies[:, :, None] + np.arange(3)).reshape(-1, 12)
+        self.pair_gradient = gradient.reshape(-1, 12)
         # the compression's rate is its gradient times the velocities, the windows' fading
         # included (the tyre's damping sees the rate its force does work against)
-        velocities = np.concatenate([self.rates[1 + wheel], self.rates[self.link0 + link]],
-                                    axis=1)
+        velocities = self.rates[bodies].reshape(-1, 12)
         self.compression_rate = np.bincount(
-            wheel, weights * np.einsum("ij,ij->i", gradient, velocities), minlength=count)
+            wheel, weights * np.einsum("ij,ij->i", self.pair_gradient, velocities),
+            minlength=count)
 
     def tyre_state(self, w):
         self.evaluate(self.v.mbs.systemData.GetTime())
@@ -485,10 +518,8 @@ class Contacts:
                            for w in np.flatnonzero(self.tyre_force > 0.0)]
         # pushes the compression back: minus the load times the gradient, by weight
         share = -(self.tyre_force[self.pair_wheel] * self.pair_weight)[:, None] * self.pair_gradient
-        coordinates = np.concatenate([3 * (1 + self.pair_wheel)[:, None] + np.arange(3),
-                                      3 * (self.link0 + self.pair_link)[:, None] + np.arange(3)],
-                                     axis=1)
-        tyres = np.bincount(coordinates.ravel(), share.ravel(), minlength=3 * len(self.nodes))
+        tyres = np.bincount(self.pair_coordinates.ravel(), share.ravel(),
+                            minlength=3 * len(self.nodes))
         if self.audit is not None:
             self.audit.power["tyres"] = float(tyres @ self.qd)
 
