@@ -181,7 +181,7 @@ def test_a_short_run_prints_its_summary_and_writes_the_csv(native_fmus, tmp_path
     assert re.search(r"s wall and [0-9.]+ s CPU per simulated second", run.stdout)
     assert re.search(r"exudyn: [0-9.]+ Newton iterations per solve", run.stdout)
     assert f"wrote {tmp_path}" in run.stdout
-    with open(tmp_path / "bump_5mps.csv") as stream:
+    with open(tmp_path / "bump_3mps.csv") as stream:
         rows = list(csv.DictReader(stream))
     # each column headed by its name and SI unit, "time (s)"
     units = dict(re.fullmatch(r"(\S+) \((\S+)\)", h).groups() for h in rows[0])
