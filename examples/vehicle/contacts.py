@@ -320,12 +320,15 @@ class Contacts:
             x = sign * np.einsum("ij,ij->i", offset, m) / HANDOVER + 0.5
             ends.append((a, b, sign, m, size, offset, x))
         window = _smoothstep(ends[0][6]) * _smoothstep(ends[1][6])
-        keep = window > 0.0
+        overlap = lay.WHEEL_RADIUS - (height[wheel, link] - lay.LINK_INNER)
+        top = np.full(count, -np.inf)
+        np.maximum.at(top, wheel, np.where(window > 0.0, overlap, -np.inf))
+        # a link whose overlap is 40 blend widths below the largest weighs e^-40 in the
+        # blend: left out (links of the top run above the wheel)
+        keep = (window > 0.0) & (overlap > top[wheel] - 40 * TYRE_BLEND)
         wheel, link, behind, ahead = wheel[keep], link[keep], behind[keep], ahead[keep]
         along, height, window, w = along[wheel, link], height[wheel, link], window[keep], w[keep]
-        overlap = lay.WHEEL_RADIUS - (height - lay.LINK_INNER)
-        top = np.full(count, -np.inf)
-        np.maximum.at(top, wheel, overlap)
+        overlap = overlap[keep]
         terms = window * np.exp((overlap - top[wheel]) / TYRE_BLEND)
         total = np.bincount(wheel, terms, minlength=count)
         self.in_contact = total > 0.0
