@@ -288,19 +288,14 @@ class Contacts:
         self._tyre_kinematics()
 
     def _tyre_kinematics(self):
-        """Per wheel: the tyre's compression, blended smoothly over the links beneath it
-        (a smooth maximum of their overlaps, TYRE_BLEND wide, each link's term faded in and
-        out over HANDOVER about its joints), its rate; per (wheel, link beneath) pair: the
-        link's weight in the blend and the gradient of its term by the coordinates of the
-        wheel's arm and of the links behind, beneath and ahead (its window's joints), for
-        the forces and the Jacobian. All wheels at once.
-
-        A link's window is bounded at each joint by the bisector of the two links' angle
-        there (the joint's pin, normal m the mean of their directions): where the track
-        bends, as over a bump's crest, each point above it is some link's (a window by the
-        distance along the link alone left a wheel above a convex joint bent by more than
-        about 5 deg with no link beneath it), and the two windows at a joint still sum to
-        one."""
+        """Per wheel: the tyre's compression, a smooth maximum (TYRE_BLEND wide) of the
+        overlaps of the links beneath it, each faded in and out over HANDOVER about its
+        joints, and its rate; per (wheel, link) pair: the link's weight in the blend and
+        the gradient of its term by the coordinates of the arm and of the links behind,
+        beneath and ahead. All wheels at once. A window is bounded at each joint by the
+        bisector of the links' angle there (through the pin, normal m the mean of their
+        directions): over a convex joint, as on a bump's crest, a wheel still has a link
+        beneath it, and the two windows at a joint sum to one (docs/vehicle.md)."""
         count, links = len(self.wheels), len(self.u)
         r = self.wheels[:, None, :] - self.link_pos[None, :, :]
         along = r[..., 0] * self.u[:, 0] + r[..., 1] * self.u[:, 1]
@@ -436,9 +431,8 @@ class Contacts:
         tooth_force = weight[:, None] * (SPROCKET_STIFFNESS * gap
                                          + SPROCKET_DAMPING * (slot_v - self.pins_v))
         # the engagement is the potential w(pin's angle) k |gap|^2 / 2: besides the pull,
-        # minus its gradient by the pin's angle (d angle / d pin = z x rel / |rel|^2),
-        # which resists a pin entering with a gap as much as it helps one leaving (a pull
-        # scaled by the ramp alone did net work round each passage: docs/vehicle.md)
+        # minus its gradient by the angle (d angle / d pin = z x rel / |rel|^2); a pull
+        # scaled by the ramp alone did net work at each passage (docs/vehicle.md)
         stored = 0.5 * SPROCKET_STIFFNESS * np.sum(gap * gap, axis=1)
         by_angle = _cross(1.0, rel) / (distance * distance)[:, None]
         ramp_force = -(stored * weight_slope)[:, None] * by_angle
@@ -449,23 +443,24 @@ class Contacts:
         on_body(0, self.pins[on], -ramp_force[on])  # w turns with the hull, not the teeth
         r = slot[on] - centre
         self.drive_torque = -np.sum(r[:, 0] * tooth_force[on, 1] - r[:, 1] * tooth_force[on, 0])
-        # the tooth space turns back as the hull travels forward
-        slot_g = self._point_g(np.zeros(len(on), dtype=int), slot[on])
-        motion_g = slot_g.copy()
-        motion_g[:, 0, 0] += np.sin(slot_angle[on])
-        motion_g[:, 1, 0] -= np.cos(slot_angle[on])
+        def slot_motion(pins):  # the tooth space turns back as the hull travels forward
+            slot_g = self._point_g(np.zeros(len(pins), dtype=int), slot[pins])
+            motion_g = slot_g.copy()
+            motion_g[:, 0, 0] += np.sin(slot_angle[pins])
+            motion_g[:, 1, 0] -= np.cos(slot_angle[pins])
+            return slot_g, motion_g
+
+        slot_g, motion_g = slot_motion(on)
         identity = weight[on, None, None] * np.eye(2)
         self._pin_springs(on, SPROCKET_STIFFNESS * identity, SPROCKET_DAMPING * identity,
                           (0, slot_g, motion_g, -1.0))
-        # the ramp force's change: with the gap, -k w' m gap^T (m = d angle / d pin), its
-        # hull member the tooth space; with the angle, stored (w'' m m^T + w' dm/d pin),
-        # its hull member the hull's point at the pin (w turns with the hull)
+        # the ramp force's change with the gap, -k w' m gap^T (m = d angle / d pin; hull
+        # member the tooth space), with the angle, stored (w'' m m^T + w' dm/d pin; hull
+        # member its point at the pin: w turns with the hull)
         ramp = np.flatnonzero(weight_slope != 0.0)
         hull = np.zeros(len(ramp), dtype=int)
         pin_g = self._point_g(hull, self.pins[ramp])
-        ramp_motion = self._point_g(hull, slot[ramp])
-        ramp_motion[:, 0, 0] += np.sin(slot_angle[ramp])
-        ramp_motion[:, 1, 0] -= np.cos(slot_angle[ramp])
+        ramp_slot, ramp_motion = slot_motion(ramp)
         m, r = by_angle[ramp], rel[ramp]
         slope = weight_slope[ramp, None, None]
         by_gap = -SPROCKET_STIFFNESS * slope * m[:, :, None] * gap[ramp, None, :]
@@ -474,21 +469,19 @@ class Contacts:
         pull = SPROCKET_STIFFNESS * gap[ramp] + SPROCKET_DAMPING * (slot_v - self.pins_v)[ramp]
         by_weight = -slope * pull[:, :, None] * m[:, None, :]
         self._pin_springs(ramp, by_weight, np.zeros_like(by_weight),
-                          (0, self._point_g(hull, slot[ramp]), pin_g, -1.0))
+                          (0, ramp_slot, pin_g, -1.0))
         turn = np.array([[0.0, -1.0], [1.0, 0.0]])
         squared = (distance[ramp] ** 2)[:, None, None]
-        m_slope = (turn / squared
-                   - 2.0 * np.einsum("ij,nj,nk->nik", turn, r, r) / squared ** 2)
+        m_slope = turn / squared - 2.0 * np.einsum("ij,nj,nk->nik", turn, r, r) / squared ** 2
         by_turn = stored[ramp, None, None] * (
             weight_curvature[ramp, None, None] * m[:, :, None] * m[:, None, :]
             + weight_slope[ramp, None, None] * m_slope)
         self._pin_springs(ramp, by_turn, np.zeros_like(by_turn), (0, pin_g, pin_g, -1.0))
         if self.audit is not None:
             self.audit.mark("sprocket", self, pin, bodies)
-            self.audit.sprocket(tooth_force, weight * stored, weight * SPROCKET_DAMPING
-                                * np.sum((slot_v - self.pins_v) ** 2, axis=1),
-                                _cross(-hull_vel[0] / lay.SPROCKET_PITCH_RADIUS,
-                                       lay.SPROCKET_PITCH_RADIUS * radial))
+            damped = weight * SPROCKET_DAMPING * np.sum((slot_v - self.pins_v) ** 2, axis=1)
+            self.audit.sprocket(tooth_force, weight * stored, damped,
+                                -hull_vel[0] * _cross(1.0, radial))
 
         # idler (on its crank) and support roller (on the hull)
         roller = hull_pos + _rotate(hull_theta, self.roller_local)
