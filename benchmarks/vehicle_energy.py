@@ -60,7 +60,7 @@ def main(argv=None):
     print(f"{args.course}, {args.speed:g} m/s, step {args.step * 1e3:g} ms, {args.coupling}: "
           f"work on the bodies per window (J); bushes, dampers: work done on them (J); "
           f"largest wheel-load swing, tensions (kN)")
-    print("window (s)   " + " ".join(f"{c[:10]:>10}" for c in columns)
+    print("window (s)     " + " ".join(f"{c[:10]:>10}" for c in columns)
           + "     bushes   dampers  swing  sprocket tension  idler tension")
     t = result["time"]
     for start in np.arange(0.0, time[-1] - 1e-9, args.window):
@@ -73,7 +73,7 @@ def main(argv=None):
         load = result["tyre_force"][rows]
         swing = np.max(load.max(axis=0) - load.min(axis=0)) / 1e3
         sprocket, idler = (result[f"track_tension_{k}"][rows] / 1e3 for k in ("sprocket", "idler"))
-        print(f"{start:4.2f}-{start + args.window:4.2f}  "
+        print(f"{start:5.3f}-{start + args.window:5.3f}  "
               + " ".join(f"{work[c][b] - work[c][a]:10.1f}" for c in columns)
               + f" {bushes:10.1f} {dampers:9.1f} {swing:6.2f} {sprocket.min():7.1f} to "
               f"{sprocket.max():5.1f} {idler.min():7.1f} to {idler.max():5.1f}")
