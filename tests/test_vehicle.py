@@ -181,7 +181,7 @@ def test_a_short_run_prints_its_summary_and_writes_the_csv(native_fmus, tmp_path
     assert re.search(r"s wall and [0-9.]+ s CPU per simulated second", run.stdout)
     assert re.search(r"exudyn: [0-9.]+ Newton iterations per solve", run.stdout)
     assert f"wrote {tmp_path}" in run.stdout
-    with open(tmp_path / "bump_5mps.csv") as stream:
+    with open(tmp_path / "bump_3mps.csv") as stream:
         rows = list(csv.DictReader(stream))
     # each column headed by its name and SI unit, "time (s)"
     units = dict(re.fullmatch(r"(\S+) \((\S+)\)", h).groups() for h in rows[0])
@@ -252,3 +252,141 @@ def test_the_components_start_at_the_runs_initial_state(native_fmus):
     assert result["time"][0] == 0.0
     assert result["bush_angle"][0][k] == pytest.approx(0.01 + offsets[k], abs=1e-12)
     assert result["bush_angle"][0][k + 1] == pytest.approx(-0.01 + offsets[k + 1], abs=1e-12)
+
+
+def _carried_round(contacts, state, link, edges, points=200):
+    """The work the contacts' forces do on one link carried round a closed loop of its
+    coordinates (edges: functions of s in [0, 1] giving the link's (x, y, angle), each
+    edge starting where the last ended), everything else still: trapezoids on each edge."""
+    q = state.copy()
+    qd = np.zeros_like(q)
+    rows = 3 * (contacts.link0 + link) + np.arange(3)
+    work = travelled = 0.0
+    for edge in edges:
+        path = np.array([edge(s) for s in np.linspace(0.0, 1.0, points + 1)])
+        forces = []
+        for coordinates in path:
+            q[rows] = coordinates - contacts.reference[contacts.link0 + link]
+            forces.append(contacts._generalized(0.0, q, qd)[rows].copy())
+        forces, steps = np.array(forces), np.diff(path, axis=0)
+        pieces = 0.5 * np.einsum("ij,ij->i", forces[1:] + forces[:-1], steps)
+        work += pieces.sum()
+        travelled += np.abs(pieces).sum()
+    return work, travelled
+
+
+def test_the_sprocket_engagement_does_no_net_work_round_a_closed_motion(native_fmus):
+    """The teeth take up and let go of a pin over ENGAGEMENT_RAMP at the wrap's ends. A link
+    whose front pin lies just past the wrap's end, turned about the sprocket's centre until
+    that pin is inside the ramp, pushed out from the centre, turned back and let back in
+    (everything else still, at rest): the contacts' forces on it do no net work round the
+    loop, as a passive contact must (the engagement is the potential w k |gap|^2 / 2; a
+    pull k (tooth space - pin) scaled by w alone pumped energy into the track at every
+    passage)."""
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle.model import ENGAGEMENT_RAMP
+
+    vehicle = _laid_out(native_fmus, settling=True)  # the tyres' relaxed tables: no FMU calls
+    try:
+        contacts = vehicle.contacts
+        data = vehicle.mbs.systemData
+        state = np.asarray(data.GetODE2Coordinates(exu.ConfigurationType.Current))[
+            contacts.system_index]
+        contacts.evaluate(0.0)
+        centre = contacts.hull[:2] + contacts.sprocket_local
+        relative = contacts.pins - centre
+        into = (np.arctan2(relative[:, 1], relative[:, 0]) - contacts.wrap_start) % (2 * math.pi)
+        past = into - contacts.wrap_sweep
+        pin = int(np.argmin(np.where(past > 0.0, past, np.inf)))
+        assert 0.0 < past[pin] < 0.5 * ENGAGEMENT_RAMP  # just past the wrap's end
+        link = pin - 1  # its front seat is that pin
+        start = contacts.reference[contacts.link0 + link] + state[
+            3 * (contacts.link0 + link) + np.arange(3)]
+        # the pin moves by half its link's motion: turn the link by twice the angle that
+        # takes the pin a fifth of the ramp inside the wrap
+        turn = -2.0 * (past[pin] + 0.2 * ENGAGEMENT_RAMP)
+        push = 0.02
+
+        def placed(angle, out):
+            c, s = math.cos(angle), math.sin(angle)
+            r = start[:2] - centre
+            moved = centre + np.array([c * r[0] - s * r[1], s * r[0] + c * r[1]])
+            moved += out * (moved - centre) / np.hypot(*(moved - centre))
+            return np.array([*moved, start[2] + angle])
+
+        edges = [lambda s: placed(turn * s, 0.0), lambda s: placed(turn, push * s),
+                 lambda s: placed(turn * (1 - s), push), lambda s: placed(0.0, push * (1 - s))]
+        work, travelled = _carried_round(contacts, state, link, edges)
+        assert travelled > 10.0  # the teeth did work on the way (J)
+        assert abs(work) < 1e-4 * travelled, (work, travelled)
+    finally:
+        vehicle.coupling.free()
+
+
+def test_the_tyres_compression_rate_is_the_rate_of_their_compression(native_fmus):
+    """The rate each wheel's tyres are given (their damping acts on it) is the time
+    derivative of the blended compression their force works against, the links' windows
+    fading in and out included: against central differences along the run's initial
+    velocities (the track running at 5 m/s under the wheels), the links jostled by 1 mm so
+    that the overlaps beneath a wheel differ."""
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    vehicle = _laid_out(native_fmus, settling=True)
+    try:
+        contacts = vehicle.contacts
+        data = vehicle.mbs.systemData
+        index = contacts.system_index
+        q = np.asarray(data.GetODE2Coordinates(exu.ConfigurationType.Current))[index]
+        qd = np.asarray(data.GetODE2Coordinates_t(exu.ConfigurationType.Initial))[index]
+        q = q + np.random.default_rng(3).normal(0.0, 1e-3, q.shape)
+        h = 1e-7
+        compression = []
+        for sign in (1.0, -1.0):
+            contacts._update(0.0, q + sign * h * qd, qd)
+            compression.append(contacts.compression.copy())
+        contacts._update(0.0, q, qd)
+        assert np.all(contacts.in_contact)
+        rate = (compression[0] - compression[1]) / (2 * h)
+        assert np.max(np.abs(rate)) > 0.01  # the wheels' compressions change (m/s)
+        assert np.max(np.abs(contacts.compression_rate - rate)) < 1e-3 * np.max(np.abs(rate))
+    finally:
+        vehicle.coupling.free()
+
+
+def test_a_wheel_above_a_convex_joint_stays_on_the_track(native_fmus):
+    """Over a bump's crest the track bends convexly under a wheel (the 80 mm bump's crest:
+    about 14 deg a joint). Two links beneath road wheel 3 turned 7 deg each way about their
+    joint, the wheel moved onto the bisector above it: the wheel is still on the track,
+    its compression its overlap with either link's face (the two windows half each), not
+    lost because the wheel's centre lies beyond both links' ends along their own lines."""
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle import layout as lay
+
+    vehicle = _laid_out(native_fmus, settling=True)
+    try:
+        contacts = vehicle.contacts
+        data = vehicle.mbs.systemData
+        q = np.array(data.GetODE2Coordinates(exu.ConfigurationType.Current))[contacts.system_index]
+        contacts.evaluate(0.0)
+        wheel = 2
+        on_ground = np.flatnonzero(contacts.pins[:, 1] < 0.1)
+        joint = on_ground[np.argmin(np.abs(contacts.pins[on_ground, 0]
+                                           - contacts.wheels[wheel, 0]))]
+        state = contacts.reference + q.reshape(-1, 3)
+        half = math.radians(7.0)
+        for link, seat, turn in ((joint - 1, 1, half), (joint, 0, -half)):
+            body = contacts.link0 + link
+            pivot = contacts.seats[link, seat]
+            c, s = math.cos(turn), math.sin(turn)
+            r = state[body, :2] - pivot
+            state[body] = [pivot[0] + c * r[0] - s * r[1], pivot[1] + s * r[0] + c * r[1],
+                           state[body, 2] + turn]
+        pin = contacts.pins[joint]
+        above = 0.3  # m from the joint to the wheel's centre
+        state[1 + wheel, :2] += pin + [0.0, above] - contacts.wheels[wheel]
+        q = (state - contacts.reference).ravel()
+        contacts._update(0.0, q, np.zeros_like(q))
+        assert contacts.in_contact[wheel]
+        expected = lay.WHEEL_RADIUS + lay.LINK_INNER - above * math.cos(half)
+        assert contacts.compression[wheel] == pytest.approx(expected, abs=1e-4)
+    finally:
+        vehicle.coupling.free()

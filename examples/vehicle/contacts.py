@@ -64,6 +64,13 @@ def _smoothstep(x):
     return x * x * (3.0 - 2.0 * x)
 
 
+def _smoothstep_derivatives(x):
+    """The smoothstep and its first and second derivatives."""
+    inside = (x > 0.0) & (x < 1.0)
+    return (_smoothstep(x), np.where(inside, 6.0 * x * (1.0 - x), 0.0),
+            np.where(inside, 6.0 - 12.0 * x, 0.0))
+
+
 def _rotate(angle, r):
     c, s = math.cos(angle), math.sin(angle)
     return np.array([c * r[0] - s * r[1], s * r[0] + c * r[1]])
@@ -90,6 +97,7 @@ class Contacts:
         self.tension_points = (geo.arc(2).point(0.0) - geo.cg,
                                geo.arc(4).point(0.0) - geo.cg)
         self._key = None
+        self.audit = None  # an energy.Audit: the power of each class of contact
 
     def add_object(self):
         """One exudyn object carries every contact force: a generic ODE2 object over the
@@ -145,6 +153,7 @@ class Contacts:
         self._key = key
         state = self.reference + q.reshape(-1, 3)
         rates = qd.reshape(-1, 3)
+        self.qd = qd
         self._kinematics(state, rates)
         self._forces(t)
 
@@ -191,7 +200,7 @@ class Contacts:
         """d(generalized tyre force)/dq of each wheel in contact, from the blend's
         gradient D (a row per link beneath) and weights p: F' (p.D)^T (p.D) +
         F/b D^T (diag(p) - p p^T) D (b TYRE_BLEND; the second derivatives of each link's
-        own term left out), on the few coordinates D touches (the wheel's, the links')."""
+        own term left out), on the few coordinates D touches (the arm's, the links')."""
         count = len(self.wheels)
         force, slope = np.zeros(count), np.zeros(count)
         for w, f, k in self.tyre_terms:
@@ -199,19 +208,18 @@ class Contacts:
         pairs = np.flatnonzero(force[self.pair_wheel] > 0.0)
         wheel, weights = self.pair_wheel[pairs], self.pair_weight[pairs]
         gradient = self.pair_gradient[pairs]
-        coordinates = np.concatenate([3 * (1 + wheel)[:, None] + np.arange(3),
-                                      3 * (self.link0 + self.pair_link[pairs])[:, None]
-                                      + np.arange(3)], axis=1)
-        # F/b sum_k p_k D_k^T D_k, a 6 x 6 block per pair
+        coordinates = self.pair_coordinates[pairs]
+        size = coordinates.shape[1]
+        # F/b sum_k p_k D_k^T D_k, a block per pair
         scale = factor * force[wheel] / TYRE_BLEND * weights
-        own = (np.broadcast_to(coordinates[:, :, None], (len(pairs), 6, 6)).ravel(),
-               np.broadcast_to(coordinates[:, None, :], (len(pairs), 6, 6)).ravel(),
+        own = (np.broadcast_to(coordinates[:, :, None], (len(pairs), size, size)).ravel(),
+               np.broadcast_to(coordinates[:, None, :], (len(pairs), size, size)).ravel(),
                (scale[:, None, None] * gradient[:, :, None] * gradient[:, None, :]).ravel())
         # (F' - F/b) (p.D)^T (p.D): p.D's entries, the wheel's summed over its links
         wheels = np.flatnonzero(force > 0.0)
         by_wheel = np.stack([np.bincount(wheel, weights * gradient[:, j], minlength=count)
                              for j in range(3)], axis=1)[wheels]
-        entry_wheel = np.concatenate([np.repeat(wheels, 3), np.repeat(wheel, 3)])
+        entry_wheel = np.concatenate([np.repeat(wheels, 3), np.repeat(wheel, size - 3)])
         entry_coordinate = np.concatenate([(3 * (1 + wheels)[:, None] + np.arange(3)).ravel(),
                                            coordinates[:, 3:].ravel()])
         entry_value = np.concatenate([by_wheel.ravel(),
@@ -259,7 +267,7 @@ class Contacts:
 
     def _kinematics(self, state, rates):
         half = 0.5 * lay.LINK_PITCH
-        self.body_pos = state[:, :2]
+        self.body_pos, self.rates = state[:, :2], rates
         self.hull, self.hull_v = state[0], rates[0]
         links, links_v = state[self.link0:], rates[self.link0:]
         self.link_pos, self.link_angle, self.link_omega = links[:, :2], links[:, 2], links_v[:, 2]
@@ -280,25 +288,42 @@ class Contacts:
         self._tyre_kinematics()
 
     def _tyre_kinematics(self):
-        """Per wheel: the tyre's compression, blended smoothly over the links beneath it
-        (a smooth maximum of their overlaps, TYRE_BLEND wide, each link's term faded in and
-        out over HANDOVER of its ends), its rate; per (wheel, link beneath) pair: the
-        link's weight in the blend and the gradient of its term (the wheel's three
-        coordinates, then the link's), for the forces and the Jacobian. All wheels at
-        once."""
-        count = len(self.wheels)
-        reach = 0.5 * lay.LINK_PITCH + 0.5 * HANDOVER
+        """Per wheel: the tyre's compression, a smooth maximum (TYRE_BLEND wide) of the
+        overlaps of the links beneath it, each faded in and out over HANDOVER about its
+        joints, and its rate; per (wheel, link) pair: the link's weight in the blend and
+        the gradient of its term by the coordinates of the arm and of the links behind,
+        beneath and ahead. All wheels at once. A window is bounded at each joint by the
+        bisector of the links' angle there (through the pin, normal m the mean of their
+        directions): over a convex joint, as on a bump's crest, a wheel still has a link
+        beneath it, and the two windows at a joint sum to one (docs/vehicle.md)."""
+        count, links = len(self.wheels), len(self.u)
         r = self.wheels[:, None, :] - self.link_pos[None, :, :]
         along = r[..., 0] * self.u[:, 0] + r[..., 1] * self.u[:, 1]
         height = r[..., 0] * self.n[:, 0] + r[..., 1] * self.n[:, 1]
-        wheel, link = np.nonzero((np.abs(along) < reach) & (height > 0.0)
+        wheel, link = np.nonzero((np.abs(along) < lay.LINK_PITCH) & (height > 0.0)
                                  & (height < 2 * lay.WHEEL_RADIUS))
-        along, height = along[wheel, link], height[wheel, link]
-        overlap = lay.WHEEL_RADIUS - (height - lay.LINK_INNER)
-        x = (reach - np.abs(along)) / HANDOVER
-        window = _smoothstep(x)
+        behind, ahead = (link - 1) % links, (link + 1) % links
+        w = self.wheels[wheel]
+        # each end: its joint's pin, the bisector's normal m = (u_a + u_b) / |u_a + u_b|,
+        # the wheel's distance from it into the link, the smoothstep's argument
+        ends = []
+        for a, b, sign, pin in ((behind, link, 1.0, link), (link, ahead, -1.0, ahead)):
+            mean = self.u[a] + self.u[b]
+            size = np.hypot(mean[:, 0], mean[:, 1])
+            m = mean / size[:, None]
+            offset = w - self.pins[pin]
+            x = sign * np.einsum("ij,ij->i", offset, m) / HANDOVER + 0.5
+            ends.append((a, b, sign, m, size, offset, x))
+        window = _smoothstep(ends[0][6]) * _smoothstep(ends[1][6])
+        overlap = lay.WHEEL_RADIUS - (height[wheel, link] - lay.LINK_INNER)
         top = np.full(count, -np.inf)
-        np.maximum.at(top, wheel, overlap)
+        np.maximum.at(top, wheel, np.where(window > 0.0, overlap, -np.inf))
+        # a link whose overlap is 40 blend widths below the largest weighs e^-40 in the
+        # blend: left out (links of the top run above the wheel)
+        keep = (window > 0.0) & (overlap > top[wheel] - 40 * TYRE_BLEND)
+        wheel, link, behind, ahead = wheel[keep], link[keep], behind[keep], ahead[keep]
+        along, height, window, w = along[wheel, link], height[wheel, link], window[keep], w[keep]
+        overlap = overlap[keep]
         terms = window * np.exp((overlap - top[wheel]) / TYRE_BLEND)
         total = np.bincount(wheel, terms, minlength=count)
         self.in_contact = total > 0.0
@@ -306,25 +331,43 @@ class Contacts:
             self.compression = np.where(self.in_contact,
                                         top + TYRE_BLEND * np.log(total), -np.inf)
         weights = terms / np.where(self.in_contact, total, 1.0)[wheel]
-        n, u = self.n[link], self.u[link]
-        relative = self.wheels_v[wheel] - self.link_v[link]
-        rates = -(np.einsum("ij,ij->i", relative, n) - self.link_omega[link] * along)
-        self.compression_rate = np.bincount(wheel, weights * rates, minlength=count)
-        # the gradient of each term, its overlap plus TYRE_BLEND ln(its window), by the
-        # wheel's coordinates and the link's (overlap R + inner - (wheel - link) . n;
-        # along (wheel - link) . u; d ln(window)/d along: the smoothstep's slope over its
-        # value, zero once full)
-        slope = np.where(x < 1.0, 6 * x * (1 - x) / np.maximum(window, 1e-300), 0.0)
-        log_window = -TYRE_BLEND * slope * np.sign(along) / HANDOVER
-        by_wheel = -n + log_window[:, None] * u
-        arm = self.wheels[wheel] - self.body_pos[1 + wheel]
-        gradient = np.empty((len(wheel), 6))
-        gradient[:, :2] = by_wheel
-        gradient[:, 2] = -by_wheel[:, 0] * arm[:, 1] + by_wheel[:, 1] * arm[:, 0]
-        gradient[:, 3:5] = -by_wheel
-        gradient[:, 5] = along + log_window * height
-        self.pair_wheel, self.pair_link = wheel, link
-        self.pair_weight, self.pair_gradient = weights, gradient
+        # the gradient of each term, its overlap (R + inner - (wheel - link) . n) plus
+        # TYRE_BLEND ln(its window), by (x, y, angle) of the arm and of the links behind,
+        # beneath and ahead; each end's ln(smoothstep) changes with the wheel, the pin (half
+        # each of the two links' seats) and m (turning with the two links)
+        n = self.n[link]
+        gradient = np.zeros((len(wheel), 4, 3))
+        by_wheel = -n
+        gradient[:, 2, :2] = n
+        gradient[:, 2, 2] = along
+        half = 0.5 * lay.LINK_PITCH
+        for (a, b, sign, m, size, offset, x), slots in zip(ends, ((1, 2), (2, 3))):
+            m, size, offset, x = m[keep], size[keep], offset[keep], x[keep]
+            a, b = a[keep], b[keep]
+            value, slope, _ = _smoothstep_derivatives(x)
+            scale = sign * TYRE_BLEND * slope / np.maximum(value, 1e-300) / HANDOVER
+            by_wheel = by_wheel + scale[:, None] * m
+            across = offset - np.einsum("ij,ij->i", offset, m)[:, None] * m
+            for slot, body, seat in ((slots[0], a, half), (slots[1], b, -half)):
+                # the pin: half of link a's front seat and of link b's rear seat
+                gradient[:, slot, :2] -= 0.5 * scale[:, None] * m
+                turn = (-0.5 * seat * np.einsum("ij,ij->i", m, self.n[body])
+                        + np.einsum("ij,ij->i", across, self.n[body]) / size)
+                gradient[:, slot, 2] += scale * turn
+        arm = w - self.body_pos[1 + wheel]
+        gradient[:, 0, :2] = by_wheel
+        gradient[:, 0, 2] = -by_wheel[:, 0] * arm[:, 1] + by_wheel[:, 1] * arm[:, 0]
+        bodies = np.stack([1 + wheel, self.link0 + behind, self.link0 + link,
+                           self.link0 + ahead], axis=1)
+        self.pair_wheel, self.pair_weight = wheel, weights
+        self.pair_coordinates = (3 * bodies[:, :, None] + np.arange(3)).reshape(-1, 12)
+        self.pair_gradient = gradient.reshape(-1, 12)
+        # the compression's rate is its gradient times the velocities, the windows' fading
+        # included (the tyre's damping sees the rate its force does work against)
+        velocities = self.rates[bodies].reshape(-1, 12)
+        self.compression_rate = np.bincount(
+            wheel, weights * np.einsum("ij,ij->i", self.pair_gradient, velocities),
+            minlength=count)
 
     def tyre_state(self, w):
         self.evaluate(self.v.mbs.systemData.GetTime())
@@ -336,12 +379,13 @@ class Contacts:
         v = self.v
         count = len(self.pins)
         pin = np.zeros((count, 2))  # forces on the pins
-        seat = np.zeros((count, 2, 2))  # forces on the links' seats, besides the pins'
         bodies = np.zeros((len(self.nodes), 3))
         self.springs = [(np.zeros((0, 2, 2)), np.zeros((0, 2, 2)), np.zeros((0, 3), dtype=int),
                          np.zeros((0, 3, 2, 3)), np.zeros((0, 3, 2, 3)), np.zeros((0, 3)))]
         hull_pos, hull_theta = self.hull[:2], self.hull[2]
         hull_vel, hull_omega = self.hull_v[:2], self.hull_v[2]
+        if self.audit is not None:
+            self.audit.begin()
 
         def on_body(body, points, forces):
             bodies[body, :2] += forces.sum(axis=0)
@@ -359,6 +403,8 @@ class Contacts:
                                             GROUND_DAMPING)
         pin[:, 1] += load
         self.ground_load = load
+        if self.audit is not None:
+            self.audit.mark("ground", self, pin, bodies)
         on = np.flatnonzero(load > 0.0)
         self._pin_springs(on, *normal_springs(stiffness[on], damping[on],
                                               np.tile([0.0, 1.0], (len(on), 1))))
@@ -372,30 +418,70 @@ class Contacts:
         rel = self.pins - centre
         angle = np.arctan2(rel[:, 1], rel[:, 0])
         into = (angle - hull_theta - self.wrap_start) % (2 * math.pi)
-        weight = (np.clip(into / ENGAGEMENT_RAMP, 0, 1)
-                  * np.clip((self.wrap_sweep - into) / ENGAGEMENT_RAMP, 0, 1))
-        weight[np.hypot(rel[:, 0], rel[:, 1]) > lay.SPROCKET_PITCH_RADIUS + 0.08] = 0.0
+        weight, weight_slope, weight_curvature = self._engagement(into)
+        distance = np.hypot(rel[:, 0], rel[:, 1])
+        off = distance > lay.SPROCKET_PITCH_RADIUS + 0.08
+        weight[off], weight_slope[off], weight_curvature[off] = 0.0, 0.0, 0.0
         tooth = np.round((angle - turned) / TOOTH_SPACING)
         slot_angle = turned + tooth * TOOTH_SPACING
         radial = np.stack([np.cos(slot_angle), np.sin(slot_angle)], axis=1)
         slot = centre + lay.SPROCKET_PITCH_RADIUS * radial
         slot_v = centre_v + _cross(rate, lay.SPROCKET_PITCH_RADIUS * radial)
-        tooth_force = weight[:, None] * (SPROCKET_STIFFNESS * (slot - self.pins)
+        gap = slot - self.pins
+        tooth_force = weight[:, None] * (SPROCKET_STIFFNESS * gap
                                          + SPROCKET_DAMPING * (slot_v - self.pins_v))
-        pin += tooth_force
-        self.tooth_gap = np.where(weight > 0, np.hypot(*(slot - self.pins).T), 0.0)
+        # the engagement is the potential w(pin's angle) k |gap|^2 / 2: besides the pull,
+        # minus its gradient by the angle (d angle / d pin = z x rel / |rel|^2); a pull
+        # scaled by the ramp alone did net work at each passage (docs/vehicle.md)
+        stored = 0.5 * SPROCKET_STIFFNESS * np.sum(gap * gap, axis=1)
+        by_angle = _cross(1.0, rel) / (distance * distance)[:, None]
+        ramp_force = -(stored * weight_slope)[:, None] * by_angle
+        pin += tooth_force + ramp_force
+        self.tooth_gap = np.where(weight > 0, np.hypot(*gap.T), 0.0)
         on = np.flatnonzero(weight > 0.0)
         on_body(0, slot[on], -tooth_force[on])
+        on_body(0, self.pins[on], -ramp_force[on])  # w turns with the hull, not the teeth
         r = slot[on] - centre
         self.drive_torque = -np.sum(r[:, 0] * tooth_force[on, 1] - r[:, 1] * tooth_force[on, 0])
-        # the tooth space turns back as the hull travels forward
-        slot_g = self._point_g(np.zeros(len(on), dtype=int), slot[on])
-        motion_g = slot_g.copy()
-        motion_g[:, 0, 0] += np.sin(slot_angle[on])
-        motion_g[:, 1, 0] -= np.cos(slot_angle[on])
+        def slot_motion(pins):  # the tooth space turns back as the hull travels forward
+            slot_g = self._point_g(np.zeros(len(pins), dtype=int), slot[pins])
+            motion_g = slot_g.copy()
+            motion_g[:, 0, 0] += np.sin(slot_angle[pins])
+            motion_g[:, 1, 0] -= np.cos(slot_angle[pins])
+            return slot_g, motion_g
+
+        slot_g, motion_g = slot_motion(on)
         identity = weight[on, None, None] * np.eye(2)
         self._pin_springs(on, SPROCKET_STIFFNESS * identity, SPROCKET_DAMPING * identity,
                           (0, slot_g, motion_g, -1.0))
+        # the ramp force's change with the gap, -k w' m gap^T (m = d angle / d pin; hull
+        # member the tooth space), with the angle, stored (w'' m m^T + w' dm/d pin; hull
+        # member its point at the pin: w turns with the hull)
+        ramp = np.flatnonzero(weight_slope != 0.0)
+        hull = np.zeros(len(ramp), dtype=int)
+        pin_g = self._point_g(hull, self.pins[ramp])
+        ramp_slot, ramp_motion = slot_motion(ramp)
+        m, r = by_angle[ramp], rel[ramp]
+        slope = weight_slope[ramp, None, None]
+        by_gap = -SPROCKET_STIFFNESS * slope * m[:, :, None] * gap[ramp, None, :]
+        self._pin_springs(ramp, by_gap, np.zeros_like(by_gap), (0, pin_g, ramp_motion, -1.0))
+        # the pull's (spring's and damper's) change with w: -w' (k gap + c gap') m^T
+        pull = SPROCKET_STIFFNESS * gap[ramp] + SPROCKET_DAMPING * (slot_v - self.pins_v)[ramp]
+        by_weight = -slope * pull[:, :, None] * m[:, None, :]
+        self._pin_springs(ramp, by_weight, np.zeros_like(by_weight),
+                          (0, ramp_slot, pin_g, -1.0))
+        turn = np.array([[0.0, -1.0], [1.0, 0.0]])
+        squared = (distance[ramp] ** 2)[:, None, None]
+        m_slope = turn / squared - 2.0 * np.einsum("ij,nj,nk->nik", turn, r, r) / squared ** 2
+        by_turn = stored[ramp, None, None] * (
+            weight_curvature[ramp, None, None] * m[:, :, None] * m[:, None, :]
+            + weight_slope[ramp, None, None] * m_slope)
+        self._pin_springs(ramp, by_turn, np.zeros_like(by_turn), (0, pin_g, pin_g, -1.0))
+        if self.audit is not None:
+            self.audit.mark("sprocket", self, pin, bodies)
+            damped = weight * SPROCKET_DAMPING * np.sum((slot_v - self.pins_v) ** 2, axis=1)
+            self.audit.sprocket(tooth_force, weight * stored, damped,
+                                -hull_vel[0] * _cross(1.0, radial))
 
         # idler (on its crank) and support roller (on the hull)
         roller = hull_pos + _rotate(hull_theta, self.roller_local)
@@ -416,6 +502,8 @@ class Contacts:
             centre_g = self._point_g(np.full(len(on), body), np.tile(centre, (len(on), 1)))
             self._pin_springs(on, *normal_springs(stiffness[on], damping[on], normal[on]),
                               (body, centre_g, centre_g, -1.0))
+            if self.audit is not None:
+                self.audit.mark("idler" if body else "roller", self, pin, bodies)
 
         # tyres: both half-wheels at the wheel's compression, the generalized force minus
         # the load times the compression's gradient (shared among the links beneath by
@@ -426,24 +514,40 @@ class Contacts:
                            for w in np.flatnonzero(self.tyre_force > 0.0)]
         # pushes the compression back: minus the load times the gradient, by weight
         share = -(self.tyre_force[self.pair_wheel] * self.pair_weight)[:, None] * self.pair_gradient
-        coordinates = np.concatenate([3 * (1 + self.pair_wheel)[:, None] + np.arange(3),
-                                      3 * (self.link0 + self.pair_link)[:, None] + np.arange(3)],
-                                     axis=1)
-        tyres = np.bincount(coordinates.ravel(), share.ravel(), minlength=3 * len(self.nodes))
+        tyres = np.bincount(self.pair_coordinates.ravel(), share.ravel(),
+                            minlength=3 * len(self.nodes))
+        if self.audit is not None:
+            self.audit.power["tyres"] = float(tyres @ self.qd)
 
-        # pins onto the seats of the links either side
-        seat[:, 0] += 0.5 * pin
-        seat[:, 1] += 0.5 * np.roll(pin, -1, axis=0)
-
+        seat = self.onto_seats(pin)
         if v.settling:  # to rest: damping of every body's velocity
             seat -= SETTLE_DAMPING["seat"] * self.seats_v
             self._settle_damping(bodies)
+        self.onto_links(bodies, seat)
+        self.generalized = bodies.reshape(-1) + tyres
+
+    @staticmethod
+    def onto_seats(pin):
+        """Forces on the pins as forces on the seats of the links either side, half each."""
+        return np.stack([0.5 * pin, 0.5 * np.roll(pin, -1, axis=0)], axis=1)
+
+    def onto_links(self, bodies, seat):
+        """Adds forces on the links' seats to the links' generalized forces in `bodies`."""
         links = slice(self.link0, None)
         r0, r1 = self.seats[:, 0] - self.link_pos, self.seats[:, 1] - self.link_pos
         bodies[links, :2] += seat[:, 0] + seat[:, 1]
         bodies[links, 2] += (r0[:, 0] * seat[:, 0, 1] - r0[:, 1] * seat[:, 0, 0]
                              + r1[:, 0] * seat[:, 1, 1] - r1[:, 1] * seat[:, 1, 0])
-        self.generalized = bodies.reshape(-1) + tyres
+
+    def _engagement(self, into):
+        """The teeth's hold w on a pin by its angle into the wrap, taken up and let go over
+        ENGAGEMENT_RAMP at the wrap's ends (smoothsteps: the ramp force has no jump), and
+        its first and second derivatives by that angle."""
+        rise = into / ENGAGEMENT_RAMP
+        fall = (self.wrap_sweep - into) / ENGAGEMENT_RAMP
+        (a, da, dda), (b, db, ddb) = _smoothstep_derivatives(rise), _smoothstep_derivatives(fall)
+        return (a * b, (da * b - a * db) / ENGAGEMENT_RAMP,
+                (dda * b - 2.0 * da * db + a * ddb) / ENGAGEMENT_RAMP ** 2)
 
     def _settle_damping(self, bodies):
         c = SETTLE_DAMPING

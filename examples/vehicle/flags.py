@@ -8,8 +8,8 @@ import bank_path
 from .course import COURSES
 
 
-def add_run_arguments(parser, end_time, step):
-    parser.add_argument("--speed", type=float, default=5.0, help="m/s (default 5)")
+def add_run_arguments(parser, end_time, step, speed=5.0):
+    parser.add_argument("--speed", type=float, default=speed, help=f"m/s (default {speed:g})")
     parser.add_argument("--course", choices=sorted(COURSES), default="bump")
     parser.add_argument("--end-time", type=float, default=end_time, help="s of driving")
     parser.add_argument("--step", type=float, default=step, help="host step, s")

@@ -189,8 +189,7 @@ def vehicle_grid(spec, folder):
     fmus = _fmus(spec, folder, sorted(COMPONENTS))
     speeds = {f"{v:g}": v for v in _numbers(spec, "speeds")}
     courses = _named(spec, "courses", ["bump"])
-    # 0.4 s: the example's own default (at speed its runs end after about 0.5 s)
-    end_time, step = spec.get("end_time", 0.4), spec.get("step", 1e-3)
+    end_time, step = spec.get("end_time", 1.0), spec.get("step", 1e-3)
     runs = [Run(key, dict(labels, speed=speed), (examples, fmus, speed, course, end_time, step))
             for key, labels, (speed, course) in _product(speed=speeds, course=courses)]
     return Grid("vehicle", tasks.vehicle_run, runs, _results)
