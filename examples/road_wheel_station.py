@@ -74,7 +74,8 @@ TRACK_PITCH = 0.15  # m
 # Model Exchange linearisation); "tangent", its `stiffness` output (for a host without a
 # second instance: benchmarks/coupling_study.py --damper-tangent measures what it costs).
 DAMPER_STEP_MODEL = None
-# exudyn's Newton's absolute tolerance (its residual, N and N.m); one lets a step's second
+# exudyn's Newton's absolute tolerance (its residual's norm per coordinate, on a scale
+# that follows the step); one lets a step's second
 # solve start from the first's solution (exudyn_host). None, exudyn's default: the
 # tolerance that keeps the coupling's own error (1e-4) saves the second solve one
 # iteration of six and costs more in the state's copies than it saves

@@ -58,8 +58,9 @@ LINK_MASS = 15.0  # kg (estimate for a steel link casting with its pads)
 LINK_DEPTH = 0.06  # m, for the link's inertia (estimate)
 LINK_INERTIA = LINK_MASS * (PITCH ** 2 + LINK_DEPTH ** 2) / 12
 WHEEL_MASS = 100.0  # kg, the lifting wheel's share moving along the span (estimate)
-# exudyn's Newton stops where its residual (N and N.m) is below this, which lets a step's
-# second solve start from the first's solution (exudyn_host): 1e-9 of the tension, as
+# exudyn's Newton stops where its residual's norm per coordinate (on a scale that follows
+# the step) is below this, which lets a step's second solve start from the first's
+# solution (exudyn_host); not larger, as
 # 1e-4 already moved the coupling's own error at 0.5 ms (benchmarks/coupling_newton.py,
 # docs/coupling.md). None: exudyn's default.
 NEWTON_TOLERANCE = 1e-5

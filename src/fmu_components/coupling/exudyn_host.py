@@ -159,7 +159,8 @@ class ExudynCoupling:
 
 def quiet_settings(newton_tolerance=None):
     """exudyn's simulation settings for a coupled solve: quiet, no files or sensors; Newton
-    to an absolute tolerance (its residual's units, N and N.m) where one is given, which
+    to an absolute tolerance (on its residual's norm per coordinate, a scale that follows the
+    step) where one is given, which
     lets a step's next pass start from the last's solution (ExudynCoupling.install)."""
     import exudyn as exu
 
