@@ -31,7 +31,7 @@ from exudyn.itemInterface import (LoadMassProportional, MarkerBodyMass, MarkerBo
                                   ObjectRigidBody2D)
 
 from fmu_components.coupling import Coupling, FmuComponent
-from fmu_components.coupling.exudyn_host import connector_state, solve
+from fmu_components.coupling.exudyn_host import connector_state, quiet_settings, solve
 from fmu_components.coupling.kelvin import KelvinElement, harmonic_kelvin_equivalent
 
 import bank_path
@@ -471,14 +471,11 @@ class Vehicle:
 
 def run_settings():
     """The settings of the coupled run (exudyn_host.solve adds what the coupling needs)."""
-    settings = exu.SimulationSettings()
+    settings = quiet_settings(NEWTON_TOLERANCE)
     settings.timeIntegration.verboseMode = VERBOSE
-    settings.solution.file.write = False
-    settings.solution.sensors.active = False
     # a Jacobian per iteration: the contacts change from step to step (the modified
     # Newton's kept Jacobian took 14 iterations a pass against 8)
     settings.timeIntegration.newton.useModifiedNewton = False
-    settings.timeIntegration.newton.absoluteTolerance = NEWTON_TOLERANCE
     configure(settings)
     return settings
 
