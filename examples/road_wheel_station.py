@@ -104,6 +104,15 @@ class RoadProfile:
         self.ripple_depth = ripple_depth
         self.pitch = pitch
 
+    def height(self, s, cos=math.cos):
+        """height_and_slope's height alone (its operations, its bits)."""
+        ripple_k = 2 * math.pi / self.pitch
+        height = -0.5 * self.ripple_depth * (1 - cos(ripple_k * s))
+        u = (s - self.bump_start) / self.bump_length
+        if 0.0 < u < 1.0:
+            height += 0.5 * self.bump_height * (1 - cos(2 * math.pi * u))
+        return height
+
     def height_and_slope(self, s):
         ripple_k = 2 * math.pi / self.pitch
         height = -0.5 * self.ripple_depth * (1 - math.cos(ripple_k * s))
@@ -277,6 +286,11 @@ class Station:
         self.coupling.add(tyre, self._tyre_state)
         self.coupling.add(damper, self._damper_state)
         mbs.Assemble()
+        # where _deflections reads the connectors' displacements in the system's coordinates
+        self._tyre_reference = (float(wheel_centre[0]), float(wheel_centre[1]))
+        self._wheel_index = mbs.GetNodeODE2Index(wheel_node)
+        self._rotation_indices = (mbs.GetNodeODE2Index(arm_node) + 2,
+                                  mbs.GetNodeODE2Index(hull_node) + 2)
         self.records = []
         self.compiled = not linear and bank_path.compiled(path, coupling)
         if self.compiled:
@@ -309,9 +323,26 @@ class Station:
             bank_path.symbolic_function(self.mbs, self.damper_connector, damper_torque)]
 
     def _deflections(self):
-        """Both instances' deflections now (the post-Newton hook's, each pass): the
-        connectors' displacements alone, not the rates _tyre_state and _damper_state read
-        too (exudyn's GetObjectOutput is most of this function's cost)."""
+        """Both instances' deflections now (the post-Newton hook's, each pass), into the
+        bank's own array: from one read of the system's coordinates, each displacement as
+        exudyn's connectors form it (the wheel's position, its reference plus its
+        coordinates, less the ground point's; the hull's rotation coordinate less the
+        arm's), the same bits as their GetObjectOutput at a third of the cost (exudyn's
+        GetObjectOutput is a call per connector; tests/test_road_wheel_station.py)."""
+        mbs = self.mbs
+        q = mbs.systemData.GetODE2Coordinates().tolist()
+        x0, y0 = self._tyre_reference
+        w = self._wheel_index
+        dx, dy = (x0 + q[w]) - x0, (y0 + q[w + 1]) - y0
+        arm, hull = self._rotation_indices
+        deflection = self.bank.deflection
+        deflection[0] = (self.static_compression - dy
+                         + self.profile.height(self.speed * mbs.systemData.GetTime() + dx))
+        deflection[1] = q[hull] - q[arm]
+        return deflection
+
+    def _connector_deflections(self):
+        """_deflections by exudyn's connector outputs (what it must equal)."""
         mbs, displacement = self.mbs, exu.OutputVariableType.Displacement
         return np.array([
             self._compression(mbs.systemData.GetTime(),

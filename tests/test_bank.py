@@ -429,6 +429,33 @@ def test_the_station_compiled_path_gives_the_python_paths_numbers(native_fmus, m
         assert np.array_equal(compiled[key], python[key]), key
 
 
+def test_the_stations_deflections_from_its_coordinates_are_its_connectors(native_fmus,
+                                                                         monkeypatch):
+    """The station's compiled path reads both deflections from one read of the system's
+    coordinates: at every pass of a run over the bump, the bits of the tyre's compression
+    and the arm's rotation from its connectors' outputs (exudyn's GetObjectOutput)."""
+    sys.path.insert(0, str(EXAMPLES))
+    try:
+        import road_wheel_station as station
+    finally:
+        sys.path.remove(str(EXAMPLES))
+    read, compared = station.Station._deflections, []
+
+    def compare(self):
+        deflections = read(self)
+        compared.append((deflections.copy(), self._connector_deflections()))
+        return deflections
+
+    monkeypatch.setattr(station.Station, "_deflections", compare)
+    profile = station.RoadProfile(bump_start=0.1)
+    station.simulate(8.0, profile, 1e-3, Path(native_fmus["RoadWheelTyre"]).parent,
+                     end_time=0.05)
+    assert len(compared) > 50
+    coordinates, connectors = map(np.array, zip(*compared))
+    assert np.ptp(connectors[:, 0]) > 1e-4  # the tyre went over the bump
+    assert np.array_equal(coordinates, connectors)
+
+
 def test_the_exudyn_cost_benchmark_runs_both_paths(native_fmus):
     """benchmarks/coupling_exudyn.py --quick: a row per run and path, each a finite CPU
     time per simulated second (its figures are the benchmark's, not a test's)."""
