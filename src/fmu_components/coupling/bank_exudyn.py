@@ -14,7 +14,7 @@ matrices can). The hooks:
     post-Newton user function   the host's deflections (one call of the example's, from
                                 the system's coordinates), Bank.end_pass; on REPEAT the
                                 next laws into the matrix
-    post-step user function     Bank.accept
+    post-step user function     Bank.accept, with the next step's begin
 
 exudyn is imported only when these functions run.
 """
@@ -85,9 +85,24 @@ class ExudynBank(ExudynCoupling):
         super().__init__(mbs, bank)
         self.laws, self.deflections = laws, deflections
 
+    def install(self, settings):
+        super().install(settings)
+        # exudyn's step, as it computes it (its maximum step: the span over the steps); a
+        # step ends at the time before plus it
+        integration = settings.timeIntegration
+        self._step = ((integration.endTime - integration.startTime)
+                      / integration.numberOfSteps)
+
     def _pre_step(self, t):
         super()._pre_step(t)
         self.laws.update()
+        return True
+
+    def _post_step(self, t):
+        """Bank.accept, which begins the next step in the same call where it ends a step
+        later (begin_step then has nothing left to do, one C call fewer per host step;
+        a step exudyn shortens or ends early is begun again by begin_step)."""
+        self.coupling.accept(t, t + self._step)
         return True
 
     def _end_pass(self, t):
