@@ -214,7 +214,12 @@ class TrackSpan:
         self._reference = np.array([self.mbs.GetNodeParameter(n, "referenceCoordinates")
                                     for n in nodes])
         joints = self.links + 1
-        self._seats = [np.zeros(joints) for _ in range(4)] + [np.empty(2 * joints)]
+        # _deflections' arrays, rows x and y: the links' half-pitch vectors; the joints'
+        # left seats (the sprocket's (0, 0) first) and right seats
+        self._seats = (np.empty((2, joints - 1)), np.zeros((2, joints)),
+                       np.empty((2, joints)))
+        self._index_rows = np.ascontiguousarray(self._index.T)  # rows x, y, angle
+        self._reference_rows = np.ascontiguousarray(self._reference.T)
 
     def _node_coordinates(self, derivative=0):
         data = self.mbs.systemData
@@ -225,24 +230,29 @@ class TrackSpan:
     def _deflections(self):
         """Every instance's deflection from the system's coordinates, in one pass: radial,
         the distance between the pin seats of a joint; torsion, the left link's rotation
-        minus the right one's (the Python path's connector_state, vectorised). Into arrays
-        made once, each cosine and sine taken once: it runs twice per host step."""
-        x, y, angle = self._node_coordinates().T
-        left_x, left_y, right_x, right_y, deflections = self._seats
-        half_cos = np.cos(angle[:-1]) * (0.5 * PITCH)
-        half_sin = np.sin(angle[:-1]) * (0.5 * PITCH)
+        minus the right one's (the Python path's connector_state, vectorised, its
+        operations). x and y as the rows of one array, so that each operation takes both,
+        into arrays made once, each cosine and sine taken once: it runs twice per host
+        step."""
+        x_y_angle = self._reference_rows + self.mbs.systemData.GetODE2Coordinates()[
+            self._index_rows]
+        x_y, angle = x_y_angle[:2], x_y_angle[2]
+        half, left, right = self._seats
+        np.cos(angle[:-1], out=half[0])
+        np.sin(angle[:-1], out=half[1])
+        half *= 0.5 * PITCH
         # left seats: the sprocket's (0, 0), then each link's right end; right seats: each
         # link's left end, then the wheel's centre
-        np.add(x[:-1], half_cos, out=left_x[1:])
-        np.add(y[:-1], half_sin, out=left_y[1:])
-        np.subtract(x[:-1], half_cos, out=right_x[:-1])
-        np.subtract(y[:-1], half_sin, out=right_y[:-1])
-        right_x[-1], right_y[-1] = x[-1], y[-1]
-        dx, dy = right_x - left_x, right_y - left_y
-        np.sqrt(dx * dx + dy * dy, out=deflections[0::2])
+        np.add(x_y[:, :-1], half, out=left[:, 1:])
+        np.subtract(x_y[:, :-1], half, out=right[:, :-1])
+        right[:, -1] = x_y[:, -1]
+        apart = right - left
+        apart *= apart
+        deflections = np.empty(2 * len(angle))
+        np.sqrt(np.add(apart[0], apart[1], out=apart[0]), out=deflections[0::2])
         deflections[1] = 0.0 - angle[0]
         np.subtract(angle[:-1], angle[1:], out=deflections[3::2])
-        return deflections.copy()
+        return deflections
 
     # --- static state and run -----------------------------------------------------------
 
