@@ -456,6 +456,30 @@ def test_the_stations_deflections_from_its_coordinates_are_its_connectors(native
     assert np.array_equal(coordinates, connectors)
 
 
+def test_exudyn_announces_each_next_step_to_the_bank(native_fmus, monkeypatch):
+    """In exudyn the bank's accept begins the next step (exudyn's time plus its step, as
+    exudyn adds them): a C begin_step of its own only for the first step, and where exudyn
+    reaches another time than announced."""
+    sys.path.insert(0, str(EXAMPLES))
+    try:
+        import road_wheel_station as station
+    finally:
+        sys.path.remove(str(EXAMPLES))
+    begun = []
+    real_bank = Bank.__init__
+
+    def counting(self, *args, **kwargs):
+        real_bank(self, *args, **kwargs)
+        begin = self._begin
+        self._begin = lambda handle: begun.append(self._call.time) or begin(handle)
+
+    monkeypatch.setattr(Bank, "__init__", counting)
+    result = station.simulate(8.0, station.RoadProfile(), 1e-3,
+                              Path(native_fmus["RoadWheelTyre"]).parent, end_time=0.05)
+    assert len(result["time"]) > 50
+    assert 1 <= len(begun) <= 2
+
+
 def test_the_exudyn_cost_benchmark_runs_both_paths(native_fmus):
     """benchmarks/coupling_exudyn.py --quick: a row per run and path, each a finite CPU
     time per simulated second (its figures are the benchmark's, not a test's)."""
