@@ -5,12 +5,13 @@ compiled path (docs/coupling.md, "What it costs").
     python benchmarks/coupling_exudyn.py --quick      # seconds: checks that it runs
     python benchmarks/coupling_exudyn.py --only station --path compiled \
         --newton-tolerance 1e-4                       # one example, one path, a tolerance
+    python benchmarks/coupling_exudyn.py --only station --step 4e-3   # another host step
 
 Each run is timed by CPU (process time) over the dynamic solve alone (its exudyn solve,
 timed inside): the same run to two end times, and the difference over the difference of
 the end times, so that exudyn's start drops out too; each in a process of its own. The station drives at
 8 m/s over the bump (`explicit` and `corrected`), the span (examples/track_span.py) has
-40 links, 82 instances, `corrected`; 1 ms host steps. The real-time factor by CPU is
+40 links, 82 instances, `corrected`; 1 ms host steps (--step: another). The real-time factor by CPU is
 simulated time over CPU time. The machine may be loaded: the load average is printed.
 --newton-tolerance sets both examples' NEWTON_TOLERANCE (exudyn's Newton's absolute
 tolerance; "default", exudyn's own), which decides whether a step's second solve starts
@@ -48,22 +49,22 @@ def cpu_per_simulated_second(run, start, end):
 # Each example is imported only in the process that runs it: importing the station's
 # (scipy's modules with it) made the span's run in the same process half as costly again.
 
-def station_run(fmu_dir, scheme, path, newton_tolerance):
+def station_run(fmu_dir, scheme, path, newton_tolerance, step=STEP):
     import road_wheel_station as station
 
     if newton_tolerance is not None:
         station.NEWTON_TOLERANCE = _tolerance(newton_tolerance)
     profile = station.RoadProfile()
-    return lambda end_time: station.simulate(8.0, profile, STEP, fmu_dir, end_time=end_time,
+    return lambda end_time: station.simulate(8.0, profile, step, fmu_dir, end_time=end_time,
                                              coupling=scheme, path=path)
 
 
-def span_run(fmu_dir, links, path, newton_tolerance):
+def span_run(fmu_dir, links, path, newton_tolerance, step=STEP):
     import track_span as span
 
     if newton_tolerance is not None:
         span.NEWTON_TOLERANCE = _tolerance(newton_tolerance)
-    return lambda end_time: span.simulate(STEP, links=links, fmu_dir=fmu_dir,
+    return lambda end_time: span.simulate(step, links=links, fmu_dir=fmu_dir,
                                           end_time=end_time, coupling="corrected", path=path)
 
 
@@ -74,7 +75,8 @@ def _tolerance(text):
 def measure(args, kind, scheme, path):
     """CPU seconds per simulated second of one run, in a fresh process."""
     run = subprocess.run([sys.executable, __file__, "--fmus", str(args.fmus), "--links",
-                          str(args.links), *(["--quick"] if args.quick else []),
+                          str(args.links), "--step", repr(args.step),
+                          *(["--quick"] if args.quick else []),
                           *(["--newton-tolerance", args.newton_tolerance]
                             if args.newton_tolerance is not None else []),
                           "--one", kind, scheme, path],
@@ -88,11 +90,11 @@ def measure_one(args, kind, scheme, path):
     fmu_dir = Path(native_fmus(args.fmus)["TrackBushRadial"]).parent
     # the station from before the bump to its end; the span from its start
     if kind == "station":
-        run = station_run(fmu_dir, scheme, path, args.newton_tolerance)
+        run = station_run(fmu_dir, scheme, path, args.newton_tolerance, args.step)
         times = (0.05, 0.1) if args.quick else (0.1, 0.6)
     else:
         run = span_run(fmu_dir, 3 if args.quick else args.links, path,
-                       args.newton_tolerance)
+                       args.newton_tolerance, args.step)
         times = (0.01, 0.03) if args.quick else (0.05, 0.3)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the bushes' range warnings, once per instance
@@ -103,6 +105,7 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--fmus", type=Path, default=ROOT / "fmus")
     parser.add_argument("--links", type=int, default=40)
+    parser.add_argument("--step", type=float, default=STEP, help="the host step (s)")
     parser.add_argument("--quick", action="store_true", help="seconds: short runs")
     parser.add_argument("--newton-tolerance", help="both examples' Newton tolerance "
                         "(exudyn's absolute tolerance, or 'default'); else each one's own")
@@ -127,7 +130,8 @@ def main(argv=None):
         for path in paths:
             rows.append((f"track span, {links} links ({2 * (links + 1)} instances), "
                          f"`corrected`", path, measure(args, "span", "corrected", path)))
-    print("# The coupling in exudyn: CPU seconds per simulated second (1 ms host steps)\n")
+    print(f"# The coupling in exudyn: CPU seconds per simulated second "
+          f"({args.step * 1e3:g} ms host steps)\n")
     print("| run | path | CPU s per simulated s | real-time factor by CPU |")
     print("|---|---|---|---|")
     for name, path, cpu in rows:
