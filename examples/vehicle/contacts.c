@@ -42,7 +42,7 @@ CONTACTS_EXPORT void contacts_free(Contacts *c)
     free(c->reference); free(c->wheel_offset); free(c->pair_wheel); free(c->pair_coordinate);
     free(c->pair_weight); free(c->pair_gradient); free(c->spring); free(c->scratch);
     free(c->pin); free(c->candidate); free(c->in_contact); free(c->bodies_force);
-    free(c->tyres);
+    free(c->tyres); free(c->entry_wheel); free(c->entry_coordinate); free(c->entry_value);
     free(c);
 }
 
@@ -77,6 +77,10 @@ CONTACTS_EXPORT Contacts *contacts_new(int wheels, int links, const double *refe
     ok &= (c->in_contact = malloc(sizeof(int) * wheels)) != NULL;
     ok &= (c->bodies_force = malloc(sizeof(double) * 3 * c->bodies)) != NULL;
     ok &= (c->tyres = malloc(sizeof(double) * 3 * c->bodies)) != NULL;
+    int entries = 3 * wheels + 9 * pairs;
+    ok &= (c->entry_wheel = malloc(sizeof(int) * entries)) != NULL;
+    ok &= (c->entry_coordinate = malloc(sizeof(int) * entries)) != NULL;
+    ok &= (c->entry_value = malloc(sizeof(double) * entries)) != NULL;
     if (!ok) {
         contacts_free(c);
         return NULL;

@@ -69,6 +69,9 @@ typedef struct {
     int *in_contact; /* wheels */
     double *scratch, *pin; /* 8 (links + wheels), links x 2 */
     double *bodies_force, *tyres; /* bodies x 3 */
+    /* the tyres' Jacobian: p.D's entries (3 per wheel, 9 per pair) */
+    int *entry_wheel, *entry_coordinate;
+    double *entry_value;
 } Contacts;
 
 double numpy_sum(const double *a, int n);

@@ -104,6 +104,12 @@ class Contacts:
             jacobianUserFunction=lambda mbs, t, item, q, qd, f, f_t:
                 self._sparse_jacobian(t, q, qd, f, f_t)))
 
+    def use(self, kernel):
+        """Evaluate with `kernel`: "compiled" (C, where it builds) or "numpy"."""
+        if kernel not in ("compiled", "numpy") or (kernel == "compiled" and not self._compiled):
+            raise ValueError(f"contacts kernel {kernel!r}: 'numpy', or 'compiled' where gcc is")
+        self.kernel, self._key = kernel, None
+
     def index(self):
         """After Assemble: where the object's coordinates sit in the system's vectors."""
         mbs = self.v.mbs
@@ -133,18 +139,15 @@ class Contacts:
     def _update(self, t, q, qd):
         q, qd = np.asarray(q), np.asarray(qd)
         # the tyres' load laws change between the coupling's passes at the same state
-        key = (t, q.tobytes(), qd.tobytes(), self.v.settling, self.v.tyre_laws_key(),
-               self.kernel)
+        key = (t, q.tobytes(), qd.tobytes(), self.v.settling, self.v.tyre_laws_key(), self.kernel)
         if key == self._key:
             return
         self._key = key
         self._by_compiled = self.kernel == "compiled" and self.audit is None
         if self._by_compiled:  # the audit reads the numpy kernel's steps
             return self._compiled.update(q, qd)
-        state = self.reference + q.reshape(-1, 3)
-        rates = qd.reshape(-1, 3)
         self.qd = qd
-        self._kinematics(state, rates)
+        self._kinematics(self.reference + q.reshape(-1, 3), qd.reshape(-1, 3))
         self._forces(t)
 
     def _generalized(self, t, q, qd):
@@ -185,9 +188,12 @@ class Contacts:
         right = weights[:, :, None, None] * motion_g
         blocks = np.einsum("saji,sjk,sbkl->sabil", left, block, right)
         first = 3 * bodies[:, :, None] + np.arange(3)  # (spring, member, coordinate)
-        parts = [(np.broadcast_to(first[:, :, None, :, None], blocks.shape).ravel(),
-                  np.broadcast_to(first[:, None, :, None, :], blocks.shape).ravel(),
-                  blocks.ravel())]
+        member = weights != 0  # the blocks of members that exist, in the C kernel's order
+        pair = (member[:, :, None] & member[:, None, :])[..., None, None]
+        kept = np.broadcast_to(pair, blocks.shape)
+        parts = [(np.broadcast_to(first[:, :, None, :, None], blocks.shape)[kept],
+                  np.broadcast_to(first[:, None, :, None, :], blocks.shape)[kept],
+                  blocks[kept])]
         parts += self._tyre_triplets(factor)
         return tuple(np.concatenate(part).astype(float) for part in zip(*parts))
 

@@ -48,7 +48,7 @@ static void spring_triplets(const Contacts *c, double factor, double factor_t, T
 /* d(generalized tyre force)/dq of each wheel in contact, from the blend's gradient D (a
  * row per link beneath) and weights p: F' (p.D)^T (p.D) + F/b D^T (diag(p) - p p^T) D (b
  * TYRE_BLEND), on the coordinates D touches. */
-static void tyre_triplets(const Contacts *c, double factor, Triplets *t)
+static void tyre_triplets(Contacts *c, double factor, Triplets *t)
 {
     const double *force = ARRAY(TYRE_FORCE), *slope = ARRAY(SLOPES);
     double blend = P(TYRE_BLEND);
@@ -62,39 +62,43 @@ static void tyre_triplets(const Contacts *c, double factor, Triplets *t)
             for (int b = 0; b < 12; b++)
                 put(t, coordinate[a], coordinate[b], scale * gradient[a] * gradient[b]);
     }
-    /* (F' - F/b) (p.D)^T (p.D): p.D's entries, the arm's summed over the wheel's links */
+    /* (F' - F/b) (p.D)^T (p.D): p.D's entries, the arm's summed over the wheel's links,
+     * in the numpy kernel's order (every wheel's arm entries, then every pair's links') */
     int entries = 0;
-    int *entry_coordinate = (int *)(c->scratch + 4 * c->links);
-    double *entry_value = c->scratch;
     for (int w = 0; w < c->wheels; w++) {
         if (!(force[w] > 0.0)) continue;
         double by_wheel[3] = {0.0, 0.0, 0.0};
-        entries = 3;
         for (int i = 0; i < c->pairs; i++)
             if (c->pair_wheel[i] == w)
                 for (int k = 0; k < 3; k++)
                     by_wheel[k] += c->pair_weight[i] * c->pair_gradient[12 * i + k];
         for (int k = 0; k < 3; k++) {
-            entry_coordinate[k] = 3 * (1 + w) + k;
-            entry_value[k] = by_wheel[k];
+            c->entry_wheel[entries] = w;
+            c->entry_coordinate[entries] = 3 * (1 + w) + k;
+            c->entry_value[entries++] = by_wheel[k];
         }
-        for (int i = 0; i < c->pairs && entries + 9 <= 4 * c->links; i++)
-            if (c->pair_wheel[i] == w)
-                for (int k = 3; k < 12; k++) {
-                    entry_coordinate[entries] = c->pair_coordinate[12 * i + k];
-                    entry_value[entries++] = c->pair_weight[i] * c->pair_gradient[12 * i + k];
-                }
-        double scale = factor * (slope[w] - force[w] / blend);
-        for (int a = 0; a < entries; a++)
-            for (int b = 0; b < entries; b++)
-                put(t, entry_coordinate[a], entry_coordinate[b],
-                    scale * entry_value[a] * entry_value[b]);
     }
+    for (int i = 0; i < c->pairs; i++) {
+        int w = c->pair_wheel[i];
+        if (!(force[w] > 0.0)) continue;
+        for (int k = 3; k < 12; k++) {
+            c->entry_wheel[entries] = w;
+            c->entry_coordinate[entries] = c->pair_coordinate[12 * i + k];
+            c->entry_value[entries++] = c->pair_weight[i] * c->pair_gradient[12 * i + k];
+        }
+    }
+    for (int a = 0; a < entries; a++)
+        for (int b = 0; b < entries; b++) {
+            int w = c->entry_wheel[a];
+            if (c->entry_wheel[b] != w) continue;
+            put(t, c->entry_coordinate[a], c->entry_coordinate[b],
+                factor * (slope[w] - force[w] / blend) * c->entry_value[a] * c->entry_value[b]);
+        }
 }
 
 /* Writes the triplets (rows of row, column, value) into out while they fit `capacity`;
  * returns how many there are (call again with a larger out where that is more). */
-CONTACTS_EXPORT long contacts_jacobian(const Contacts *c, double factor, double factor_t,
+CONTACTS_EXPORT long contacts_jacobian(Contacts *c, double factor, double factor_t,
                                        double *out, long capacity)
 {
     Triplets t = {out, 0, capacity};
