@@ -168,7 +168,7 @@ def test_the_c_kernel_gives_the_numpy_kernels_numbers(native_fmus, settling):
 
 
 def test_a_short_run_gives_the_same_hull_accelerations_on_both_kernels(native_fmus):
-    """20 host steps of 1 ms (3 m/s, bump course, `corrected`, compiled coupling path)
+    """20 host steps of 1 ms (3 m/s, bump course, the default coupling and path)
     from the laid-out geometry on each kernel: the hull's vertical and pitch accelerations
     agree to 1e-9 of their range, and each run used its kernel."""
     pytest.importorskip("exudyn", reason=NO_EXUDYN)
@@ -176,11 +176,11 @@ def test_a_short_run_gives_the_same_hull_accelerations_on_both_kernels(native_fm
     from vehicle.model import static_points
 
     fmu_dir = native_fmus["RoadWheelTyre"].parent
-    statics = static_points(fmu_dir)
+    start = dict(statics=static_points(fmu_dir), settle_time=0.0, fmu_dir=fmu_dir)
     runs = {}
     for kernel in ("numpy", "compiled"):
-        vehicle, runs[kernel], _, _ = simulate("bump", 3.0, 0.02, 1e-3, "corrected", None,
-                                               statics, 0.0, fmu_dir, contacts=kernel)
+        vehicle, runs[kernel], _, _ = simulate("bump", 3.0, 0.02, 1e-3, contacts=kernel,
+                                               **start)
         assert vehicle.contacts.kernel == kernel
         assert vehicle.coupling.steps >= 20
     for key in ("hull_vertical_acceleration", "hull_pitch_acceleration"):

@@ -136,19 +136,21 @@ class CompiledContacts:
         views["loads"][:], views["slopes"][:] = v.tyre_loads(compression, rate)
         views["ground"][:] = v.course.height(views["pins"][:, 0])
         self.lib.contacts_forces(self.handle, bool(v.settling))
-        state, rates = views["state"], views["rates"]
+        # copies, as the numpy kernel's are new arrays each time: a caller may keep them
+        # across evaluations (a few microseconds)
+        state, rates = views["state"].copy(), views["rates"].copy()
         link0 = c.link0
         c.__dict__.update(
-            (name, views[name]) for name in ("u", "n", "seats", "seats_v", "pins", "pins_v",
-                                             "wheels", "wheels_v", "compression",
-                                             "compression_rate", "tyre_force", "ground_load",
-                                             "tooth_gap", "generalized"))
-        c.qd, c.rates, c.body_pos = views["rates"].reshape(-1), rates, state[:, :2]
+            (name, views[name].copy()) for name in (
+                "u", "n", "seats", "seats_v", "pins", "pins_v", "wheels", "wheels_v",
+                "compression", "compression_rate", "tyre_force", "ground_load", "tooth_gap",
+                "generalized"))
+        c.qd, c.rates, c.body_pos = rates.reshape(-1), rates, state[:, :2]
         c.hull, c.hull_v = state[0], rates[0]
         c.link_pos, c.link_angle = state[link0:, :2], state[link0:, 2]
         c.link_v, c.link_omega = rates[link0:, :2], rates[link0:, 2]
         c.idler, c.idler_v = state[link0 - 1, :2], rates[link0 - 1, :2]
-        c.in_contact = compression > -np.inf
+        c.in_contact = c.compression > -np.inf
         c.drive_torque = float(views["drive_torque"][0])
 
     def triplets(self, factor, factor_t):
