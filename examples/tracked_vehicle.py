@@ -34,12 +34,15 @@ DEFAULT_STEP = 1e-3  # s
 
 
 def simulate(course_name, speed, end_time, step, coupling=DEFAULT_SCHEME, linear=None,
-             statics=None, settle_time=3.0, fmu_dir=None, path=bank_path.DEFAULT_PATH):
+             statics=None, settle_time=3.0, fmu_dir=None, path=bank_path.DEFAULT_PATH,
+             contacts=None):
     """One run; returns (vehicle, histories, wall seconds, CPU seconds) of the run proper
     (the settling to the static point, stored after the first run, and the set-up,
-    Vehicle.prepare, excluded)."""
+    Vehicle.prepare, excluded). contacts: the contacts' kernel, "compiled" or "numpy"
+    (default: compiled where it builds; vehicle/contacts_kernel.py)."""
     statics = statics or static_points(fmu_dir)
     vehicle = Vehicle(None, speed, fmu_dir, linear, coupling, statics, path)
+    vehicle.contacts.use(contacts or vehicle.contacts.kernel)
     vehicle.course = COURSES[course_name](vehicle.layout.sprocket[0] + 0.3)
     if settle_time > 0:
         vehicle.settle(settle_time)
@@ -61,6 +64,9 @@ def main(argv=None):
     parser.add_argument("--csv", action="store_true", help="write the histories (SI) as CSV")
     parser.add_argument("--animate", action="store_true", help="write an animated GIF")
     parser.add_argument("--fmu-dir", type=Path, help="default: fmus/")
+    parser.add_argument("--contacts", choices=("compiled", "numpy"),
+                        help="the contacts' kernel: C compiled on first use (the default "
+                             "where gcc is found) or numpy (the readable reference)")
     parser.add_argument("--out", type=Path, default=Path("reports") / "tracked_vehicle")
     args = parser.parse_args(argv)
     if args.speed < 0 or args.end_time <= 0 or args.step <= 0:
@@ -72,21 +78,23 @@ def main(argv=None):
     try:
         vehicle, result, wall, cpu = simulate(args.course, args.speed, args.end_time,
                                               args.step, args.coupling, None, statics,
-                                              args.settle_time, args.fmu_dir, args.path)
+                                              args.settle_time, args.fmu_dir, args.path,
+                                              args.contacts)
         runs["FMUs"] = result
         if args.linear:
             linear = Linear(statics, args.fmu_dir)
             print(f"Kelvin equivalents: {linear.describe()}")
             runs["linear"] = simulate(args.course, args.speed, args.end_time, args.step,
                                       args.coupling, linear, statics, args.settle_time,
-                                      args.fmu_dir)[1]
+                                      args.fmu_dir, contacts=args.contacts)[1]
     except VehicleError as error:
         sys.exit(f"tracked_vehicle: {error}")
     simulated = result["time"][-1] - result["time"][0]
     name = f"{args.course}_{args.speed:g}mps"
     print(f"{vehicle.instances} FMU instances ({vehicle.links} links), course: "
           f"{vehicle.course.describe()}; {args.speed:g} m/s, host step {args.step * 1e3:g} ms, "
-          f"coupling {args.coupling}, {'compiled' if vehicle.compiled else 'Python'} path")
+          f"coupling {args.coupling}, {'compiled' if vehicle.compiled else 'Python'} path, "
+          f"{vehicle.contacts.kernel} contacts")
     print(f"{simulated:.3f} s simulated in {wall:.1f} s wall, {cpu:.1f} s CPU: "
           f"{wall / simulated:.1f} s wall and {cpu / simulated:.1f} s CPU per simulated "
           f"second")

@@ -23,6 +23,7 @@ import exudyn as exu
 from exudyn.itemInterface import ObjectGenericODE2
 
 from . import layout as lay
+from .contact_math import cross, rotate, smoothstep, smoothstep_derivatives
 from .model import (ENGAGEMENT_RAMP, GROUND_DAMPING, GROUND_STIFFNESS, HORN_HEIGHT,
                     SPROCKET_DAMPING, SPROCKET_STIFFNESS, VehicleError, WHEEL_DAMPING,
                     WHEEL_STIFFNESS)
@@ -41,11 +42,6 @@ HANDOVER = 0.03
 CONTACT_ONSET = 5e-4  # m: the penalty contacts' force grows smoothly over this depth
 
 
-def _cross(omega, r):
-    """omega (scalar, about z) x r (n x 2)."""
-    return np.stack([-omega * r[..., 1], omega * r[..., 0]], axis=-1)
-
-
 def _penalty(depth, closing, stiffness, damping):
     """A penalty contact with a smooth onset: the spring's force k d^2 / (2 e) over the
     first CONTACT_ONSET e of depth d, then k (d - e / 2), and the damper's taken up over the
@@ -57,23 +53,6 @@ def _penalty(depth, closing, stiffness, damping):
     touching = force > 0.0
     return (np.where(touching, force, 0.0), np.where(touching, stiffness * ramp, 0.0),
             np.where(touching, damping * ramp, 0.0))
-
-
-def _smoothstep(x):
-    x = np.clip(x, 0.0, 1.0)
-    return x * x * (3.0 - 2.0 * x)
-
-
-def _smoothstep_derivatives(x):
-    """The smoothstep and its first and second derivatives."""
-    inside = (x > 0.0) & (x < 1.0)
-    return (_smoothstep(x), np.where(inside, 6.0 * x * (1.0 - x), 0.0),
-            np.where(inside, 6.0 - 12.0 * x, 0.0))
-
-
-def _rotate(angle, r):
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([c * r[0] - s * r[1], s * r[0] + c * r[1]])
 
 
 class Contacts:
@@ -98,6 +77,8 @@ class Contacts:
                                geo.arc(4).point(0.0) - geo.cg)
         self._key = None
         self.audit = None  # an energy.Audit: the power of each class of contact
+        # "compiled" (contacts_kernel.py, C) where it builds, else "numpy" (this file's)
+        self.kernel, self._compiled, self._by_compiled = "numpy", None, False
 
     def add_object(self):
         """One exudyn object carries every contact force: a generic ODE2 object over the
@@ -109,6 +90,9 @@ class Contacts:
         self.link0 = 2 + len(v.arm_nodes)  # body index of the first link
         self.reference = np.array([v.mbs.GetNodeParameter(n, "referenceCoordinates")
                                    for n in self.nodes], dtype=float)
+        from .contacts_kernel import CompiledContacts, library
+        if library() is not None:
+            self.kernel, self._compiled = "compiled", CompiledContacts(self, library())
         size = 3 * len(self.nodes)
         # sparse (triplets): a dense matrix of this size made exudyn's sparse solver factor
         # a dense block at every Newton iteration
@@ -119,6 +103,12 @@ class Contacts:
             forceUserFunction=lambda mbs, t, item, q, qd: self._generalized(t, q, qd),
             jacobianUserFunction=lambda mbs, t, item, q, qd, f, f_t:
                 self._sparse_jacobian(t, q, qd, f, f_t)))
+
+    def use(self, kernel):
+        """Evaluate with `kernel`: "compiled" (C, where it builds) or "numpy"."""
+        if kernel not in ("compiled", "numpy") or (kernel == "compiled" and not self._compiled):
+            raise ValueError(f"contacts kernel {kernel!r}: 'numpy', or 'compiled' where gcc is")
+        self.kernel, self._key = kernel, None
 
     def index(self):
         """After Assemble: where the object's coordinates sit in the system's vectors."""
@@ -133,6 +123,8 @@ class Contacts:
         self.tooth_phase -= (hull_x - self.hull_x0) / lay.SPROCKET_PITCH_RADIUS
         self.hull_x0 = hull_x
         self._key = None
+        if self._compiled is not None:
+            self._compiled.set_parameters()
 
     # --- one evaluation per state ---------------------------------------------------------
 
@@ -147,14 +139,15 @@ class Contacts:
     def _update(self, t, q, qd):
         q, qd = np.asarray(q), np.asarray(qd)
         # the tyres' load laws change between the coupling's passes at the same state
-        key = (t, q.tobytes(), qd.tobytes(), self.v.settling, self.v.tyre_laws_key())
+        key = (t, q.tobytes(), qd.tobytes(), self.v.settling, self.v.tyre_laws_key(), self.kernel)
         if key == self._key:
             return
         self._key = key
-        state = self.reference + q.reshape(-1, 3)
-        rates = qd.reshape(-1, 3)
+        self._by_compiled = self.kernel == "compiled" and self.audit is None
+        if self._by_compiled:  # the audit reads the numpy kernel's steps
+            return self._compiled.update(q, qd)
         self.qd = qd
-        self._kinematics(state, rates)
+        self._kinematics(self.reference + q.reshape(-1, 3), qd.reshape(-1, 3))
         self._forces(t)
 
     def _generalized(self, t, q, qd):
@@ -167,17 +160,22 @@ class Contacts:
         self._update(t, q, qd)
         size = 3 * len(self.nodes)
         matrix = exu.MatrixContainer()
-        matrix.SetWithSparseMatrix(np.stack(self._triplets(factor, factor_t), axis=1),
-                                   size, size)
+        matrix.SetWithSparseMatrix(self._triplet_rows(factor, factor_t), size, size)
         return matrix
 
     def _jacobian(self, t, q, qd, factor, factor_t):
         """The Jacobian as a dense matrix (for checks)."""
         self._update(t, q, qd)
         size = 3 * len(self.nodes)
-        rows, columns, values = self._triplets(factor, factor_t)
+        rows, columns, values = self._triplet_rows(factor, factor_t).T
         return np.bincount((rows * size + columns).astype(int), values,
                            minlength=size * size).reshape(size, size)
+
+    def _triplet_rows(self, factor, factor_t):
+        """The triplets as rows (row, column, value), from the kernel that evaluated."""
+        if self._by_compiled:
+            return self._compiled.triplets(factor, factor_t)
+        return np.stack(self._triplets(factor, factor_t), axis=1)
 
     def _triplets(self, factor, factor_t):
         """Every spring's block (its members a, b: w_a G_a^T (factor K + factor_t C) w_b H_b,
@@ -190,9 +188,12 @@ class Contacts:
         right = weights[:, :, None, None] * motion_g
         blocks = np.einsum("saji,sjk,sbkl->sabil", left, block, right)
         first = 3 * bodies[:, :, None] + np.arange(3)  # (spring, member, coordinate)
-        parts = [(np.broadcast_to(first[:, :, None, :, None], blocks.shape).ravel(),
-                  np.broadcast_to(first[:, None, :, None, :], blocks.shape).ravel(),
-                  blocks.ravel())]
+        member = weights != 0  # the blocks of members that exist, in the C kernel's order
+        pair = (member[:, :, None] & member[:, None, :])[..., None, None]
+        kept = np.broadcast_to(pair, blocks.shape)
+        parts = [(np.broadcast_to(first[:, :, None, :, None], blocks.shape)[kept],
+                  np.broadcast_to(first[:, None, :, None, :], blocks.shape)[kept],
+                  blocks[kept])]
         parts += self._tyre_triplets(factor)
         return tuple(np.concatenate(part).astype(float) for part in zip(*parts))
 
@@ -274,16 +275,16 @@ class Contacts:
         self.link_v = links_v[:, :2]
         u = np.stack([np.cos(links[:, 2]), np.sin(links[:, 2])], axis=1)
         self.u, self.n = u, np.stack([-u[:, 1], u[:, 0]], axis=1)
-        seat_v = _cross(links_v[:, 2], half * u)
+        seat_v = cross(links_v[:, 2], half * u)
         self.seats = np.stack([links[:, :2] - half * u, links[:, :2] + half * u], axis=1)
         self.seats_v = np.stack([links_v[:, :2] - seat_v, links_v[:, :2] + seat_v], axis=1)
         # pin j: between link j - 1's front seat and link j's rear seat
         self.pins = 0.5 * (np.roll(self.seats[:, 1], 1, axis=0) + self.seats[:, 0])
         self.pins_v = 0.5 * (np.roll(self.seats_v[:, 1], 1, axis=0) + self.seats_v[:, 0])
         arms, arms_v = state[1:self.link0 - 1], rates[1:self.link0 - 1]
-        offsets = np.array([_rotate(a, o) for a, o in zip(arms[:, 2], self.wheel_offset)])
+        offsets = np.array([rotate(a, o) for a, o in zip(arms[:, 2], self.wheel_offset)])
         self.wheels = arms[:, :2] + offsets
-        self.wheels_v = arms_v[:, :2] + _cross(arms_v[:, 2], offsets)
+        self.wheels_v = arms_v[:, :2] + cross(arms_v[:, 2], offsets)
         self.idler, self.idler_v = state[self.link0 - 1][:2], rates[self.link0 - 1][:2]
         self._tyre_kinematics()
 
@@ -314,7 +315,7 @@ class Contacts:
             offset = w - self.pins[pin]
             x = sign * np.einsum("ij,ij->i", offset, m) / HANDOVER + 0.5
             ends.append((a, b, sign, m, size, offset, x))
-        window = _smoothstep(ends[0][6]) * _smoothstep(ends[1][6])
+        window = smoothstep(ends[0][6]) * smoothstep(ends[1][6])
         overlap = lay.WHEEL_RADIUS - (height[wheel, link] - lay.LINK_INNER)
         top = np.full(count, -np.inf)
         np.maximum.at(top, wheel, np.where(window > 0.0, overlap, -np.inf))
@@ -344,7 +345,7 @@ class Contacts:
         for (a, b, sign, m, size, offset, x), slots in zip(ends, ((1, 2), (2, 3))):
             m, size, offset, x = m[keep], size[keep], offset[keep], x[keep]
             a, b = a[keep], b[keep]
-            value, slope, _ = _smoothstep_derivatives(x)
+            value, slope, _ = smoothstep_derivatives(x)
             scale = sign * TYRE_BLEND * slope / np.maximum(value, 1e-300) / HANDOVER
             by_wheel = by_wheel + scale[:, None] * m
             across = offset - np.einsum("ij,ij->i", offset, m)[:, None] * m
@@ -366,8 +367,7 @@ class Contacts:
         # included (the tyre's damping sees the rate its force does work against)
         velocities = self.rates[bodies].reshape(-1, 12)
         self.compression_rate = np.bincount(
-            wheel, weights * np.einsum("ij,ij->i", self.pair_gradient, velocities),
-            minlength=count)
+            wheel, weights * np.sum(self.pair_gradient * velocities, axis=1), minlength=count)
 
     def tyre_state(self, w):
         self.evaluate(self.v.mbs.systemData.GetTime())
@@ -410,8 +410,8 @@ class Contacts:
                                               np.tile([0.0, 1.0], (len(on), 1))))
 
         # sprocket teeth
-        centre = hull_pos + _rotate(hull_theta, self.sprocket_local)
-        centre_v = hull_vel + _cross(hull_omega, centre - hull_pos)
+        centre = hull_pos + rotate(hull_theta, self.sprocket_local)
+        centre_v = hull_vel + cross(hull_omega, centre - hull_pos)
         turned = (hull_theta + self.tooth_phase
                   - (hull_pos[0] - self.hull_x0) / lay.SPROCKET_PITCH_RADIUS)
         rate = hull_omega - hull_vel[0] / lay.SPROCKET_PITCH_RADIUS
@@ -426,7 +426,7 @@ class Contacts:
         slot_angle = turned + tooth * TOOTH_SPACING
         radial = np.stack([np.cos(slot_angle), np.sin(slot_angle)], axis=1)
         slot = centre + lay.SPROCKET_PITCH_RADIUS * radial
-        slot_v = centre_v + _cross(rate, lay.SPROCKET_PITCH_RADIUS * radial)
+        slot_v = centre_v + cross(rate, lay.SPROCKET_PITCH_RADIUS * radial)
         gap = slot - self.pins
         tooth_force = weight[:, None] * (SPROCKET_STIFFNESS * gap
                                          + SPROCKET_DAMPING * (slot_v - self.pins_v))
@@ -434,7 +434,7 @@ class Contacts:
         # minus its gradient by the angle (d angle / d pin = z x rel / |rel|^2); a pull
         # scaled by the ramp alone did net work at each passage (docs/vehicle.md)
         stored = 0.5 * SPROCKET_STIFFNESS * np.sum(gap * gap, axis=1)
-        by_angle = _cross(1.0, rel) / (distance * distance)[:, None]
+        by_angle = cross(1.0, rel) / (distance * distance)[:, None]
         ramp_force = -(stored * weight_slope)[:, None] * by_angle
         pin += tooth_force + ramp_force
         self.tooth_gap = np.where(weight > 0, np.hypot(*gap.T), 0.0)
@@ -481,11 +481,11 @@ class Contacts:
             self.audit.mark("sprocket", self, pin, bodies)
             damped = weight * SPROCKET_DAMPING * np.sum((slot_v - self.pins_v) ** 2, axis=1)
             self.audit.sprocket(tooth_force, weight * stored, damped,
-                                -hull_vel[0] * _cross(1.0, radial))
+                                -hull_vel[0] * cross(1.0, radial))
 
         # idler (on its crank) and support roller (on the hull)
-        roller = hull_pos + _rotate(hull_theta, self.roller_local)
-        roller_v = hull_vel + _cross(hull_omega, roller - hull_pos)
+        roller = hull_pos + rotate(hull_theta, self.roller_local)
+        roller_v = hull_vel + cross(hull_omega, roller - hull_pos)
         for centre, centre_v, radius, body in (
                 (self.idler, self.idler_v, lay.IDLER_PIN_RADIUS, self.link0 - 1),
                 (roller, roller_v, lay.ROLLER_PIN_RADIUS, 0)):
@@ -545,7 +545,7 @@ class Contacts:
         its first and second derivatives by that angle."""
         rise = into / ENGAGEMENT_RAMP
         fall = (self.wrap_sweep - into) / ENGAGEMENT_RAMP
-        (a, da, dda), (b, db, ddb) = _smoothstep_derivatives(rise), _smoothstep_derivatives(fall)
+        (a, da, dda), (b, db, ddb) = smoothstep_derivatives(rise), smoothstep_derivatives(fall)
         return (a * b, (da * b - a * db) / ENGAGEMENT_RAMP,
                 (dda * b - 2.0 * da * db + a * ddb) / ENGAGEMENT_RAMP ** 2)
 
@@ -595,6 +595,6 @@ class Contacts:
         hull_pos, hull_theta = self.hull[:2], self.hull[2]
         joints = []
         for local in self.tension_points:
-            point = hull_pos + _rotate(hull_theta, local)
+            point = hull_pos + rotate(hull_theta, local)
             joints.append(int(np.argmin(np.hypot(*(self.pins - point).T))))
         return joints

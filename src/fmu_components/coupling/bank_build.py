@@ -5,6 +5,8 @@ library per platform, libc and libm only.
 beside the sources (bank.c, bank_linearised.c, bank.h) (linux64, and win64 where mingw-w64 is installed). A bank that finds no
 library there compiles one on first use into a cache (~/.cache/fmu_components, or
 $FMU_COMPONENTS_CACHE); where no compiler is found it says so and names the Python path.
+`Library` does the same for other C code compiled on first use (the vehicle example's
+contacts, examples/vehicle/contacts_kernel.py).
 """
 
 import hashlib
@@ -35,39 +37,89 @@ def platform_name():
     return sys.platform
 
 
+def cache_directory():
+    return Path(os.environ.get("FMU_COMPONENTS_CACHE")
+                or Path.home() / ".cache" / "fmu_components")
+
+
+class Library:
+    """A shared library compiled from C sources (libc and libm only), named `stem` and
+    keyed by a hash of its sources: built beside them, or on first use into the cache.
+    `what` says what it is and `fallback` what to use without a compiler (the message's
+    end)."""
+
+    def __init__(self, stem, sources, headers, what, fallback):
+        self.stem, self.sources, self.headers = stem, list(sources), list(headers)
+        self.what, self.fallback = what, fallback
+
+    def source_tag(self):
+        """A hash of the sources: a library built from other code is never loaded."""
+        digest = hashlib.sha256()
+        for path in self.sources + self.headers:
+            digest.update(path.read_bytes())
+        return digest.hexdigest()[:12]
+
+    def library_name(self, platform):
+        return f"{self.stem}_{platform}_{self.source_tag()}{COMPILERS[platform][1]}"
+
+    def compile(self, platform, directory):
+        """Compile for `platform` into `directory` (older builds there removed); the
+        library's path."""
+        compiler, _, flags = COMPILERS[platform]
+        if shutil.which(compiler) is None:
+            raise NoCompiler(f"{compiler} not found: {self.what} needs a C compiler to build "
+                             f"it once (Debian/Ubuntu: apt-get install gcc), or "
+                             f"{self.fallback}")
+        directory = Path(directory)
+        directory.mkdir(parents=True, exist_ok=True)
+        target = directory / self.library_name(platform)
+        partial = target.with_suffix(f".{os.getpid()}.tmp")
+        run = subprocess.run([compiler, *FLAGS, *flags, *map(str, self.sources), "-o",
+                              str(partial), "-lm"], capture_output=True, text=True)
+        if run.returncode != 0:
+            raise RuntimeError(f"compiling {self.what} with {compiler} failed:\n{run.stderr}")
+        partial.replace(target)  # atomic: a process loading it never sees half a file
+        for older in directory.glob(f"{self.stem}_{platform}_*{COMPILERS[platform][1]}"):
+            if older != target:
+                older.unlink(missing_ok=True)
+        return target
+
+    def built(self, beside=None):
+        """The library for this platform where it is built already (beside the sources,
+        or `beside`, or in the cache), else None (never compiles)."""
+        platform = platform_name()
+        if platform not in COMPILERS:
+            return None
+        name = self.library_name(platform)
+        for directory in (Path(beside or self.sources[0].parent), cache_directory()):
+            if (directory / name).exists():
+                return directory / name
+        return None
+
+    def path(self):
+        """The library for this platform: built already, or compiled into the cache now."""
+        platform = platform_name()
+        if platform not in COMPILERS:
+            raise NoCompiler(f"{self.what} has no build for platform {platform}: "
+                             f"{self.fallback}")
+        return self.built() or self.compile(platform, cache_directory())
+
+
+BANK = Library("bank", SOURCES, HEADERS, "the coupling bank (compiled per-step work)",
+               "use the Python path (path='python')")
+
+
 def source_tag():
-    """A hash of the bank's sources: a library built from other code is never loaded."""
-    digest = hashlib.sha256()
-    for path in SOURCES + HEADERS:
-        digest.update(path.read_bytes())
-    return digest.hexdigest()[:12]
+    return BANK.source_tag()
 
 
 def library_name(platform):
-    return f"bank_{platform}_{source_tag()}{COMPILERS[platform][1]}"
+    return BANK.library_name(platform)
 
 
 def compile_bank(platform, directory):
-    """Compile the bank for `platform` into `directory` (older builds of it there
-    removed); the library's path."""
-    compiler, _, flags = COMPILERS[platform]
-    if shutil.which(compiler) is None:
-        raise NoCompiler(f"{compiler} not found: the coupling bank (compiled per-step work) "
-                         f"needs a C compiler to build it once (Debian/Ubuntu: apt-get "
-                         f"install gcc), or use the Python path (path='python')")
-    directory = Path(directory)
-    directory.mkdir(parents=True, exist_ok=True)
-    target = directory / library_name(platform)
-    partial = target.with_suffix(f".{os.getpid()}.tmp")
-    run = subprocess.run([compiler, *FLAGS, *flags, *map(str, SOURCES), "-o", str(partial),
-                          "-lm"], capture_output=True, text=True)
-    if run.returncode != 0:
-        raise RuntimeError(f"compiling the bank with {compiler} failed:\n{run.stderr}")
-    partial.replace(target)  # atomic: a process loading it never sees half a file
-    for older in directory.glob(f"bank_{platform}_*{COMPILERS[platform][1]}"):
-        if older != target:
-            older.unlink(missing_ok=True)
-    return target
+    """Compile the bank for `platform` into `directory`; the library's path."""
+    return BANK.compile(platform, directory)
 
 
 def build_bank(directory=None):
@@ -83,29 +135,13 @@ def build_bank(directory=None):
     return built, skipped
 
 
-def cache_directory():
-    return Path(os.environ.get("FMU_COMPONENTS_CACHE")
-                or Path.home() / ".cache" / "fmu_components")
-
-
 def built_library():
     """The bank's library for this platform where it is built already, else None (never
     compiles)."""
-    platform = platform_name()
-    if platform not in COMPILERS:
-        return None
-    name = library_name(platform)
-    for directory in (HERE, cache_directory()):
-        if (directory / name).exists():
-            return directory / name
-    return None
+    return BANK.built()
 
 
 def library_path():
     """The bank's library for this platform: built beside its sources, in the cache, or
     compiled into the cache now."""
-    platform = platform_name()
-    if platform not in COMPILERS:
-        raise NoCompiler(f"no bank for platform {platform}: use the Python path "
-                         f"(path='python')")
-    return built_library() or compile_bank(platform, cache_directory())
+    return BANK.path()

@@ -1,0 +1,168 @@
+"""The vehicle's contacts in C (contacts.c, contacts_forces.c, contacts_jacobian.c):
+compiled on first use as the coupling's bank is (bank_build.Library: gcc,
+-ffp-contract=off, a cache keyed by a hash of the sources), the same equations in the same
+order of operations as contacts.py's numpy kernel, which stays the readable reference and
+the fallback. One evaluation: the kernel's kinematics (bodies, pins, the tyres'
+compressions), the tyres' loads from Python (Vehicle.tyre_loads: the bank's laws) and the
+course's height under the pins, then the kernel's forces; the Jacobian's triplets on
+exudyn's call. Python reads the results as numpy views of the kernel's memory: no
+allocation per call.
+"""
+
+import ctypes
+import math
+import warnings
+import weakref
+from pathlib import Path
+
+import numpy as np
+
+from fmu_components.coupling.bank_build import Library, NoCompiler
+
+from . import layout as lay
+from . import model
+
+HERE = Path(__file__).resolve().parent
+LIBRARY = Library("vehicle_contacts",
+                  [HERE / name for name in ("contacts.c", "contacts_forces.c",
+                                            "contacts_jacobian.c")],
+                  [HERE / "contacts.h"], "the vehicle's contacts kernel (contacts.c)",
+                  "use the numpy kernel (vehicle.contacts.kernel = 'numpy')")
+# contacts.h's enum Parameter, in its order
+PARAMETERS = ("LINK_PITCH", "LINK_INNER", "LINK_OUTER", "WHEEL_RADIUS", "TYRE_BLEND",
+              "HANDOVER", "CONTACT_ONSET", "GROUND_STIFFNESS", "GROUND_DAMPING",
+              "SPROCKET_STIFFNESS", "SPROCKET_DAMPING", "WHEEL_STIFFNESS", "WHEEL_DAMPING",
+              "ENGAGEMENT_RAMP", "ENGAGEMENT_RAMP_SQUARED", "SPROCKET_PITCH_RADIUS",
+              "TOOTH_SPACING", "IDLER_PIN_RADIUS", "ROLLER_PIN_RADIUS", "SPROCKET_X",
+              "SPROCKET_Y", "ROLLER_X", "ROLLER_Y", "WRAP_START", "WRAP_SWEEP",
+              "TOOTH_PHASE", "HULL_X0", "SETTLE_SEAT", "SETTLE_ARM", "SETTLE_HULL_X",
+              "SETTLE_HULL_Y", "SETTLE_HULL_PITCH", "TWO_PI")
+# contacts.h's enum Array, in its order: the Contacts attribute each is read as, its shape
+# in (bodies, links, wheels)
+ARRAYS = (("state", ("b", 3)), ("rates", ("b", 3)), ("u", ("l", 2)), ("n", ("l", 2)),
+          ("seats", ("l", 2, 2)), ("seats_v", ("l", 2, 2)), ("pins", ("l", 2)),
+          ("pins_v", ("l", 2)), ("wheels", ("w", 2)), ("wheels_v", ("w", 2)),
+          ("compression", ("w",)), ("compression_rate", ("w",)), ("loads", ("w",)),
+          ("slopes", ("w",)), ("tyre_force", ("w",)), ("ground", ("l",)),
+          ("ground_load", ("l",)), ("tooth_gap", ("l",)), ("generalized", ("g",)),
+          ("drive_torque", (1,)))
+_loaded = {}
+
+
+def library():
+    """The kernel's library, loaded once per process; None, with a warning saying why and
+    what to use, where it cannot be built."""
+    if "lib" not in _loaded:
+        try:
+            lib = ctypes.CDLL(str(LIBRARY.path()))
+        except NoCompiler as missing:
+            warnings.warn(f"{missing}; the vehicle's contacts use their numpy kernel")
+            lib = None
+        if lib is not None:
+            pointer, handle = ctypes.POINTER(ctypes.c_double), ctypes.c_void_p
+            lib.contacts_new.restype = handle
+            lib.contacts_new.argtypes = [ctypes.c_int, ctypes.c_int, pointer, pointer]
+            lib.contacts_free.argtypes = [handle]
+            lib.contacts_array.restype = pointer
+            lib.contacts_array.argtypes = [handle, ctypes.c_int, ctypes.POINTER(ctypes.c_int)]
+            lib.contacts_kinematics.argtypes = [handle]
+            lib.contacts_forces.argtypes = [handle, ctypes.c_int]
+            lib.contacts_jacobian.restype = ctypes.c_long
+            lib.contacts_jacobian.argtypes = [handle, ctypes.c_double, ctypes.c_double,
+                                              pointer, ctypes.c_long]
+            counts = (ctypes.c_int(), ctypes.c_int())
+            lib.contacts_layout(*map(ctypes.byref, counts))
+            if (counts[0].value, counts[1].value) != (len(PARAMETERS), len(ARRAYS)):
+                raise RuntimeError("contacts.h and contacts_kernel.py disagree on the "
+                                   "kernel's parameters or arrays: rebuild both from one "
+                                   "revision")
+        _loaded["lib"] = lib
+    return _loaded["lib"]
+
+
+class CompiledContacts:
+    """The C kernel for one Contacts object: its memory, its parameters, its views."""
+
+    def __init__(self, contacts, lib):
+        self.contacts, self.lib = contacts, lib
+        links, wheels = len(contacts.nodes) - contacts.link0, contacts.link0 - 2
+        self.handle = lib.contacts_new(wheels, links, _pointer(contacts.reference),
+                                       _pointer(np.ascontiguousarray(contacts.wheel_offset,
+                                                                     dtype=float)))
+        if not self.handle:
+            raise MemoryError("the vehicle's contacts kernel: out of memory")
+        weakref.finalize(self, lib.contacts_free, self.handle)
+        sizes = {"b": len(contacts.nodes), "g": 3 * len(contacts.nodes), "l": links, "w": wheels}
+        self.views = {}
+        for index, (name, shape) in enumerate(ARRAYS):
+            shape = tuple(sizes.get(s, s) for s in shape)
+            count = ctypes.c_int()
+            data = lib.contacts_array(self.handle, index, ctypes.byref(count))
+            assert count.value == math.prod(shape), name
+            self.views[name] = np.ctypeslib.as_array(data, shape=shape)
+        count = ctypes.c_int()
+        self.parameters = np.ctypeslib.as_array(
+            lib.contacts_array(self.handle, -1, ctypes.byref(count)), shape=(len(PARAMETERS),))
+        self.triplets_out = np.zeros((4096, 3))
+        self.set_parameters()
+
+    def set_parameters(self):
+        """The model's values (again after Contacts.rebase moves the tooth phase)."""
+        from . import contacts as numpy_kernel
+
+        c, values = self.contacts, {}
+        for module in (lay, model, numpy_kernel):
+            values.update({name: getattr(module, name) for name in PARAMETERS
+                           if hasattr(module, name)})
+        settle = numpy_kernel.SETTLE_DAMPING
+        values.update(ENGAGEMENT_RAMP_SQUARED=model.ENGAGEMENT_RAMP ** 2,
+                      SPROCKET_X=c.sprocket_local[0], SPROCKET_Y=c.sprocket_local[1],
+                      ROLLER_X=c.roller_local[0], ROLLER_Y=c.roller_local[1],
+                      WRAP_START=c.wrap_start, WRAP_SWEEP=c.wrap_sweep,
+                      TOOTH_PHASE=c.tooth_phase, HULL_X0=c.hull_x0,
+                      SETTLE_SEAT=settle["seat"], SETTLE_ARM=settle["arm"],
+                      SETTLE_HULL_X=settle["hull"][0], SETTLE_HULL_Y=settle["hull"][1],
+                      SETTLE_HULL_PITCH=settle["hull_pitch"], TWO_PI=2 * math.pi)
+        self.parameters[:] = [float(values[name]) for name in PARAMETERS]
+
+    def update(self, q, qd):
+        """The contacts at (q, qd), the object's coordinates; the results as the numpy
+        kernel's attributes of `contacts`."""
+        c, v, views = self.contacts, self.contacts.v, self.views
+        np.add(c.reference, np.reshape(q, (-1, 3)), out=views["state"])
+        views["rates"][:] = np.reshape(qd, (-1, 3))
+        self.lib.contacts_kinematics(self.handle)
+        compression, rate = views["compression"], views["compression_rate"]
+        views["loads"][:], views["slopes"][:] = v.tyre_loads(compression, rate)
+        views["ground"][:] = v.course.height(views["pins"][:, 0])
+        self.lib.contacts_forces(self.handle, bool(v.settling))
+        # copies, as the numpy kernel's are new arrays each time: a caller may keep them
+        # across evaluations (a few microseconds)
+        state, rates = views["state"].copy(), views["rates"].copy()
+        link0 = c.link0
+        c.__dict__.update(
+            (name, views[name].copy()) for name in (
+                "u", "n", "seats", "seats_v", "pins", "pins_v", "wheels", "wheels_v",
+                "compression", "compression_rate", "tyre_force", "ground_load", "tooth_gap",
+                "generalized"))
+        c.qd, c.rates, c.body_pos = rates.reshape(-1), rates, state[:, :2]
+        c.hull, c.hull_v = state[0], rates[0]
+        c.link_pos, c.link_angle = state[link0:, :2], state[link0:, 2]
+        c.link_v, c.link_omega = rates[link0:, :2], rates[link0:, 2]
+        c.idler, c.idler_v = state[link0 - 1, :2], rates[link0 - 1, :2]
+        c.in_contact = c.compression > -np.inf
+        c.drive_torque = float(views["drive_torque"][0])
+
+    def triplets(self, factor, factor_t):
+        """The Jacobian's (row, column, value) rows at the state last evaluated."""
+        while True:
+            out = self.triplets_out
+            count = self.lib.contacts_jacobian(self.handle, factor, factor_t, _pointer(out),
+                                               len(out))
+            if count <= len(out):
+                return out[:count]
+            self.triplets_out = np.zeros((2 * count, 3))
+
+
+def _pointer(array):
+    return array.ctypes.data_as(ctypes.POINTER(ctypes.c_double))

@@ -1,0 +1,222 @@
+"""The tracked vehicle's contacts on their two kernels (docs/vehicle.md, Contacts): the C
+kernel compiled on first use (examples/vehicle/contacts_kernel.py) against the numpy
+kernel it was written from (examples/vehicle/contacts.py, the readable reference): the
+same generalized forces, records and Jacobian at states that reach every contact's
+branches, the same short run, and the message where no compiler is found."""
+
+import math
+import sys
+
+import numpy as np
+import pytest
+
+from conftest import ROOT
+
+sys.path.insert(0, str(ROOT / "examples"))  # the example scripts, imported as modules
+
+NO_EXUDYN = 'exudyn is not installed: pip install -e ".[examples]"'
+# what the run's records, the coupling's readers and the checks read
+RECORDS = ("generalized", "compression", "compression_rate", "in_contact", "tyre_force",
+           "pins", "pins_v", "seats", "seats_v", "wheels", "wheels_v", "idler", "hull",
+           "ground_load", "tooth_gap", "drive_torque")
+FACTORS = ((1.0, 0.0), (0.25, 250.0))  # exudyn's (factor, factor_t) for K and C
+
+
+def _vehicle(native_fmus):
+    from vehicle.course import Bump
+    from vehicle.model import Vehicle
+
+    return Vehicle(Bump(3.0), 5.0, native_fmus["RoadWheelTyre"].parent)
+
+
+def _both_kernels(contacts, q, qd):
+    """{kernel: {record: value}} at (q, qd), the Jacobian at each of FACTORS included."""
+    values = {}
+    for kernel in ("numpy", "compiled"):
+        contacts.use(kernel)
+        contacts._update(0.0, q, qd)
+        got = {name: np.array(getattr(contacts, name), dtype=float) for name in RECORDS}
+        got["tension_joints"] = np.array(contacts.tension_joints(), dtype=float)
+        for factor, factor_t in FACTORS:
+            got[f"jacobian {factor} {factor_t}"] = contacts._jacobian(0.0, q, qd, factor,
+                                                                      factor_t)
+            # the triplets themselves, in exudyn's order: its sums come out the same
+            got[f"triplets {factor} {factor_t}"] = contacts._triplet_rows(factor,
+                                                                          factor_t).copy()
+        values[kernel] = got
+    return values
+
+
+def _coverage(contacts, seen):
+    """Marks which branches of each contact the numpy kernel's last evaluation reached."""
+    from vehicle import layout as lay
+    from vehicle.contacts import CONTACT_ONSET
+    from vehicle.model import ENGAGEMENT_RAMP
+
+    depth = contacts.v.course.height(contacts.pins[:, 0]) - (contacts.pins[:, 1]
+                                                             - lay.LINK_OUTER)
+    seen["ground onset"] |= np.any((depth > 0.0) & (depth < CONTACT_ONSET))
+    seen["ground full"] |= np.any(depth > CONTACT_ONSET)
+    theta = contacts.hull[2]
+    c, s = math.cos(theta), math.sin(theta)
+    turn = np.array([[c, -s], [s, c]])
+    centre = contacts.hull[:2] + turn @ contacts.sprocket_local
+    relative = contacts.pins - centre
+    into = (np.arctan2(relative[:, 1], relative[:, 0]) - theta - contacts.wrap_start) % (
+        2 * math.pi)
+    near = np.hypot(*relative.T) < lay.SPROCKET_PITCH_RADIUS + 0.08
+    ramp = near & ((into < ENGAGEMENT_RAMP) | ((into > contacts.wrap_sweep - ENGAGEMENT_RAMP)
+                                                & (into < contacts.wrap_sweep)))
+    seen["sprocket ramp"] |= np.any(ramp)
+    seen["sprocket held"] |= np.any(near & (into > ENGAGEMENT_RAMP)
+                                    & (into < contacts.wrap_sweep - ENGAGEMENT_RAMP))
+    roller = contacts.hull[:2] + turn @ contacts.roller_local
+    seen["idler"] |= np.any(np.hypot(*(contacts.pins - contacts.idler).T)
+                            < lay.IDLER_PIN_RADIUS)
+    seen["roller"] |= np.any(np.hypot(*(contacts.pins - roller).T) < lay.ROLLER_PIN_RADIUS)
+    seen["wheel on two links"] |= np.any(np.bincount(contacts.pair_wheel) >= 2)
+
+
+def _states(contacts, q0, qd0):
+    """The states compared: the laid-out vehicle at rest and with its track running; every
+    coordinate jostled (1 mm, 1 mrad) with random velocities; the track's ground run
+    lifted and pressed by up to a millimetre (pins entering the ground); the hull pitched
+    about the sprocket's centre (pins moved into the engagement ramps at the wrap's
+    ends); a wheel over a joint bent 14 deg (a convex joint, as on a bump's crest)."""
+    rng = np.random.default_rng(29)
+    yield q0, np.zeros_like(q0)
+    yield q0, qd0
+    for _ in range(2):
+        yield q0 + rng.normal(0.0, 1e-3, q0.shape), qd0 + rng.normal(0.0, 0.5, q0.shape)
+    state = contacts.reference + q0.reshape(-1, 3)
+    links = np.arange(contacts.link0, len(state))
+    ground_run = links[state[links, 1] < 0.1]
+    lifted = state.copy()
+    lifted[ground_run, 1] += rng.uniform(-1e-3, 5e-4, len(ground_run))
+    yield (lifted - contacts.reference).ravel(), qd0
+    for pitch in (-0.15, -0.08, 0.05, 0.12):
+        pitched = state.copy()
+        theta = state[0, 2] + pitch
+
+        def turned(angle, r):
+            return np.array([math.cos(angle) * r[0] - math.sin(angle) * r[1],
+                             math.sin(angle) * r[0] + math.cos(angle) * r[1]])
+
+        centre = state[0, :2] + turned(state[0, 2], contacts.sprocket_local)
+        pitched[0, :2], pitched[0, 2] = centre - turned(theta, contacts.sprocket_local), theta
+        yield (pitched - contacts.reference).ravel(), qd0
+    # a wheel over a convex joint (tests/test_vehicle.py builds the same)
+    contacts.use("numpy")
+    contacts._update(0.0, q0, qd0)
+    wheel = 2
+    on_ground = np.flatnonzero(contacts.pins[:, 1] < 0.1)
+    joint = on_ground[np.argmin(np.abs(contacts.pins[on_ground, 0] - contacts.wheels[wheel, 0]))]
+    bent = state.copy()
+    for link, seat, turn in ((joint - 1, 1, math.radians(7.0)), (joint, 0, -math.radians(7.0))):
+        body = contacts.link0 + link
+        pivot = contacts.seats[link, seat].copy()
+        c, s = math.cos(turn), math.sin(turn)
+        r = bent[body, :2] - pivot
+        bent[body] = [pivot[0] + c * r[0] - s * r[1], pivot[1] + s * r[0] + c * r[1],
+                      bent[body, 2] + turn]
+    bent[1 + wheel, :2] += contacts.pins[joint] + [0.0, 0.3] - contacts.wheels[wheel]
+    yield (bent - contacts.reference).ravel(), qd0
+
+
+@pytest.mark.parametrize("settling", [True, False])
+def test_the_c_kernel_gives_the_numpy_kernels_numbers(native_fmus, settling):
+    """At each state of _states, settling (its damping springs) and running (the tyres'
+    FMU laws): the C kernel's generalized forces, the records the run and the checks read
+    and the Jacobian (at two of exudyn's factor pairs) equal the numpy kernel's to 1e-12
+    of each one's largest magnitude (they are the same bits on this machine; other
+    builds of numpy or libm may differ in the last bits); and the states reach every
+    contact's branches."""
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    vehicle = _vehicle(native_fmus)
+    try:
+        contacts = vehicle.contacts
+        assert contacts.kernel == "compiled"  # the default where gcc is found
+        vehicle.settling = settling
+        if not settling:
+            vehicle.coupling.start(0.0)  # the FMUs' load laws
+        data = vehicle.mbs.systemData
+        index = contacts.system_index
+        q0 = np.array(data.GetODE2Coordinates(exu.ConfigurationType.Current))[index]
+        qd0 = np.array(data.GetODE2Coordinates_t(exu.ConfigurationType.Initial))[index]
+        seen = dict.fromkeys(("ground onset", "ground full", "sprocket ramp", "sprocket held",
+                              "idler", "roller", "wheel on two links"), False)
+        identical = True
+        for q, qd in list(_states(contacts, q0, qd0)):
+            values = _both_kernels(contacts, q, qd)
+            contacts.use("numpy")
+            contacts._update(0.0, q, qd)
+            _coverage(contacts, seen)
+            for name, expected in values["numpy"].items():
+                got = values["compiled"][name]
+                assert got.shape == expected.shape, name
+                finite = np.isfinite(expected)
+                assert np.array_equal(finite, np.isfinite(got)), name
+                scale = np.max(np.abs(expected[finite]), initial=0.0)
+                assert np.max(np.abs(got[finite] - expected[finite]), initial=0.0) <= \
+                    1e-12 * scale, name
+                identical &= np.array_equal(got, expected)
+        assert all(seen.values()), seen
+        print(f"bit-identical: {identical}")
+        assert np.any(values["numpy"]["generalized"] != 0.0)
+    finally:
+        vehicle.coupling.free()
+
+
+def test_a_short_run_gives_the_same_hull_accelerations_on_both_kernels(native_fmus):
+    """20 host steps of 1 ms (3 m/s, bump course, the default coupling and path)
+    from the laid-out geometry on each kernel: the hull's vertical and pitch accelerations
+    agree to 1e-9 of their range, and each run used its kernel."""
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from tracked_vehicle import simulate
+    from vehicle.model import static_points
+
+    fmu_dir = native_fmus["RoadWheelTyre"].parent
+    start = dict(statics=static_points(fmu_dir), settle_time=0.0, fmu_dir=fmu_dir)
+    runs = {}
+    for kernel in ("numpy", "compiled"):
+        vehicle, runs[kernel], _, _ = simulate("bump", 3.0, 0.02, 1e-3, contacts=kernel,
+                                               **start)
+        assert vehicle.contacts.kernel == kernel
+        assert vehicle.coupling.steps >= 20
+    for key in ("hull_vertical_acceleration", "hull_pitch_acceleration"):
+        numpy_run, compiled_run = runs["numpy"][key], runs["compiled"][key]
+        assert numpy_run.shape == compiled_run.shape
+        spread = np.ptp(numpy_run)
+        assert spread > 0.0
+        assert np.max(np.abs(compiled_run - numpy_run)) <= 1e-9 * spread, key
+
+
+def test_without_a_compiler_the_contacts_say_so_and_use_numpy(native_fmus, monkeypatch,
+                                                              tmp_path):
+    """Compiling with no compiler found names the numpy kernel; the loader then warns
+    once with that message and the vehicle's contacts take the numpy kernel."""
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from fmu_components.coupling import bank_build
+    from vehicle import contacts_kernel
+
+    platform = bank_build.platform_name()
+    _, suffix, flags = bank_build.COMPILERS[platform]
+    monkeypatch.setitem(bank_build.COMPILERS, platform, ("no-such-gcc", suffix, flags))
+    with pytest.raises(bank_build.NoCompiler,
+                       match=r"^no-such-gcc not found: the vehicle's contacts kernel .* "
+                             r"numpy kernel \(vehicle\.contacts\.kernel = 'numpy'\)$"):
+        contacts_kernel.LIBRARY.compile(platform, tmp_path)
+    monkeypatch.setattr(contacts_kernel.LIBRARY, "built", lambda beside=None: None)
+    monkeypatch.setattr(contacts_kernel, "_loaded", {})
+    with pytest.warns(UserWarning, match="no-such-gcc not found.*use their numpy kernel"):
+        assert contacts_kernel.library() is None
+    assert contacts_kernel.library() is None  # once: no second warning, no second try
+    vehicle = _vehicle(native_fmus)
+    try:
+        assert vehicle.contacts.kernel == "numpy"
+        vehicle.contacts.evaluate(0.0)
+        assert np.all(vehicle.contacts.in_contact)
+        with pytest.raises(ValueError, match="'compiled' where gcc is"):
+            vehicle.contacts.use("compiled")
+    finally:
+        vehicle.coupling.free()
