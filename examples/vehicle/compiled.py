@@ -14,7 +14,7 @@ import numpy as np
 import bank_path
 
 from . import layout as lay
-from .model import HORN_HEIGHT
+from .model import HORN_HEIGHT, radial_fade
 
 
 class CompiledPath:
@@ -44,9 +44,10 @@ class CompiledPath:
         laws, v, mbs = self.laws, self.v, self.v.mbs
 
         def radial(i):
-            # the law of the seats' distance, along their line (exudyn's spring-damper)
+            # the law of the seats' distance, along their line (exudyn's spring-damper),
+            # faded in near zero distance as the Python path's (model.radial_fade)
             def radial_force(mbs, t, itemNumber, deltaL, deltaL_t, stiffness, damping, force):
-                return laws.load(i, deltaL)
+                return laws.load(i, deltaL) * radial_fade(deltaL, laws.esym.min)
             return radial_force
 
         def coordinate(i, offset=None):

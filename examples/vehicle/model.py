@@ -59,6 +59,15 @@ VERBOSE = 0  # exudyn's solver output while settling (1: per step)
 # relative test decides, which asks a pass that starts from the last pass's solution
 # (exudyn_host) for the same 1e-8 of its much smaller first residual.
 NEWTON_TOLERANCE = 0.1
+# The radial bush's force is its law's load along the line between the pin seats; that
+# line is undefined where the seats meet, and the law (two-sided, with memory: spec
+# section 2) can give a load of either sign there. So the force applied is faded in over
+# the seats' first RADIAL_FADE of distance (radial_fade, assumed): it vanishes at zero
+# distance and is Lipschitz through it, whatever the load. 0.02 mm is an eighth of the
+# bush's deflection at the track's tension (0.159 mm at 13 kN): a joint under tension is
+# well clear of it; only a joint near slack (a load of 1.6 kN or less on the elastic
+# rate) feels it (docs/vehicle.md).
+RADIAL_FADE = 2e-5  # m
 
 
 def markers(mbs):
@@ -71,6 +80,16 @@ def markers(mbs):
         return mbs.AddMarker(MarkerBodyPosition(bodyNumber=body,
                                                 localPosition=[local[0], local[1], 0.0]))
     return coordinate, at
+
+
+def radial_fade(distance, smaller=min):
+    """The share of the radial bush's load applied at its seats' `distance`: s (2 - s),
+    s = min(distance / RADIAL_FADE, 1), rising from 0 with slope 2 / RADIAL_FADE to 1 at
+    RADIAL_FADE with zero slope (no kink). `smaller` is min for numbers and exudyn's
+    symbolic min for the compiled path's expression (compiled.py): one definition, the
+    same operations on both paths."""
+    s = smaller(distance / RADIAL_FADE, 1.0)
+    return s * (2.0 - s)
 
 
 class VehicleError(RuntimeError):
@@ -325,11 +344,12 @@ class Vehicle:
             offset = float(np.angle(np.exp(1j * (angles[ahead_] - angles[behind]))))
             # a scalar force along the line between the seats (exudyn's own geometry, as
             # the track-span example): a tension pulls them together (its Cartesian
-            # spring-damper with the force as a vector cost a fifth more CPU)
+            # spring-damper with the force as a vector cost a fifth more CPU); faded in
+            # over the seats' first RADIAL_FADE of distance, where that line turns
             rc = mbs.AddObject(ObjectConnectorSpringDamper(
                 markerNumbers=[self.link_markers[behind][1], self.link_markers[ahead_][0]],
                 springForceUserFunction=lambda mbs, t, item, length, rate, *_, b=radial:
-                    self.load(b, length, rate)))
+                    self.load(b, length, rate) * radial_fade(length)))
             tc = mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
                 markerNumbers=[coordinate(self.link_nodes[behind], 2),
                                coordinate(self.link_nodes[ahead_], 2)],
