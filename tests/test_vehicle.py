@@ -404,6 +404,7 @@ def test_the_radial_bushs_force_is_lipschitz_through_zero_distance(native_fmus, 
     exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
     from fmu_components.coupling.law import LoadLaw
     from vehicle import layout as lay
+    from vehicle.model import RADIAL_FADE
 
     vehicle = _laid_out(native_fmus)
     mbs, j = vehicle.mbs, 40  # joint 40: between links 39 and 40, on the top run
@@ -441,8 +442,54 @@ def test_the_radial_bushs_force_is_lipschitz_through_zero_distance(native_fmus, 
         slopes = []
         for e in (1e-6, 1e-8, 1e-10):
             plus, minus = force(e * direction), force(-e * direction)
-            assert np.hypot(*plus) <= 2.0 * abs(load) * e / 2e-5 * 1.01 + 1e8 * e
+            assert np.hypot(*plus) <= 2.0 * abs(load) * e / RADIAL_FADE * 1.01 + 1e8 * e
             slopes.append(np.hypot(*(plus - minus)) / (2 * e))
         assert max(slopes) <= 1.1 * slopes[0], slopes  # no steeper as the seats meet
     finally:  # the bank frees the same instances
         (vehicle.compiled_path.bank if path == "compiled" else vehicle.coupling).free()
+
+
+def test_a_step_whose_solution_jumps_is_refused_naming_the_part(native_fmus):
+    """The run's step check (vehicle/step_check.py) against a step of 1 ms from the
+    laid-out state, the track running at 5 m/s: the state its start's velocities carry it
+    to passes; the link beneath road wheel 1 turned by 21 deg and moved 47 mm (a stop at
+    5 m/s replayed showed that) is refused, naming the link and the wheel; so is road
+    wheel 2 pressed 5 mm further into its tyre."""
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle.step_check import StepCheck
+
+    vehicle = _laid_out(native_fmus, settling=True)
+    try:
+        mbs, contacts = vehicle.mbs, vehicle.contacts
+        data = mbs.systemData
+        current, start = exu.ConfigurationType.Current, exu.ConfigurationType.StartOfStep
+        q0 = np.array(data.GetODE2Coordinates(current))
+        v0 = np.array(data.GetODE2Coordinates_t(exu.ConfigurationType.Initial))
+        data.SetODE2Coordinates(q0, start)
+        data.SetODE2Coordinates_t(v0, start)
+        data.SetODE2Coordinates_t(v0, current)
+        data.SetTime(0.1, start)
+        check = StepCheck(vehicle)
+        contacts.evaluate(0.1)
+        check.accepted()
+
+        def judged(q):
+            data.SetODE2Coordinates(q, current)
+            return check(mbs, 0.101)
+
+        assert judged(q0 + 1e-3 * v0) is None
+        wheel = contacts.wheels[0]
+        ground = np.flatnonzero(contacts.link_pos[:, 1] < 0.1)
+        k = int(ground[np.argmin(np.abs(contacts.link_pos[ground, 0] - wheel[0]))])
+        jumped = q0 + 1e-3 * v0
+        index = mbs.GetNodeODE2Index(vehicle.link_nodes[k])
+        jumped[index:index + 3] += [0.04, 0.025, math.radians(21.0)]
+        assert re.fullmatch(rf"link {k} \(beneath road wheel 1\) moved 47\.2 mm and turned "
+                            r"21\.0 deg in one step beyond its motion at the step's start",
+                            judged(jumped))
+        pressed = q0 + 1e-3 * v0
+        pressed[mbs.GetNodeODE2Index(vehicle.arm_nodes[1]) + 1] -= 5e-3
+        assert re.match(r"road wheel 2: its tyre's compression jumped by 5\.\d mm",
+                        judged(pressed))
+    finally:
+        vehicle.coupling.free()

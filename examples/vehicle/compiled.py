@@ -108,14 +108,15 @@ class CompiledPath:
         return deflection
 
 
-def solve_compiled(vehicle, end_time, step, settings):
+def solve_compiled(vehicle, end_time, step, settings, step_check=None):
     """The run on the compiled path; returns exudyn_host.solve's host. The bank stands in
     for the Python coupling afterwards (its counts: Vehicle.solver_statistics)."""
     path = vehicle.compiled_path
     vehicle.bank = path.bank
     try:
         return bank_path.solve(vehicle.mbs, path.bank, path.laws, path.deflections, end_time,
-                               step, settings=settings, initial=path.initial_state)
+                               step, settings=settings, initial=path.initial_state,
+                               step_check=step_check)
     finally:
         vehicle.bank = None
         vehicle.coupling = path.bank

@@ -30,7 +30,7 @@ from exudyn.itemInterface import (LoadMassProportional, MarkerBodyMass, MarkerBo
                                   ObjectConnectorCoordinateSpringDamper, ObjectJointRevolute2D,
                                   ObjectRigidBody2D)
 
-from fmu_components.coupling import Coupling, FmuComponent
+from fmu_components.coupling import Coupling, FmuComponent, StepRefused
 from fmu_components.coupling.exudyn_host import connector_state, quiet_settings, solve
 from fmu_components.coupling.kelvin import KelvinElement, harmonic_kelvin_equivalent
 
@@ -63,11 +63,11 @@ NEWTON_TOLERANCE = 0.1
 # line is undefined where the seats meet, and the law (two-sided, with memory: spec
 # section 2) can give a load of either sign there. So the force applied is faded in over
 # the seats' first RADIAL_FADE of distance (radial_fade, assumed): it vanishes at zero
-# distance and is Lipschitz through it, whatever the load. 0.02 mm is an eighth of the
-# bush's deflection at the track's tension (0.159 mm at 13 kN): a joint under tension is
-# well clear of it; only a joint near slack (a load of 1.6 kN or less on the elastic
-# rate) feels it (docs/vehicle.md).
-RADIAL_FADE = 2e-5  # m
+# distance and is Lipschitz through it (2 |load| / RADIAL_FADE), whatever the load. 5 um
+# is 1/32 of the bush's deflection at the track's tension (0.159 mm at 13 kN): only a
+# joint near slack (0.4 kN or less on the elastic rate) feels it. Wider fades (20, 50 um)
+# made exudyn shorten more steps at 5 m/s (docs/vehicle.md).
+RADIAL_FADE = 5e-6  # m
 
 
 def markers(mbs):
@@ -204,6 +204,7 @@ class Vehicle:
         self.coupling = Coupling(coupling, record=self._record)
         self.records = []
         self.settling = False
+        self.step_check = None  # the run's (step_check.py), while it runs
         # every instance in one list (the bank's order); rows of it by kind
         self.components = []
         self.rows = {"tyre": [], "damper": [], "radial": [], "torsion": []}
@@ -441,6 +442,8 @@ class Vehicle:
     def _record(self, t):
         from .outputs import snapshot
         self.contacts.check(t)
+        if self.step_check is not None:
+            self.step_check.accepted()
         self.records.append(snapshot(self, t))
 
     def prepare(self):
@@ -464,29 +467,39 @@ class Vehicle:
                          (data.GetODE2Coordinates_t, data.SetODE2Coordinates_t)):
             put(get(exu.ConfigurationType.Initial), exu.ConfigurationType.Current)
         self.host_steps = math.ceil(end_time / step - 1e-9)
+        from .step_check import StepCheck
+        self.step_check = check = StepCheck(self)
         try:
             if self.compiled:
                 from .compiled import solve_compiled
-                self.host = solve_compiled(self, end_time, step, run_settings())
+                self.host = solve_compiled(self, end_time, step, run_settings(), check)
             else:
                 self.host = solve(self.mbs, self.coupling, end_time, step,
-                                  settings=run_settings())
+                                  settings=run_settings(), step_check=check)
         except exu.SolverError:
             raise VehicleError(f"exudyn's solver gave up at t = {self.coupling.time:.4f} s "
                                f"(its Newton did not converge even on shortened steps; "
                                f"docs/vehicle.md, What remains)") from None
+        except StepRefused as refused:
+            raise VehicleError(f"the solution jumped: {refused.what} at "
+                               f"t = {refused.time:.4f} s, on steps down to "
+                               f"{refused.step * 1e6:.3g} us; lower --speed or choose a "
+                               f"gentler course") from None
+        finally:
+            self.step_check = None
         from .outputs import histories
         return histories(self)
 
     def solver_statistics(self):
         """exudyn's Newton iterations per solve of a step, solves (coupling passes) per
-        accepted step, and the steps accepted against the host steps asked for (more
-        where steps were shortened)."""
+        accepted step, the steps accepted against the host steps asked for (more where
+        steps were shortened), and the solves the step check refused (step_check.py)."""
         it = self.mbs.sys["dynamicSolver"].it
         passes = max(self.coupling.total_passes, 1)
         return {"newton_per_pass": it.newtonStepsCount / passes,
                 "passes_per_step": passes / max(self.coupling.steps, 1),
-                "steps": self.coupling.steps, "host_steps": self.host_steps}
+                "steps": self.coupling.steps, "host_steps": self.host_steps,
+                "refused": self.host.refused}
 
 
 def run_settings():
