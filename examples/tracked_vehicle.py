@@ -102,7 +102,7 @@ def main(argv=None):
     print(f"exudyn: {solver['newton_per_pass']:.1f} Newton iterations per solve, "
           f"{solver['passes_per_step']:.2f} solves per host step, "
           f"{solver['steps']} steps for the {solver['host_steps']} asked (more where "
-          f"shortened)")
+          f"shortened), {solver['refused']} solutions refused (they jumped)")
     for key, label, unit, scale in outputs.FIGURE_LABELS:
         values = "  ".join(f"{model}: {outputs.figures(r)[key] * scale:.3g} {unit}"
                            for model, r in runs.items())

@@ -18,10 +18,10 @@ exudyn = pytest.importorskip("exudyn", reason='exudyn is not installed: pip inst
 MASS, LOAD = 10.0, 9.81e3  # kg, N
 
 
-def quarter_wheel(fmu, settings, step=1e-4, scheme="corrected"):
+def quarter_wheel(fmu, settings, step=1e-4, scheme="corrected", step_check=None):
     """A mass on a RoadWheelTyre, released off its static point, the ground beneath it a
-    2 mm, 15 Hz sine; 30 steps of `scheme`; returns ((pass, Newton iterations) of every
-    pass, the mass's accelerations)."""
+    2 mm, 15 Hz sine; 30 steps of `scheme` (`step_check`: exudyn_host.solve's); returns
+    ((pass, Newton iterations) of every pass, the mass's accelerations)."""
     from exudyn.itemInterface import (LoadCoordinate, MarkerNodeCoordinate, NodeGenericODE2,
                                       NodePointGround, ObjectConnectorCoordinateSpringDamper,
                                       ObjectGenericODE2)
@@ -71,7 +71,7 @@ def quarter_wheel(fmu, settings, step=1e-4, scheme="corrected"):
         return end_pass(t)
 
     coupling.end_pass = counted
-    solve(mbs, coupling, 30 * step, step, settings=settings)
+    solve(mbs, coupling, 30 * step, step, settings=settings, step_check=step_check)
     return np.array(iterations), np.array(accelerations)
 
 
@@ -149,3 +149,42 @@ def test_the_newton_tolerance_benchmark_prints_both_tables():
         assert first >= 1.0 and second >= 1.0
         if row[0].strip() != "default":  # the second solve starts from the first's end
             assert second < first
+
+
+def _steps_judged(refuse):
+    """A step check that refuses the solutions `refuse(start, end)` names, recording the
+    (start, end) of every solve it judged."""
+    judged = []
+
+    def check(mbs, t):
+        start = mbs.systemData.GetTime(exudyn.ConfigurationType.StartOfStep)
+        judged.append((start, t))
+        return "the mass jumped" if refuse(start, t) else None
+    return check, judged
+
+
+def test_a_step_whose_solution_jumps_is_refused_and_retried_shorter(native_fmus):
+    """The host's step check refuses every solution of a step across t = 1.05 ms longer
+    than a quarter of the host step (0.1 ms): that step is solved again from its start at
+    half its length, twice, and the run goes on to its end, the FMU's trials of the
+    refused solves undone."""
+    check, judged = _steps_judged(lambda start, end: start < 1.05e-3 < end
+                                  and end - start > 0.26e-4)
+    _, accelerations = quarter_wheel(native_fmus["RoadWheelTyre"], settings(), step_check=check)
+    crossing = [(start, end) for start, end in judged if start < 1.05e-3 < end]
+    lengths = sorted({round((end - start) * 1e7) for start, end in crossing}, reverse=True)
+    assert lengths == [1000, 500, 250]  # 0.1, 0.05, 0.025 ms (in 0.1 us)
+    assert judged[-1][1] == pytest.approx(3e-3)
+    assert len(accelerations) > 31 and np.all(np.isfinite(accelerations))
+
+
+def test_a_step_refused_at_the_shortest_step_ends_the_solve(native_fmus):
+    """A solution refused however short the step (down to 1/64 of the host step) ends the
+    solve with what jumped and the time."""
+    from fmu_components.coupling import StepRefused
+
+    check, judged = _steps_judged(lambda start, end: end > 1.07e-3)
+    with pytest.raises(StepRefused, match=r"the mass jumped at t = 0\.0011 s, on steps "
+                                          r"down to 1\.56e-06 s"):
+        quarter_wheel(native_fmus["RoadWheelTyre"], settings(), step_check=check)
+    assert min(end - start for start, end in judged) == pytest.approx(1e-4 / 64)

@@ -390,3 +390,108 @@ def test_a_wheel_above_a_convex_joint_stays_on_the_track(native_fmus):
         assert contacts.compression[wheel] == pytest.approx(expected, abs=1e-4)
     finally:
         vehicle.coupling.free()
+
+
+@pytest.mark.parametrize("path", ["python", "compiled"])
+@pytest.mark.parametrize("load", [-3000.0, 3000.0])
+def test_the_radial_bushs_force_is_lipschitz_through_zero_distance(native_fmus, path, load):
+    """A radial bush's law carries a load at zero distance (its memory: here -3 or +3 kN
+    at 0.01 mm, 1e8 N/m): the force its connector applies, along the line between the pin
+    seats, must still vanish there continuously, not flip with the line's direction. With
+    the seats displaced by +e and -e along one direction, e from 1 um to 0.1 nm, the force
+    goes to zero and its change over the 2 e stays bounded (a Lipschitz constant) on both
+    paths."""
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from fmu_components.coupling.law import LoadLaw
+    from vehicle import layout as lay
+    from vehicle.model import RADIAL_FADE
+
+    vehicle = _laid_out(native_fmus)
+    mbs, j = vehicle.mbs, 40  # joint 40: between links 39 and 40, on the top run
+    try:
+        if path == "compiled":
+            vehicle.prepare()
+            compiled = vehicle.compiled_path
+            compiled.bank.start(0.0, *compiled.initial_state())
+            compiled.bank._set_law(compiled.radial_rows[j], 1e-5, load, 1e8, 0.0)
+            compiled.laws.update()
+        else:
+            vehicle.coupling.start(0.0)
+            vehicle.radial[j].law = LoadLaw(1e-5, load, 1e8)
+        data, current = mbs.systemData, exu.ConfigurationType.Current
+        q = np.array(data.GetODE2Coordinates(current))
+        behind, ahead = (mbs.GetNodeODE2Index(vehicle.link_nodes[k]) for k in (j - 1, j))
+        reference = [np.array(mbs.GetNodeParameter(vehicle.link_nodes[k],
+                                                   "referenceCoordinates")) for k in (j - 1, j)]
+        x0, y0, angle0 = reference[0] + q[behind:behind + 3]
+        angle1 = reference[1][2] + q[ahead + 2]
+        half = 0.5 * lay.LINK_PITCH
+        front = np.array([x0 + half * math.cos(angle0), y0 + half * math.sin(angle0)])
+        direction = np.array([math.cos(0.3), math.sin(0.3)])
+
+        def force(offset):
+            rear = front + offset  # link 40's rear seat
+            centre = rear + half * np.array([math.cos(angle1), math.sin(angle1)])
+            q[ahead:ahead + 2] = centre - reference[1][:2]
+            data.SetODE2Coordinates(q, current)
+            assert mbs.GetObjectOutput(vehicle.radial_connectors[j], exu.OutputVariableType
+                                       .Distance) == pytest.approx(np.hypot(*offset), rel=1e-3)
+            return np.array(mbs.GetObjectOutput(vehicle.radial_connectors[j],
+                                                exu.OutputVariableType.Force))[:2]
+
+        slopes = []
+        for e in (1e-6, 1e-8, 1e-10):
+            plus, minus = force(e * direction), force(-e * direction)
+            # the law's load there is at most |load| + 1 kN; the fade s (2 - s) <= 2 s
+            assert np.hypot(*plus) <= 2.0 * (abs(load) + 1e3) * e / RADIAL_FADE
+            slopes.append(np.hypot(*(plus - minus)) / (2 * e))
+        # no steeper as the seats meet: the fade's Lipschitz constant, 2 |load| / RADIAL_FADE
+        assert max(slopes) <= 2.0 * (abs(load) + 1e3) / RADIAL_FADE, slopes
+    finally:  # the bank frees the same instances
+        (vehicle.compiled_path.bank if path == "compiled" else vehicle.coupling).free()
+
+
+def test_a_step_whose_solution_jumps_is_refused_naming_the_part(native_fmus):
+    """The run's step check (vehicle/step_check.py) against a step of 1 ms from the
+    laid-out state, the track running at 5 m/s: the state its start's velocities carry it
+    to passes; the link beneath road wheel 1 turned by 21 deg and moved 47 mm (a stop at
+    5 m/s replayed showed that) is refused, naming the link and the wheel; so is road
+    wheel 2 pressed 5 mm further into its tyre."""
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle.step_check import StepCheck
+
+    vehicle = _laid_out(native_fmus, settling=True)
+    try:
+        mbs, contacts = vehicle.mbs, vehicle.contacts
+        data = mbs.systemData
+        current, start = exu.ConfigurationType.Current, exu.ConfigurationType.StartOfStep
+        q0 = np.array(data.GetODE2Coordinates(current))
+        v0 = np.array(data.GetODE2Coordinates_t(exu.ConfigurationType.Initial))
+        data.SetODE2Coordinates(q0, start)
+        data.SetODE2Coordinates_t(v0, start)
+        data.SetODE2Coordinates_t(v0, current)
+        data.SetTime(0.1, start)
+        check = StepCheck(vehicle)
+        contacts.evaluate(0.1)
+        check.accepted()
+
+        def judged(q):
+            data.SetODE2Coordinates(q, current)
+            return check(mbs, 0.101)
+
+        assert judged(q0 + 1e-3 * v0) is None
+        wheel = contacts.wheels[0]
+        ground = np.flatnonzero(contacts.link_pos[:, 1] < 0.1)
+        k = int(ground[np.argmin(np.abs(contacts.link_pos[ground, 0] - wheel[0]))])
+        jumped = q0 + 1e-3 * v0
+        index = mbs.GetNodeODE2Index(vehicle.link_nodes[k])
+        jumped[index:index + 3] += [0.04, 0.025, math.radians(21.0)]
+        assert re.fullmatch(rf"link {k} \(beneath road wheel 1\) moved 47\.2 mm and turned "
+                            r"21\.0 deg in one step beyond its motion at the step's start",
+                            judged(jumped))
+        pressed = q0 + 1e-3 * v0
+        pressed[mbs.GetNodeODE2Index(vehicle.arm_nodes[1]) + 1] -= 5e-3
+        assert re.match(r"road wheel 2: its tyre's compression jumped by 5\.\d mm",
+                        judged(pressed))
+    finally:
+        vehicle.coupling.free()

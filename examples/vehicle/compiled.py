@@ -14,7 +14,7 @@ import numpy as np
 import bank_path
 
 from . import layout as lay
-from .model import HORN_HEIGHT
+from .model import HORN_HEIGHT, radial_fade
 
 
 class CompiledPath:
@@ -44,9 +44,10 @@ class CompiledPath:
         laws, v, mbs = self.laws, self.v, self.v.mbs
 
         def radial(i):
-            # the law of the seats' distance, along their line (exudyn's spring-damper)
+            # the law of the seats' distance, along their line (exudyn's spring-damper),
+            # faded in near zero distance as the Python path's (model.radial_fade)
             def radial_force(mbs, t, itemNumber, deltaL, deltaL_t, stiffness, damping, force):
-                return laws.load(i, deltaL)
+                return laws.load(i, deltaL) * radial_fade(deltaL, laws.esym.min)
             return radial_force
 
         def coordinate(i, offset=None):
@@ -107,14 +108,15 @@ class CompiledPath:
         return deflection
 
 
-def solve_compiled(vehicle, end_time, step, settings):
+def solve_compiled(vehicle, end_time, step, settings, step_check=None):
     """The run on the compiled path; returns exudyn_host.solve's host. The bank stands in
     for the Python coupling afterwards (its counts: Vehicle.solver_statistics)."""
     path = vehicle.compiled_path
     vehicle.bank = path.bank
     try:
         return bank_path.solve(vehicle.mbs, path.bank, path.laws, path.deflections, end_time,
-                               step, settings=settings, initial=path.initial_state)
+                               step, settings=settings, initial=path.initial_state,
+                               step_check=step_check)
     finally:
         vehicle.bank = None
         vehicle.coupling = path.bank

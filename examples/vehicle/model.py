@@ -30,7 +30,7 @@ from exudyn.itemInterface import (LoadMassProportional, MarkerBodyMass, MarkerBo
                                   ObjectConnectorCoordinateSpringDamper, ObjectJointRevolute2D,
                                   ObjectRigidBody2D)
 
-from fmu_components.coupling import Coupling, FmuComponent
+from fmu_components.coupling import Coupling, FmuComponent, StepRefused
 from fmu_components.coupling.exudyn_host import connector_state, quiet_settings, solve
 from fmu_components.coupling.kelvin import KelvinElement, harmonic_kelvin_equivalent
 
@@ -59,6 +59,15 @@ VERBOSE = 0  # exudyn's solver output while settling (1: per step)
 # relative test decides, which asks a pass that starts from the last pass's solution
 # (exudyn_host) for the same 1e-8 of its much smaller first residual.
 NEWTON_TOLERANCE = 0.1
+# The radial bush's force is its law's load along the line between the pin seats; that
+# line is undefined where the seats meet, and the law (two-sided, with memory: spec
+# section 2) can give a load of either sign there. So the force applied is faded in over
+# the seats' first RADIAL_FADE of distance (radial_fade, assumed): it vanishes at zero
+# distance and is Lipschitz through it (2 |load| / RADIAL_FADE), whatever the load. 5 um
+# is 1/32 of the bush's deflection at the track's tension (0.159 mm at 13 kN): only a
+# joint near slack (0.4 kN or less on the elastic rate) feels it. Wider fades (20, 50 um)
+# made exudyn shorten more steps at 5 m/s (docs/vehicle.md).
+RADIAL_FADE = 5e-6  # m
 
 
 def markers(mbs):
@@ -71,6 +80,16 @@ def markers(mbs):
         return mbs.AddMarker(MarkerBodyPosition(bodyNumber=body,
                                                 localPosition=[local[0], local[1], 0.0]))
     return coordinate, at
+
+
+def radial_fade(distance, smaller=min):
+    """The share of the radial bush's load applied at its seats' `distance`: s (2 - s),
+    s = min(distance / RADIAL_FADE, 1), rising from 0 with slope 2 / RADIAL_FADE to 1 at
+    RADIAL_FADE with zero slope (no kink). `smaller` is min for numbers and exudyn's
+    symbolic min for the compiled path's expression (compiled.py): one definition, the
+    same operations on both paths."""
+    s = smaller(distance / RADIAL_FADE, 1.0)
+    return s * (2.0 - s)
 
 
 class VehicleError(RuntimeError):
@@ -185,6 +204,7 @@ class Vehicle:
         self.coupling = Coupling(coupling, record=self._record)
         self.records = []
         self.settling = False
+        self.step_check = None  # the run's (step_check.py), while it runs
         # every instance in one list (the bank's order); rows of it by kind
         self.components = []
         self.rows = {"tyre": [], "damper": [], "radial": [], "torsion": []}
@@ -325,11 +345,12 @@ class Vehicle:
             offset = float(np.angle(np.exp(1j * (angles[ahead_] - angles[behind]))))
             # a scalar force along the line between the seats (exudyn's own geometry, as
             # the track-span example): a tension pulls them together (its Cartesian
-            # spring-damper with the force as a vector cost a fifth more CPU)
+            # spring-damper with the force as a vector cost a fifth more CPU); faded in
+            # over the seats' first RADIAL_FADE of distance, where that line turns
             rc = mbs.AddObject(ObjectConnectorSpringDamper(
                 markerNumbers=[self.link_markers[behind][1], self.link_markers[ahead_][0]],
                 springForceUserFunction=lambda mbs, t, item, length, rate, *_, b=radial:
-                    self.load(b, length, rate)))
+                    self.load(b, length, rate) * radial_fade(length)))
             tc = mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
                 markerNumbers=[coordinate(self.link_nodes[behind], 2),
                                coordinate(self.link_nodes[ahead_], 2)],
@@ -421,6 +442,8 @@ class Vehicle:
     def _record(self, t):
         from .outputs import snapshot
         self.contacts.check(t)
+        if self.step_check is not None:
+            self.step_check.accepted()
         self.records.append(snapshot(self, t))
 
     def prepare(self):
@@ -444,29 +467,39 @@ class Vehicle:
                          (data.GetODE2Coordinates_t, data.SetODE2Coordinates_t)):
             put(get(exu.ConfigurationType.Initial), exu.ConfigurationType.Current)
         self.host_steps = math.ceil(end_time / step - 1e-9)
+        from .step_check import StepCheck
+        self.step_check = check = StepCheck(self)
         try:
             if self.compiled:
                 from .compiled import solve_compiled
-                self.host = solve_compiled(self, end_time, step, run_settings())
+                self.host = solve_compiled(self, end_time, step, run_settings(), check)
             else:
                 self.host = solve(self.mbs, self.coupling, end_time, step,
-                                  settings=run_settings())
+                                  settings=run_settings(), step_check=check)
         except exu.SolverError:
             raise VehicleError(f"exudyn's solver gave up at t = {self.coupling.time:.4f} s "
                                f"(its Newton did not converge even on shortened steps; "
                                f"docs/vehicle.md, What remains)") from None
+        except StepRefused as refused:
+            raise VehicleError(f"the solution jumped: {refused.what} at "
+                               f"t = {refused.time:.4f} s, on steps down to "
+                               f"{refused.step * 1e6:.3g} us; lower --speed or choose a "
+                               f"gentler course") from None
+        finally:
+            self.step_check = None
         from .outputs import histories
         return histories(self)
 
     def solver_statistics(self):
         """exudyn's Newton iterations per solve of a step, solves (coupling passes) per
-        accepted step, and the steps accepted against the host steps asked for (more
-        where steps were shortened)."""
+        accepted step, the steps accepted against the host steps asked for (more where
+        steps were shortened), and the solves the step check refused (step_check.py)."""
         it = self.mbs.sys["dynamicSolver"].it
         passes = max(self.coupling.total_passes, 1)
         return {"newton_per_pass": it.newtonStepsCount / passes,
                 "passes_per_step": passes / max(self.coupling.steps, 1),
-                "steps": self.coupling.steps, "host_steps": self.host_steps}
+                "steps": self.coupling.steps, "host_steps": self.host_steps,
+                "refused": self.host.refused}
 
 
 def run_settings():

@@ -11,7 +11,7 @@ component's `parameters`) and errors.py: copy-free use from any host. docs/coupl
 gives the FMI call sequence for hosts in other languages.
 """
 
-from .errors import CouplingError, StepDiscarded
+from .errors import CouplingError, StepDiscarded, StepRefused
 from .fmu import FmuComponent
 from .law import LoadLaw
 from .master import Coupling, Verdict
@@ -20,4 +20,4 @@ from .schemes import SCHEMES, scheme_named
 DEFAULT_SCHEME = "corrected"
 
 __all__ = ["Coupling", "CouplingError", "DEFAULT_SCHEME", "FmuComponent", "LoadLaw",
-           "SCHEMES", "StepDiscarded", "Verdict", "scheme_named"]
+           "SCHEMES", "StepDiscarded", "StepRefused", "Verdict", "scheme_named"]

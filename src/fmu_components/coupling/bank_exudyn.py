@@ -129,11 +129,12 @@ class _Starting:
 
 
 def solve(mbs, bank, laws, deflections, end_time, step, start_time=0.0, settings=None,
-          initial=None):
+          initial=None, step_check=None):
     """exudyn_host.solve for a bank: start its components at the host's initial state
     (`initial()`, (deflections, rates), where the host has the rates; else `deflections()`
     at rest), integrate with generalized-alpha at `step` to the first multiple of it at or
-    after end_time. Frees the bank. Returns the ExudynBank."""
+    after end_time (`step_check` as exudyn_host.solve's). Frees the bank. Returns the
+    ExudynBank."""
     return exudyn_host.solve(mbs, _Starting(bank, laws, initial or deflections), end_time,
                              step, start_time, settings,
-                             host=ExudynBank(mbs, bank, laws, deflections))
+                             host=ExudynBank(mbs, bank, laws, deflections), step_check=step_check)

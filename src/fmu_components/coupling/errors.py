@@ -23,3 +23,14 @@ class StepDiscarded(Exception):
         self.component = component
         self.time = time
         self.step = step
+
+
+class StepRefused(RuntimeError):
+    """The host's check refused a step's solution (it jumped: `what` says where) at every
+    step length down to the shortest the host tries."""
+
+    def __init__(self, what, time, step):
+        super().__init__(f"{what} at t = {time:.4f} s, on steps down to {step:.3g} s")
+        self.what = what
+        self.time = time
+        self.step = step

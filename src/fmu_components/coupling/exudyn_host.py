@@ -7,7 +7,9 @@ function, which may ask for the step to be solved again from its start (a
     pre-step user function      Coupling.begin_step (also before a retried step)
     connector force functions   component.host_load(x, v), at every Newton iterate and
                                 for exudyn's numerical Jacobian
-    post-Newton user function   Coupling.end_pass: [0, -1] accepts, [1, -1] solves the
+    post-Newton user function   the host's step check, if one is given: [1, h/2]
+                                retries a step whose solution jumped; then
+                                Coupling.end_pass: [0, -1] accepts, [1, -1] solves the
                                 step again, [1, h] retries it with step h
     post-step user function     Coupling.accept
     pre-Newton-residual user    a step solved again starts from the last pass's solution
@@ -19,7 +21,12 @@ exudyn is imported here only, and only when these functions run.
 import math
 import time
 
+from .errors import StepRefused
 from .master import Coupling
+
+# A step the step check refuses is retried at half its length, down to this share of the
+# host step (six halvings); one refused even there ends the solve (StepRefused).
+SHORTEST_STEP = 1.0 / 64
 
 
 def connector_state(mbs, connector):
@@ -39,9 +46,15 @@ class ExudynCoupling:
     # exudyn compares the post-Newton function's first value with this
     _TOLERANCE = 0.5
 
-    def __init__(self, mbs, coupling: Coupling):
+    def __init__(self, mbs, coupling: Coupling, step_check=None):
+        """step_check(mbs, t), if given, judges each solve's solution against the step's
+        start before the coupling does: None accepts it, else a description of what
+        jumped (naming the part), and the step is retried at half its length."""
         self.mbs = mbs
         self.coupling = coupling
+        self.step_check = step_check
+        self.shortest_step = 0.0  # solve() sets it from the host step
+        self.refused = 0  # solves the step check refused
         self.failure = None
         self.attempts = 0  # steps begun, retries included
         self.solve_cpu = 0.0  # CPU seconds of the process in the dynamic solve (solve())
@@ -71,12 +84,30 @@ class ExudynCoupling:
         return self.coupling.end_pass(t)
 
     def _post_newton(self, t):
+        if self.step_check is not None:
+            jumped = self.step_check(self.mbs, t)
+            if jumped is not None:
+                return self._refuse(t, jumped)
         verdict = self._end_pass(t)
         if verdict.retry_step is not None:
             self._warm(False)
             return [1.0, verdict.retry_step]
         self._warm(verdict.repeat)
         return [1.0 if verdict.repeat else 0.0, -1.0]
+
+    def _refuse(self, t, jumped):
+        """A solution that jumped: the components back to the step's start, the step
+        retried at half its length (exudyn's recommended step: with adaptive steps it
+        solves the step again from its start at that length and lengthens its steps
+        again after adaptiveStepRecoverySteps good ones); below the shortest step the
+        solve ends."""
+        step = t - self.coupling.time
+        if 0.5 * step < self.shortest_step * (1.0 - 1e-9):
+            raise StepRefused(jumped, t, step)
+        self.coupling.reject()
+        self.refused += 1
+        self._warm(False)
+        return [1.0, 0.5 * step]
 
     def _warm(self, repeat):
         """Where the step is solved again, keep this pass's solution, and let exudyn call
@@ -173,17 +204,22 @@ def quiet_settings(newton_tolerance=None):
     return settings
 
 
-def solve(mbs, coupling, end_time, step, start_time=0.0, settings=None, host=None):
+def solve(mbs, coupling, end_time, step, start_time=0.0, settings=None, host=None,
+          step_check=None):
     """Start the components at the host's initial state, then integrate with exudyn's
     implicit generalized-alpha at `step` (shortened only where a component asks for a
-    retry) to the first multiple of it at or after end_time, coupling the components by
-    the coupling's scheme. Frees the components. Returns the ExudynCoupling (its
-    `attempts` against coupling.steps count retries; `solve_cpu`, the solve's CPU time,
-    the system's building and the components' start left out); `host`, one made already
-    (a bank's, bank_exudyn.py)."""
+    retry, or `step_check` refuses a solution: ExudynCoupling) to the first multiple of it
+    at or after end_time, coupling the components by the coupling's scheme. Frees the
+    components. Returns the ExudynCoupling (its `attempts` against coupling.steps count
+    retries; `solve_cpu`, the solve's CPU time, the system's building and the components'
+    start left out); `host`, one made already (a bank's, bank_exudyn.py). Raises
+    StepRefused where the step check refuses a step SHORTEST_STEP of `step` long."""
     import exudyn as exu
 
     host = host or ExudynCoupling(mbs, coupling)
+    if step_check is not None:
+        host.step_check = step_check
+    host.shortest_step = SHORTEST_STEP * step
     if settings is None:
         settings = quiet_settings()
     steps = math.ceil((end_time - start_time) / step - 1e-9)
