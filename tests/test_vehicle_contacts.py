@@ -204,7 +204,8 @@ def test_without_a_compiler_the_contacts_say_so_and_use_numpy(native_fmus, monke
     monkeypatch.setitem(bank_build.COMPILERS, platform, ("no-such-gcc", suffix, flags))
     with pytest.raises(bank_build.NoCompiler,
                        match=r"^no-such-gcc not found: the vehicle's contacts kernel .* "
-                             r"numpy kernel \(vehicle\.contacts\.kernel = 'numpy'\)$"):
+                             r"numpy kernel \(--contacts numpy, "
+                             r"or vehicle\.contacts\.use\('numpy'\)\)$"):
         contacts_kernel.LIBRARY.compile(platform, tmp_path)
     monkeypatch.setattr(contacts_kernel.LIBRARY, "built", lambda beside=None: None)
     monkeypatch.setattr(contacts_kernel, "_loaded", {})

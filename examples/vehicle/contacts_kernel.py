@@ -5,8 +5,8 @@ order of operations as contacts.py's numpy kernel, which stays the readable refe
 the fallback. One evaluation: the kernel's kinematics (bodies, pins, the tyres'
 compressions), the tyres' loads from Python (Vehicle.tyre_loads: the bank's laws) and the
 course's height under the pins, then the kernel's forces; the Jacobian's triplets on
-exudyn's call. Python reads the results as numpy views of the kernel's memory: no
-allocation per call.
+exudyn's call. The kernel's memory is allocated once; Python hands its results on as
+copies, as the numpy kernel's are new arrays each time.
 """
 
 import ctypes
@@ -27,7 +27,7 @@ LIBRARY = Library("vehicle_contacts",
                   [HERE / name for name in ("contacts.c", "contacts_forces.c",
                                             "contacts_jacobian.c")],
                   [HERE / "contacts.h"], "the vehicle's contacts kernel (contacts.c)",
-                  "use the numpy kernel (vehicle.contacts.kernel = 'numpy')")
+                  "use the numpy kernel (--contacts numpy, or vehicle.contacts.use('numpy'))")
 # contacts.h's enum Parameter, in its order
 PARAMETERS = ("LINK_PITCH", "LINK_INNER", "LINK_OUTER", "WHEEL_RADIUS", "TYRE_BLEND",
               "HANDOVER", "CONTACT_ONSET", "GROUND_STIFFNESS", "GROUND_DAMPING",
