@@ -92,6 +92,7 @@ class ExudynBank(ExudynCoupling):
         integration = settings.timeIntegration
         self._step = ((integration.endTime - integration.startTime)
                       / integration.numberOfSteps)
+        self._end = integration.endTime
 
     def _pre_step(self, t):
         super()._pre_step(t)
@@ -102,8 +103,15 @@ class ExudynBank(ExudynCoupling):
         """Bank.accept, which begins the next step in the same call where it ends a step
         later (begin_step then has nothing left to do, one C call fewer per host step;
         a step exudyn shortens or ends early is begun again by begin_step)."""
-        self.coupling.accept(t, t + self._step)
+        self.coupling.accept(t, self._next_end(t))
         return True
+
+    def _next_end(self, t):
+        """Where exudyn's next step ends: its step on, and the last one cut to the end
+        time; None after the last (no step to begin)."""
+        if self._end - t <= 1e-9 * self._step:
+            return None
+        return min(t + self._step, self._end)
 
     def _end_pass(self, t):
         verdict = self.coupling.end_pass(t, self.deflections())
