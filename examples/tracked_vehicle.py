@@ -42,7 +42,8 @@ def simulate(course_name, speed, end_time, step, coupling=DEFAULT_SCHEME, linear
     (default: compiled where it builds; vehicle/contacts_kernel.py)."""
     statics = statics or static_points(fmu_dir)
     vehicle = Vehicle(None, speed, fmu_dir, linear, coupling, statics, path)
-    vehicle.contacts.use(contacts or vehicle.contacts.kernel)
+    if contacts:
+        vehicle.contacts.use(contacts)
     vehicle.course = COURSES[course_name](vehicle.layout.sprocket[0] + 0.3)
     if settle_time > 0:
         vehicle.settle(settle_time)
