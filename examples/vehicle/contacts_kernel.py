@@ -3,9 +3,12 @@ compiled on first use as the coupling's bank is (bank_build.Library: gcc,
 -ffp-contract=off, a cache keyed by a hash of the sources), the same equations in the same
 order of operations as contacts.py's numpy kernel, which stays the readable reference and
 the fallback. One evaluation: the kernel's kinematics (bodies, pins, the tyres'
-compressions), the tyres' loads from Python (Vehicle.tyre_loads: the bank's laws) and the
-course's height under the pins, then the kernel's forces; the Jacobian's triplets on
-exudyn's call. The kernel's memory is allocated once. Its results stay there while
+compressions), the tyres' loads and the course's height under the pins, then the kernel's
+forces; the Jacobian's triplets on exudyn's call. On the compiled path an evaluation is
+one C call: the kernel calls the bank's laws itself (Bank.law_loads_entry; the operations
+of Vehicle.tyre_loads) and evaluates course.py's courses (contacts_course.c); otherwise
+Python gives the loads (Vehicle.tyre_loads) and the heights of a course of another class
+between two calls. The kernel's memory is allocated once. Its results stay there while
 exudyn's Newton iterates; they are handed on as the numpy kernel's attributes (copies, as
 the numpy kernel's are new arrays each time) only when a reader first asks for one after
 an evaluation (`publish`, Contacts.__getattr__): the coupling's readers, the step check
@@ -194,7 +197,8 @@ class CompiledContacts:
 
     def _set_tyre_laws(self, bank):
         """Let the kernel call the bank's laws for the tyres' loads (Vehicle.tyre_loads,
-        the same operations), once per bank (kept: its memory lives while it is used)."""
+        the same operations), set once per bank (the run sets Vehicle.bank only while the
+        bank lives)."""
         if self._bank is not bank:
             rows = np.ascontiguousarray(self.contacts.v.tyre_rows, dtype=ctypes.c_int)
             if self.lib.contacts_set_tyre_laws(self.handle, *bank.law_loads_entry(), bank.n,
