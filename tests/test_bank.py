@@ -188,6 +188,31 @@ def test_a_host_that_announces_its_next_step_saves_a_call_and_changes_no_number(
     assert calls >= 121 and announced_calls == calls - 119
 
 
+def test_the_law_loads_entry_called_from_c_gives_law_loads(native_fmus):
+    """law_loads_entry's function (bank.c's bank_law_loads, as the vehicle's contacts
+    kernel calls it) at the bank's handle gives law_loads' loads and slopes to the bit,
+    at a step's laws."""
+    import ctypes
+
+    bank = Bank(mix(native_fmus), "corrected")
+    bank.start(0.0, motion(0.0))
+    try:
+        bank.begin_step(1e-3)
+        address, handle = bank.law_loads_entry()
+        double = ctypes.POINTER(ctypes.c_double)
+        law_loads = ctypes.CFUNCTYPE(None, ctypes.c_void_p, double, double, double)(address)
+        for scale in (0.5, 1.01, 2.0):
+            deflection = scale * motion(1e-3)
+            loads, slopes = np.empty(bank.n), np.empty(bank.n)
+            law_loads(handle, *(a.ctypes.data_as(double) for a in (deflection, loads, slopes)))
+            expected_loads, expected_slopes = bank.law_loads(deflection, slopes=True)
+            assert np.any(expected_loads != 0.0)
+            assert np.array_equal(loads, expected_loads)
+            assert np.array_equal(slopes, expected_slopes)
+    finally:
+        bank.free()
+
+
 def serialized(bank):
     return [c.serialized_state() for c in bank.components]
 

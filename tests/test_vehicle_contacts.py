@@ -123,6 +123,31 @@ def _states(contacts, q0, qd0):
     yield (bent - contacts.reference).ravel(), qd0
 
 
+def _compare(values):
+    """The compiled kernel's values against the numpy kernel's, to 1e-12 of each one's
+    largest magnitude; whether all were the same bits."""
+    identical = True
+    for name, expected in values["numpy"].items():
+        got = values["compiled"][name]
+        assert got.shape == expected.shape, name
+        finite = np.isfinite(expected)
+        assert np.array_equal(finite, np.isfinite(got)), name
+        scale = np.max(np.abs(expected[finite]), initial=0.0)
+        assert np.max(np.abs(got[finite] - expected[finite]), initial=0.0) <= 1e-12 * scale, \
+            name
+        identical &= np.array_equal(got, expected)
+    return identical
+
+
+def _start_state(vehicle):
+    """The object's coordinates at the vehicle's current state and its initial rates."""
+    import exudyn as exu
+
+    data, index = vehicle.mbs.systemData, vehicle.contacts.system_index
+    return (np.array(data.GetODE2Coordinates(exu.ConfigurationType.Current))[index],
+            np.array(data.GetODE2Coordinates_t(exu.ConfigurationType.Initial))[index])
+
+
 @pytest.mark.parametrize("settling", [True, False])
 def test_the_c_kernel_gives_the_numpy_kernels_numbers(native_fmus, settling):
     """At each state of _states, settling (its damping springs) and running (the tyres'
@@ -151,18 +176,111 @@ def test_the_c_kernel_gives_the_numpy_kernels_numbers(native_fmus, settling):
             contacts.use("numpy")
             contacts._update(0.0, q, qd)
             _coverage(contacts, seen)
-            for name, expected in values["numpy"].items():
-                got = values["compiled"][name]
-                assert got.shape == expected.shape, name
-                finite = np.isfinite(expected)
-                assert np.array_equal(finite, np.isfinite(got)), name
-                scale = np.max(np.abs(expected[finite]), initial=0.0)
-                assert np.max(np.abs(got[finite] - expected[finite]), initial=0.0) <= \
-                    1e-12 * scale, name
-                identical &= np.array_equal(got, expected)
+            identical &= _compare(values)
         assert all(seen.values()), seen
         print(f"bit-identical: {identical}")
         assert np.any(values["numpy"]["generalized"] != 0.0)
+    finally:
+        vehicle.coupling.free()
+
+
+def test_the_c_kernel_calls_the_banks_laws_as_the_vehicle_does(native_fmus):
+    """On the compiled path the C kernel evaluates the tyres' loads itself, calling the
+    bank's laws in its one call per evaluation: at each state of _states its forces,
+    records and Jacobian equal the numpy kernel's, which takes the loads from
+    Vehicle.tyre_loads (Bank.law_loads), to 1e-12 (the same bits on this machine); the
+    tyres carry load."""
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    vehicle = _vehicle(native_fmus)
+    vehicle.prepare()
+    bank = vehicle.compiled_path.bank
+    try:
+        bank.start(0.0, *vehicle.compiled_path.initial_state())
+        bank.begin_step(1e-3)  # the tyres' first laws
+        vehicle.bank = bank
+        contacts = vehicle.contacts
+        q0, qd0 = _start_state(vehicle)
+        identical, loaded = True, False
+        for q, qd in list(_states(contacts, q0, qd0)):
+            values = _both_kernels(contacts, q, qd)
+            identical &= _compare(values)
+            loaded |= bool(np.any(values["compiled"]["tyre_force"] > 1e3))
+        assert contacts._compiled._bank is bank  # the one call took the bank's laws
+        assert loaded
+        print(f"bit-identical: {identical}")
+    finally:
+        vehicle.bank = None
+        bank.free()
+
+
+def test_the_c_kernels_records_are_its_last_evaluations(native_fmus):
+    """The C kernel's results are read from its memory where they are first asked for
+    after an evaluation: after one that was read and one that was not, the records are
+    the second's (the numpy kernel's at that state); the generalized forces handed out
+    are each evaluation's own arrays (a caller may keep them)."""
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    vehicle = _vehicle(native_fmus)
+    try:
+        vehicle.settling = True
+        contacts = vehicle.contacts
+        q0, qd0 = _start_state(vehicle)
+        q1 = q0 + np.random.default_rng(5).normal(0.0, 1e-3, q0.shape)
+        contacts.use("numpy")
+        contacts._update(0.0, q1, qd0)
+        expected = {name: np.array(getattr(contacts, name), dtype=float) for name in RECORDS}
+        contacts.use("compiled")
+        first = contacts._generalized(0.0, list(q0), list(qd0))  # lists, as exudyn's
+        read = contacts.compression.copy()
+        second = contacts._generalized(0.0, list(q1), list(qd0))
+        assert not np.array_equal(read, contacts.compression)
+        for name in RECORDS:
+            assert np.array_equal(np.array(getattr(contacts, name), dtype=float),
+                                  expected[name]), name
+        assert np.array_equal(second, expected["generalized"])
+        assert not np.array_equal(first, second)  # the first kept its values
+    finally:
+        vehicle.coupling.free()
+
+
+def test_the_c_kernel_evaluates_the_courses_as_course_py_does(native_fmus):
+    """The C kernel's course heights (contacts_course.c) equal course.py's heights to
+    1e-12 of their largest (the same bits on this machine) for the flat ground, the
+    bump, the sine course and random roads, over the flat start and the course, and
+    again after a course's attribute is set anew; a course of another class gives its
+    heights from Python."""
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle.course import Bump, Course, RandomRoad, Sine
+
+    class Ramp(Course):
+        def height(self, x):
+            return 0.01 * np.asarray(x, dtype=float)
+
+    vehicle = _vehicle(native_fmus)
+    try:
+        kernel = vehicle.contacts._compiled
+        rng = np.random.default_rng(8)
+        moved = Bump(3.0, 0.2, 0.5)
+        courses = [Course(3.0), Bump(3.0), Sine(3.0), RandomRoad(3.0), RandomRoad(3.0, "E"),
+                   moved, moved, Ramp(3.0)]
+        identical = True
+        for i, course in enumerate(courses):
+            if i == 6:
+                moved.start = 2.5  # set anew after the kernel took the course
+            for trial in range(20):
+                # random points, and some over every course's features (4 to 6.1 m)
+                x = np.sort(np.concatenate([rng.uniform(0.0, 12.0, len(kernel.views["pins"])
+                                                        - 20), np.linspace(3.9, 6.1, 20)]))
+                kernel.views["pins"][:, 0] = x
+                given = kernel._set_course(course)
+                assert given == isinstance(course, Ramp)
+                if not given:
+                    kernel.lib.contacts_course_heights(kernel.handle)
+                    got, expected = kernel.views["ground"].copy(), course.height(x)
+                    assert np.any(expected != 0.0) or type(course) is Course
+                    scale = np.max(np.abs(expected))
+                    assert np.max(np.abs(got - expected)) <= 1e-12 * scale, type(course)
+                    identical &= np.array_equal(got, expected)
+        print(f"bit-identical: {identical}")
     finally:
         vehicle.coupling.free()
 

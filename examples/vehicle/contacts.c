@@ -43,6 +43,7 @@ CONTACTS_EXPORT void contacts_free(Contacts *c)
     free(c->pair_weight); free(c->pair_gradient); free(c->spring); free(c->scratch);
     free(c->pin); free(c->candidate); free(c->in_contact); free(c->bodies_force);
     free(c->tyres); free(c->entry_wheel); free(c->entry_coordinate); free(c->entry_value);
+    free(c->course_term); free(c->tyre_row); free(c->law_deflection);
     free(c);
 }
 
@@ -58,6 +59,7 @@ CONTACTS_EXPORT Contacts *contacts_new(int wheels, int links, const double *refe
     c->links = links;
     c->link0 = 2 + wheels;
     c->bodies = c->link0 + links;
+    c->course = COURSE_GIVEN;
     int ok = 1;
     for (int i = 0; i < A_COUNT; i++)
         ok &= (c->array[i] = calloc((size_t)array_size(c, i), sizeof(double))) != NULL;
@@ -352,4 +354,59 @@ CONTACTS_EXPORT void contacts_kinematics(Contacts *c)
 {
     bodies_kinematics(c);
     tyre_kinematics(c);
+}
+
+/* Where the bank's laws give the tyres' loads: bank.c's bank_law_loads (`law_loads`) and
+ * the bank (`bank`, `size` instances), `rows` each wheel's two tyres' rows in it (wheels
+ * x 2). NULL: the loads are given (Python writes ARRAY(LOADS), ARRAY(SLOPES)). 0, or -1
+ * where memory runs out (the loads are then given). */
+CONTACTS_EXPORT int contacts_set_tyre_laws(Contacts *c, LawLoads law_loads, const void *bank,
+                                           int size, const int *rows)
+{
+    free(c->tyre_row);
+    free(c->law_deflection);
+    c->tyre_row = NULL;
+    c->law_deflection = NULL;
+    c->law_loads = NULL;
+    if (!law_loads) return 0;
+    c->tyre_row = malloc(sizeof(int) * 2 * c->wheels);
+    c->law_deflection = calloc(3 * (size_t)size, sizeof(double)); /* the others stay 0 */
+    if (!c->tyre_row || !c->law_deflection) return -1;
+    memcpy(c->tyre_row, rows, sizeof(int) * 2 * c->wheels);
+    c->law_load = c->law_deflection + size;
+    c->law_slope = c->law_deflection + 2 * size;
+    c->bank = bank;
+    c->law_loads = law_loads;
+    return 0;
+}
+
+/* model.Vehicle.tyre_loads on the compiled path: each wheel's two tyres at its
+ * compression (-HORN_HEIGHT out of contact), their loads and slopes summed as numpy sums
+ * a row */
+static void tyre_loads(Contacts *c)
+{
+    for (int w = 0; w < c->wheels; w++) {
+        double x = ARRAY(COMPRESSION)[w];
+        x = isfinite(x) ? x : -P(HORN_HEIGHT);
+        c->law_deflection[c->tyre_row[2 * w]] = c->law_deflection[c->tyre_row[2 * w + 1]] = x;
+    }
+    c->law_loads(c->bank, c->law_deflection, c->law_load, c->law_slope);
+    for (int w = 0; w < c->wheels; w++) {
+        const int *row = c->tyre_row + 2 * w;
+        double loads[2] = {c->law_load[row[0]], c->law_load[row[1]]};
+        double slopes[2] = {c->law_slope[row[0]], c->law_slope[row[1]]};
+        ARRAY(LOADS)[w] = numpy_sum(loads, 2);
+        ARRAY(SLOPES)[w] = numpy_sum(slopes, 2);
+    }
+}
+
+/* One evaluation in one call, where the kernel has the tyres' laws and the course:
+ * the kinematics, the tyres' loads, the forces. -1 where it lacks the laws. */
+CONTACTS_EXPORT int contacts_evaluate(Contacts *c, int settling)
+{
+    if (!c->law_loads) return -1;
+    contacts_kinematics(c);
+    tyre_loads(c);
+    contacts_forces(c, settling);
+    return 0;
 }

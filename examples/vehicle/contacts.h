@@ -18,7 +18,7 @@ enum Parameter {
     P_ENGAGEMENT_RAMP_SQUARED, P_SPROCKET_PITCH_RADIUS, P_TOOTH_SPACING, P_IDLER_PIN_RADIUS,
     P_ROLLER_PIN_RADIUS, P_SPROCKET_X, P_SPROCKET_Y, P_ROLLER_X, P_ROLLER_Y, P_WRAP_START,
     P_WRAP_SWEEP, P_TOOTH_PHASE, P_HULL_X0, P_SETTLE_SEAT, P_SETTLE_ARM, P_SETTLE_HULL_X,
-    P_SETTLE_HULL_Y, P_SETTLE_HULL_PITCH, P_TWO_PI, P_COUNT
+    P_SETTLE_HULL_Y, P_SETTLE_HULL_PITCH, P_TWO_PI, P_HORN_HEIGHT, P_COUNT
 };
 
 /* The arrays Python reads and writes in place (numpy views of the kernel's memory), in
@@ -28,6 +28,16 @@ enum Array {
     A_COMPRESSION, A_COMPRESSION_RATE, A_LOADS, A_SLOPES, A_TYRE_FORCE, A_GROUND,
     A_GROUND_LOAD, A_TOOTH_GAP, A_GENERALIZED, A_DRIVE_TORQUE, A_COUNT
 };
+
+/* bank.c's bank_law_loads: the bank's laws' loads and slopes at its deflections. */
+typedef void (*LawLoads)(const void *bank, const double *deflection, double *loads,
+                         double *slopes);
+
+/* The course under the pins (contacts_course.c): course.py's courses, or heights given
+ * (Python writes ARRAY(GROUND)). */
+enum Course { COURSE_GIVEN = -1, COURSE_FLAT, COURSE_BUMP, COURSE_SINE, COURSE_RANDOM };
+/* A course's values, in the order contacts_kernel.course_values gives them. */
+enum CourseValue { C_FRONT, C_START, C_LENGTH, C_SCALE, C_FADE, C_OFFSET, C_COUNT };
 
 /* One spring for the Jacobian: its 2 x 2 stiffness and damping between up to three
  * members, each a body, how a force at its point loads the body (force_g), how the point
@@ -72,11 +82,24 @@ typedef struct {
     /* the tyres' Jacobian: p.D's entries (3 per wheel, 9 per pair) */
     int *entry_wheel, *entry_coordinate;
     double *entry_value;
+    /* the course: its kind, values, and a random road's terms (wave numbers, amplitudes,
+     * phases, then room for the terms of one pin: 4 x course_terms) */
+    int course, course_terms;
+    double course_value[C_COUNT];
+    double *course_term;
+    /* the tyres' laws where the kernel evaluates them (contacts_set_tyre_laws): the bank's
+     * function and handle, each wheel's two rows in it, arrays of the bank's size */
+    LawLoads law_loads;
+    const void *bank;
+    int *tyre_row; /* wheels x 2 */
+    double *law_deflection, *law_load, *law_slope;
 } Contacts;
 
 double numpy_sum(const double *a, int n);
 double numpy_remainder(double a, double b);
 void smoothstep_derivatives(double x, double *value, double *slope, double *curvature);
+CONTACTS_EXPORT void contacts_course_heights(Contacts *c);
+CONTACTS_EXPORT void contacts_forces(Contacts *c, int settling);
 double penalty_force(const Contacts *c, double depth, double closing, double stiffness,
                      double damping, double *by_depth, double *by_closing);
 

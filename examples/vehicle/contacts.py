@@ -24,6 +24,7 @@ from exudyn.itemInterface import ObjectGenericODE2
 
 from . import layout as lay
 from .contact_math import cross, rotate, smoothstep, smoothstep_derivatives
+from .contacts_kernel import CompiledContacts, KernelResults, as_vector, library
 from .model import (ENGAGEMENT_RAMP, GROUND_DAMPING, GROUND_STIFFNESS, HORN_HEIGHT,
                     SPROCKET_DAMPING, SPROCKET_STIFFNESS, VehicleError, WHEEL_DAMPING,
                     WHEEL_STIFFNESS)
@@ -55,7 +56,7 @@ def _penalty(depth, closing, stiffness, damping):
             np.where(touching, damping * ramp, 0.0))
 
 
-class Contacts:
+class Contacts(KernelResults):
     def __init__(self, vehicle):
         self.v = vehicle
         geo = vehicle.layout
@@ -90,7 +91,6 @@ class Contacts:
         self.link0 = 2 + len(v.arm_nodes)  # body index of the first link
         self.reference = np.array([v.mbs.GetNodeParameter(n, "referenceCoordinates")
                                    for n in self.nodes], dtype=float)
-        from .contacts_kernel import CompiledContacts, library
         if library() is not None:
             self.kernel, self._compiled = "compiled", CompiledContacts(self, library())
         size = 3 * len(self.nodes)
@@ -137,7 +137,7 @@ class Contacts:
         self._update(t, q[self.system_index], qd[self.system_index])
 
     def _update(self, t, q, qd):
-        q, qd = np.asarray(q), np.asarray(qd)
+        q, qd = as_vector(q), as_vector(qd)
         # the tyres' load laws change between the coupling's passes at the same state
         key = (t, q.tobytes(), qd.tobytes(), self.v.settling, self.v.tyre_laws_key(), self.kernel)
         if key == self._key:
@@ -152,7 +152,7 @@ class Contacts:
 
     def _generalized(self, t, q, qd):
         self._update(t, q, qd)
-        return self.generalized
+        return self._compiled.generalized() if self._by_compiled else self.generalized
 
     def _sparse_jacobian(self, t, q, qd, factor, factor_t):
         """The Jacobian as exudyn takes it from this object: (row, column, value)

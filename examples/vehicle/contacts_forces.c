@@ -319,10 +319,12 @@ static void settle_damping(Contacts *c, double *seat)
             damper(c, c->link0 + i, ARRAY(SEATS) + 4 * i + 2 * s, P(SETTLE_SEAT));
 }
 
-/* The forces, once ARRAY(LOADS), ARRAY(SLOPES) (the tyres' loads at the compressions) and
- * ARRAY(GROUND) (the course's height under each pin) are set. */
+/* The forces, once ARRAY(LOADS), ARRAY(SLOPES) (the tyres' loads at the compressions)
+ * are set, and ARRAY(GROUND) (the course's height under each pin) where the course is
+ * given, not evaluated here (contacts_course.c). */
 CONTACTS_EXPORT void contacts_forces(Contacts *c, int settling)
 {
+    contacts_course_heights(c);
     const double *state = ARRAY(STATE), *seats = ARRAY(SEATS);
     int size = 3 * c->bodies;
     memset(c->pin, 0, sizeof(double) * 2 * c->links);

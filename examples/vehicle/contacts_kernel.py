@@ -3,10 +3,16 @@ compiled on first use as the coupling's bank is (bank_build.Library: gcc,
 -ffp-contract=off, a cache keyed by a hash of the sources), the same equations in the same
 order of operations as contacts.py's numpy kernel, which stays the readable reference and
 the fallback. One evaluation: the kernel's kinematics (bodies, pins, the tyres'
-compressions), the tyres' loads from Python (Vehicle.tyre_loads: the bank's laws) and the
-course's height under the pins, then the kernel's forces; the Jacobian's triplets on
-exudyn's call. The kernel's memory is allocated once; Python hands its results on as
-copies, as the numpy kernel's are new arrays each time.
+compressions), the tyres' loads and the course's height under the pins, then the kernel's
+forces; the Jacobian's triplets on exudyn's call. On the compiled path an evaluation is
+one C call: the kernel calls the bank's laws itself (Bank.law_loads_entry; the operations
+of Vehicle.tyre_loads) and evaluates course.py's courses (contacts_course.c); otherwise
+Python gives the loads (Vehicle.tyre_loads) and the heights of a course of another class
+between two calls. The kernel's memory is allocated once. Its results stay there while
+exudyn's Newton iterates; they are handed on as the numpy kernel's attributes (copies, as
+the numpy kernel's are new arrays each time) only when a reader first asks for one after
+an evaluation (`publish`, Contacts.__getattr__): the coupling's readers, the step check
+and the records, a few times a step, not at every iterate.
 """
 
 import ctypes
@@ -21,11 +27,12 @@ from fmu_components.coupling.bank_build import Library, NoCompiler
 
 from . import layout as lay
 from . import model
+from .course import Bump, Course, RandomRoad, Sine
 
 HERE = Path(__file__).resolve().parent
 LIBRARY = Library("vehicle_contacts",
                   [HERE / name for name in ("contacts.c", "contacts_forces.c",
-                                            "contacts_jacobian.c")],
+                                            "contacts_jacobian.c", "contacts_course.c")],
                   [HERE / "contacts.h"], "the vehicle's contacts kernel (contacts.c)",
                   "use the numpy kernel (--contacts numpy, or vehicle.contacts.use('numpy'))")
 # contacts.h's enum Parameter, in its order
@@ -36,7 +43,7 @@ PARAMETERS = ("LINK_PITCH", "LINK_INNER", "LINK_OUTER", "WHEEL_RADIUS", "TYRE_BL
               "TOOTH_SPACING", "IDLER_PIN_RADIUS", "ROLLER_PIN_RADIUS", "SPROCKET_X",
               "SPROCKET_Y", "ROLLER_X", "ROLLER_Y", "WRAP_START", "WRAP_SWEEP",
               "TOOTH_PHASE", "HULL_X0", "SETTLE_SEAT", "SETTLE_ARM", "SETTLE_HULL_X",
-              "SETTLE_HULL_Y", "SETTLE_HULL_PITCH", "TWO_PI")
+              "SETTLE_HULL_Y", "SETTLE_HULL_PITCH", "TWO_PI", "HORN_HEIGHT")
 # contacts.h's enum Array, in its order: the Contacts attribute each is read as, its shape
 # in (bodies, links, wheels)
 ARRAYS = (("state", ("b", 3)), ("rates", ("b", 3)), ("u", ("l", 2)), ("n", ("l", 2)),
@@ -46,6 +53,14 @@ ARRAYS = (("state", ("b", 3)), ("rates", ("b", 3)), ("u", ("l", 2)), ("n", ("l",
           ("slopes", ("w",)), ("tyre_force", ("w",)), ("ground", ("l",)),
           ("ground_load", ("l",)), ("tooth_gap", ("l",)), ("generalized", ("g",)),
           ("drive_torque", (1,)))
+# the numpy kernel's results that the run's readers read, as `publish` sets them
+PUBLISHED = ("u", "n", "seats", "seats_v", "pins", "pins_v", "wheels", "wheels_v",
+             "compression", "compression_rate", "tyre_force", "ground_load", "tooth_gap",
+             "generalized", "qd", "rates", "body_pos", "hull", "hull_v", "link_pos",
+             "link_angle", "link_v", "link_omega", "idler", "idler_v", "in_contact",
+             "drive_torque")
+# contacts.h's enum Course: the courses the kernel evaluates (contacts_course.c)
+COURSE_GIVEN, COURSE_KINDS = -1, {Course: 0, Bump: 1, Sine: 2, RandomRoad: 3}
 _loaded = {}
 
 
@@ -70,6 +85,12 @@ def library():
             lib.contacts_jacobian.restype = ctypes.c_long
             lib.contacts_jacobian.argtypes = [handle, ctypes.c_double, ctypes.c_double,
                                               pointer, ctypes.c_long]
+            lib.contacts_set_course.argtypes = [handle, ctypes.c_int, pointer, ctypes.c_int,
+                                                pointer, pointer, pointer]
+            lib.contacts_course_heights.argtypes = [handle]
+            lib.contacts_set_tyre_laws.argtypes = [handle, handle, handle, ctypes.c_int,
+                                                   ctypes.POINTER(ctypes.c_int)]
+            lib.contacts_evaluate.argtypes = [handle, ctypes.c_int]
             counts = (ctypes.c_int(), ctypes.c_int())
             lib.contacts_layout(*map(ctypes.byref, counts))
             if (counts[0].value, counts[1].value) != (len(PARAMETERS), len(ARRAYS)):
@@ -78,6 +99,28 @@ def library():
                                    "revision")
         _loaded["lib"] = lib
     return _loaded["lib"]
+
+
+def as_vector(values):
+    """A vector exudyn hands a user function (a list) as an array: np.fromiter costs a
+    third of np.asarray on a list."""
+    if isinstance(values, list):
+        return np.fromiter(values, float, len(values))
+    return np.asarray(values)
+
+
+class KernelResults:
+    """What Contacts reads of the C kernel: where its last evaluation was the kernel's
+    (`_by_compiled`), an attribute of PUBLISHED not set yet is read from the kernel's
+    memory on first use (`CompiledContacts.publish`, all of them at once)."""
+
+    _published = frozenset(PUBLISHED)
+
+    def __getattr__(self, name):  # only for attributes not set
+        if self.__dict__.get("_by_compiled") and name in self._published:
+            self._compiled.publish()
+            return self.__dict__[name]
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
 
 class CompiledContacts:
@@ -103,7 +146,12 @@ class CompiledContacts:
         count = ctypes.c_int()
         self.parameters = np.ctypeslib.as_array(
             lib.contacts_array(self.handle, -1, ctypes.byref(count)), shape=(len(PARAMETERS),))
-        self.triplets_out = np.zeros((4096, 3))
+        # the state's inputs as flat views, the object's coordinates' order
+        self.state, self.rates = self.views["state"].reshape(-1), self.views["rates"].reshape(-1)
+        self.reference = contacts.reference.reshape(-1)
+        self._course = None  # (the course, its attributes, its kind) the kernel has
+        self._bank = None  # the bank whose laws the kernel calls
+        self._triplets_buffer(4096)
         self.set_parameters()
 
     def set_parameters(self):
@@ -126,18 +174,63 @@ class CompiledContacts:
         self.parameters[:] = [float(values[name]) for name in PARAMETERS]
 
     def update(self, q, qd):
-        """The contacts at (q, qd), the object's coordinates; the results as the numpy
-        kernel's attributes of `contacts`."""
+        """The contacts at (q, qd), the object's coordinates (arrays), in the kernel's
+        memory (the last evaluation's attributes of `contacts` dropped: `publish` makes
+        them again where they are read)."""
         c, v, views = self.contacts, self.contacts.v, self.views
-        np.add(c.reference, np.reshape(q, (-1, 3)), out=views["state"])
-        views["rates"][:] = np.reshape(qd, (-1, 3))
+        if "generalized" in c.__dict__:  # published, or the numpy kernel's
+            for name in PUBLISHED:
+                c.__dict__.pop(name, None)
+        np.add(self.reference, q, out=self.state)
+        self.rates[:] = qd
+        given = self._set_course(v.course)
+        if v.bank is not None and not given:  # one call: the bank's laws called from C
+            self._set_tyre_laws(v.bank)
+            self.lib.contacts_evaluate(self.handle, bool(v.settling))
+            return
         self.lib.contacts_kinematics(self.handle)
-        compression, rate = views["compression"], views["compression_rate"]
-        views["loads"][:], views["slopes"][:] = v.tyre_loads(compression, rate)
-        views["ground"][:] = v.course.height(views["pins"][:, 0])
+        views["loads"][:], views["slopes"][:] = v.tyre_loads(views["compression"],
+                                                              views["compression_rate"])
+        if given:
+            views["ground"][:] = v.course.height(views["pins"][:, 0])
         self.lib.contacts_forces(self.handle, bool(v.settling))
-        # copies, as the numpy kernel's are new arrays each time: a caller may keep them
-        # across evaluations (a few microseconds)
+
+    def _set_tyre_laws(self, bank):
+        """Let the kernel call the bank's laws for the tyres' loads (Vehicle.tyre_loads,
+        the same operations), set once per bank (the run sets Vehicle.bank only while the
+        bank lives)."""
+        if self._bank is not bank:
+            rows = np.ascontiguousarray(self.contacts.v.tyre_rows, dtype=ctypes.c_int)
+            if self.lib.contacts_set_tyre_laws(self.handle, *bank.law_loads_entry(), bank.n,
+                                               rows.ctypes.data_as(ctypes.POINTER(
+                                                   ctypes.c_int))):
+                raise MemoryError("the vehicle's contacts kernel: out of memory")
+            self._bank = bank
+
+    def _set_course(self, course):
+        """Hand `course` to the kernel where it is one of course.py's (again where any of
+        its attributes was set anew); True where its heights are given from Python."""
+        attributes = tuple(vars(course).values())
+        if self._course is None or self._course[0] is not course or \
+                len(attributes) != len(self._course[1]) or \
+                any(a is not b for a, b in zip(attributes, self._course[1])):
+            kind, values, waves = course_values(course)
+            if self.lib.contacts_set_course(self.handle, kind,
+                                            _pointer(np.array(values, dtype=float)),
+                                            len(waves[0]), *map(_pointer, waves)):
+                raise MemoryError("the vehicle's contacts kernel: out of memory")
+            self._course = (course, attributes, kind)
+        return self._course[2] == COURSE_GIVEN
+
+    def generalized(self):
+        """The generalized forces of the last evaluation (a copy)."""
+        return self.views["generalized"].copy()
+
+    def publish(self):
+        """The last evaluation's results as the numpy kernel's attributes of `contacts`
+        (PUBLISHED): copies, as the numpy kernel's are new arrays each time (a reader may
+        keep them across evaluations)."""
+        c, views = self.contacts, self.views
         state, rates = views["state"].copy(), views["rates"].copy()
         link0 = c.link0
         c.__dict__.update(
@@ -153,15 +246,40 @@ class CompiledContacts:
         c.in_contact = c.compression > -np.inf
         c.drive_torque = float(views["drive_torque"][0])
 
+    def _triplets_buffer(self, rows):
+        self.triplets_out = np.zeros((rows, 3))
+        self._triplets_address = _pointer(self.triplets_out)  # converted once
+
     def triplets(self, factor, factor_t):
-        """The Jacobian's (row, column, value) rows at the state last evaluated."""
+        """The Jacobian's (row, column, value) rows at the state last evaluated (a view of
+        the kernel's buffer, valid until the next call)."""
         while True:
             out = self.triplets_out
-            count = self.lib.contacts_jacobian(self.handle, factor, factor_t, _pointer(out),
-                                               len(out))
+            count = self.lib.contacts_jacobian(self.handle, factor, factor_t,
+                                               self._triplets_address, len(out))
             if count <= len(out):
                 return out[:count]
-            self.triplets_out = np.zeros((2 * count, 3))
+            self._triplets_buffer(2 * count)
+
+
+def course_values(course):
+    """(kind, values, (k, amplitude, phase)) of `course` for contacts_set_course
+    (contacts.h's enum Course and CourseValue): the numbers its height takes, computed as
+    it computes them; COURSE_GIVEN for a course of another class."""
+    kind = COURSE_KINDS.get(type(course), COURSE_GIVEN)
+    none = np.zeros(0)
+    values = [course.front, course.start, 1.0, 0.0, 1.0, 0.0] if kind != COURSE_GIVEN \
+        else [0.0] * 6
+    waves = (none, none, none)
+    if kind == COURSE_KINDS[Bump]:
+        values[2:4] = course.length, 0.5 * course.bump_height
+    elif kind == COURSE_KINDS[Sine]:
+        values[2:4] = course.wavelength, course.amplitude
+    elif kind == COURSE_KINDS[RandomRoad]:
+        waves = tuple(np.ascontiguousarray(a, dtype=float)
+                      for a in (course.k, course.amplitude, course.phase))
+        values[4:6] = course.fade, (course.amplitude * np.cos(course.phase)).sum()
+    return kind, tuple(values), waves
 
 
 def _pointer(array):

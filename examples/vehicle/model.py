@@ -19,6 +19,7 @@ Force elements:
 * surge: a speed-holding force on the hull (the tractive effort, not modelled in detail).
 """
 
+import functools
 import math
 
 import numpy as np
@@ -388,9 +389,10 @@ class Vehicle:
         """Each wheel's tyre load (both half-wheels) at its compression and rate, and its
         slope by the compression (for the contacts' Jacobian: the load law's tangent, not
         its secant; central differences as the bank's law_loads takes them). On the
-        compiled path the bank's laws, in one call for every tyre."""
+        compiled path the bank's laws, in one call for every tyre (the contacts' C kernel
+        makes that call itself, the same operations: contacts_kernel.py)."""
         compression = np.where(np.isfinite(compression), compression, -HORN_HEIGHT)
-        rows = np.array(self.rows["tyre"])
+        rows = self.tyre_rows
         if self.bank is not None:
             deflection = np.zeros(len(self.components))
             deflection[rows] = compression[:, None]
@@ -406,11 +408,22 @@ class Vehicle:
                               / (2.0 * step))
         return loads, slopes
 
+    @functools.cached_property
+    def tyre_rows(self):
+        """The tyres' rows in `components`, a row (both half-wheels) per wheel."""
+        return np.array(self.rows["tyre"])
+
+    @functools.cached_property
+    def _tyre_rows_end(self):
+        return int(self.tyre_rows.max()) + 1
+
     def tyre_laws_key(self):
         """What decides the tyres' present load laws (they change between the coupling's
-        passes at the same state)."""
+        passes at the same state). On the compiled path the bank's rows of laws up to the
+        last tyre's: a slice costs less than picking the tyres' rows (a change of a
+        damper's law among them costs at most an evaluation more)."""
         if self.bank is not None:
-            return self.bank.laws[np.array(self.rows["tyre"]).ravel()].tobytes()
+            return self.bank.laws[:self._tyre_rows_end].tobytes()
         return tuple(_law_key(tyre) for pair in self.tyres for tyre in pair)
 
     def accepted(self):

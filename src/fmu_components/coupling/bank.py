@@ -347,6 +347,13 @@ class Bank:
                                  _address(slope) if slopes else None)
         return (loads, slope) if slopes else loads
 
+    def law_loads_entry(self):
+        """(the address of bank.c's bank_law_loads, the bank's handle), for C code that
+        evaluates the laws itself at every iterate: bank_law_loads(handle, deflection,
+        loads, slopes), arrays of n (slopes may be NULL), as law_loads; valid while the
+        bank lives."""
+        return ctypes.cast(self._lib.bank_law_loads, ctypes.c_void_p).value, self._handle
+
     def _linearised(self, i, deflection, rate, step):
         component = self.components[i]
         component.time = self.accepted[i, 0]  # for its messages
