@@ -198,11 +198,13 @@ class Joints:
         self.offset = np.asarray(v.torsion_offsets, dtype=float)
         self.radial_rows, self.torsion_rows = (np.array(v.rows[kind])
                                                for kind in ("radial", "torsion"))
-        self.kernel, self._compiled = "numpy", None
-        if library() is not None:
+        self.kernel, self._compiled, self._reading = "numpy", None, None
+        if library() is not None:  # one for exudyn's calls, one for the readers
             self.kernel = "compiled"
-            self._compiled = CompiledJoints(library(), self.reference, self.offset)
-        self._read_key, self._deflection = None, np.zeros(len(v.components))
+            self._compiled, self._reading = (CompiledJoints(library(), self.reference,
+                                                            self.offset) for _ in range(2))
+        self._key, self._read_key = None, None
+        self._deflection = np.zeros(len(v.components))
 
     def add_object(self):
         v = self.v
@@ -229,10 +231,11 @@ class Joints:
 
     # --- evaluation ----------------------------------------------------------------------------
 
-    def kinematics(self, q, qd):
+    def kinematics(self, q, qd, kernel=None):
+        """(link, joint) at the links' coordinates (q, qd): module `kinematics`'s."""
         q, qd = np.reshape(q, (-1, 3)), np.reshape(qd, (-1, 3))
         if self.kernel == "compiled":
-            return self._compiled.kinematics(q, qd)
+            return (kernel or self._reading).kinematics(q, qd)
         return kinematics(self.reference, q, qd, self.offset)
 
     def laws(self, joint):
@@ -254,15 +257,29 @@ class Joints:
                                                              float(rate[j]))
         return law
 
+    def _laws_key(self):
+        """What decides the laws now, where it is cheap to tell (None: not told)."""
+        v = self.v
+        if v.bank is not None:  # they change between the coupling's passes
+            return v.bank.laws.tobytes()
+        return "relaxed" if v.settling else None
+
     def evaluate(self, q, qd):
-        """(link, joint, law, effort, generalized) at the links' coordinates (q, qd)."""
-        link, joint = self.kinematics(q, qd)
+        """(link, joint, law, effort, generalized) at the links' coordinates (q, qd); once
+        per state and laws where the laws can be told apart (exudyn asks for the forces
+        and then the Jacobian at each Newton iterate)."""
+        laws = self._laws_key()
+        key = (np.asarray(q).tobytes(), np.asarray(qd).tobytes(), self.kernel, laws)
+        if laws is not None and key == self._key:
+            return self._evaluated
+        link, joint = self.kinematics(q, qd, self._compiled)
         law = self.laws(joint)
         if self.kernel == "compiled":
             effort, generalized = self._compiled.forces(law)
         else:
             effort, generalized = forces(link, joint, law)
-        return link, joint, law, effort, generalized
+        self._key, self._evaluated = key, (link, joint, law, effort, generalized)
+        return self._evaluated
 
     def generalized(self, q, qd):
         return self.evaluate(q, qd)[-1].reshape(-1)
