@@ -198,3 +198,25 @@ def test_the_readers_read_the_connectors_deflections(vehicle):
                 expected = readers[component]()
                 assert kernel.state(j, kind) == pytest.approx(expected, rel=1e-12, abs=1e-12), (
                     name, j, kind)
+
+
+def test_a_short_run_takes_the_same_steps_on_both_kernels(native_fmus):
+    """Three host steps of 1 ms from the laid-out loop at 5 m/s on the compiled path, the
+    joints' object on its C kernel and on its numpy kernel: the same histories (the same
+    bits on this machine; 1e-9 of each history's range asked: another libm may round
+    cos or sin differently)."""
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle.course import Bump
+    from vehicle.model import Vehicle
+
+    runs = {}
+    for which in ("numpy", "compiled"):
+        vehicle = Vehicle(Bump(3.0), 5.0, native_fmus["RoadWheelTyre"].parent)
+        vehicle.joints.use(which)
+        runs[which] = vehicle.run(0.003, 1e-3, settle=False)
+        assert vehicle.compiled and vehicle.coupling.steps == 3
+    for key, value in runs["numpy"].items():
+        if isinstance(value, np.ndarray) and value.dtype.kind == "f":
+            span = max(np.ptp(value), 1e-300)
+            assert np.max(np.abs(runs["compiled"][key] - value)) <= 1e-9 * span, key
+    assert np.max(runs["compiled"]["bush_radial_force"][-1]) > 5e3  # the track's tension

@@ -15,7 +15,6 @@ for every row, Bank.law_loads) and from the components on the Python path
 """
 
 import ctypes
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -23,16 +22,15 @@ import numpy as np
 import exudyn as exu
 from exudyn.itemInterface import ObjectGenericODE2
 
-from fmu_components.coupling.bank_build import Library, NoCompiler
+from fmu_components.coupling.bank_build import Library
 
 from . import layout as lay
 from .model import RADIAL_FADE, radial_fade
 
 HERE = Path(__file__).resolve().parent
 LIBRARY = Library("vehicle_joints", [HERE / "joints.c"], [], "the track joints' kernel "
-                  "(joints.c)", "use the numpy kernel (vehicle.joints.use('numpy'))")
+                  "(joints.c)", "the joints take their numpy kernel")
 KERNELS = ("compiled", "numpy")
-_loaded = {}
 
 
 # --- the numpy kernel (joints.c's functions, operation for operation) -----------------------
@@ -131,22 +129,15 @@ def jacobian(link, joint, qd, law, effort, factor, factor_t):
 # --- the C kernel ----------------------------------------------------------------------------
 
 def library():
-    """joints.c's library, loaded once per process; None, with a warning saying why and
-    what to use, where it cannot be built."""
-    if "lib" not in _loaded:
-        try:
-            lib = ctypes.CDLL(str(LIBRARY.path()))
-        except NoCompiler as missing:
-            warnings.warn(f"{missing}; the track's joints use their numpy kernel")
-            lib = None
-        if lib is not None:
-            pointer, integer, real = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
-            lib.joints_kinematics.argtypes = [integer, real] + [pointer] * 6
-            lib.joints_forces.argtypes = [integer, real, real] + [pointer] * 5
-            lib.joints_jacobian.argtypes = [integer, real] + [pointer] * 5 + [real, real,
-                                                                              pointer]
-        _loaded["lib"] = lib
-    return _loaded["lib"]
+    """joints.c's library, its functions declared; None where it cannot be built (with a
+    warning saying why and what to use: bank_build.Library.load)."""
+    lib = LIBRARY.load()
+    if lib is not None and lib.joints_forces.argtypes is None:
+        pointer, integer, real = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
+        lib.joints_kinematics.argtypes = [integer, real] + [pointer] * 6
+        lib.joints_forces.argtypes = [integer, real, real] + [pointer] * 5
+        lib.joints_jacobian.argtypes = [integer, real] + [pointer] * 5 + [real, real, pointer]
+    return lib
 
 
 class CompiledJoints:
