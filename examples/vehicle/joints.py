@@ -168,13 +168,15 @@ class CompiledJoints:
                                at["joint"], at["law"], at["effort"], at["generalized"])
         return a["effort"].copy(), a["generalized"].copy()
 
-    def jacobian(self, factor, factor_t):
-        """At the state and laws of the last forces() call."""
+    def jacobian(self, factor, factor_t, copy=True):
+        """At the state and laws of the last forces() call (without `copy`, a view of the
+        kernel's memory, valid until its next call)."""
         at = self.at
         self.lib.joints_jacobian(self.n, 0.5 * lay.LINK_PITCH, at["link"], at["joint"],
                                  at["qd"], at["law"], at["effort"], factor, factor_t,
                                  at["triplets"])
-        return self.arrays["triplets"].copy()
+        triplets = self.arrays["triplets"]
+        return triplets.copy() if copy else triplets
 
 
 class Joints:
@@ -259,8 +261,10 @@ class Joints:
         """(link, joint, law, effort, generalized) at the links' coordinates (q, qd); once
         per state and laws where the laws can be told apart (exudyn asks for the forces
         and then the Jacobian at each Newton iterate)."""
+        # exudyn's vectors converted once (a conversion costs about what the kernel does)
+        q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
         laws = self._laws_key()
-        key = (np.asarray(q).tobytes(), np.asarray(qd).tobytes(), self.kernel, laws)
+        key = (q.tobytes(), qd.tobytes(), self.kernel, laws)
         if laws is not None and key == self._key:
             return self._evaluated
         link, joint = self.kinematics(q, qd, self._compiled)
@@ -275,18 +279,19 @@ class Joints:
     def generalized(self, q, qd):
         return self.evaluate(q, qd)[-1].reshape(-1)
 
-    def triplets(self, q, qd, factor, factor_t):
+    def triplets(self, q, qd, factor, factor_t, copy=True):
         """The Jacobian's (row, column, value) rows at (q, qd): exudyn's factor K +
         factor_t C, K and C minus the forces' derivatives by q and by qd."""
         link, joint, law, effort, _ = self.evaluate(q, qd)
         if self.kernel == "compiled":
-            return self._compiled.jacobian(factor, factor_t)
+            return self._compiled.jacobian(factor, factor_t, copy)
         return jacobian(link, joint, np.reshape(qd, (-1, 3)), law, effort, factor, factor_t)
 
     def _sparse_jacobian(self, q, qd, factor, factor_t):
         size = 3 * len(self.v.link_nodes)
-        matrix = exu.MatrixContainer()
-        matrix.SetWithSparseMatrix(self.triplets(q, qd, factor, factor_t), size, size)
+        matrix = exu.MatrixContainer()  # copies the triplets
+        matrix.SetWithSparseMatrix(self.triplets(q, qd, factor, factor_t, copy=False), size,
+                                   size)
         return matrix
 
     # --- the coupling's readers ----------------------------------------------------------------
