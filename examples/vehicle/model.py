@@ -9,7 +9,9 @@ a closed loop of links. The sprocket is part of the hull and turns with its trav
 Force elements:
 * joints between links: TrackBushRadial (distance between the pin seats, along that line)
   and TrackBushTorsion (the angle between the links, zero in line, positive bent towards
-  the loop's inside, as round the sprocket) FMU instances, as in examples/track_span.py;
+  the loop's inside, as round the sprocket) FMU instances, as in examples/track_span.py:
+  one object computing all their forces with their Jacobian (joints.py), or two exudyn
+  connectors each;
 * arms: a preloaded linear torsion bar, and a RotaryDamper at the damped stations (input
   the arm's rotation from static, positive in bump, as in examples/road_wheel_station.py);
 * tyres: two RoadWheelTyre instances per wheel, one per half-wheel, both compressed by the
