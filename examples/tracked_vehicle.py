@@ -28,20 +28,23 @@ from coupling_study import write_csv
 from vehicle import outputs
 from vehicle.course import COURSES
 from vehicle.flags import add_run_arguments
-from vehicle.model import Linear, Vehicle, VehicleError, static_points
+from vehicle.model import (DEFAULT_JOINTS, JOINTS, Linear, Vehicle, VehicleError,
+                           static_points)
 
 DEFAULT_STEP = 1e-3  # s
 
 
 def simulate(course_name, speed, end_time, step, coupling=DEFAULT_SCHEME, linear=None,
              statics=None, settle_time=3.0, fmu_dir=None, path=bank_path.DEFAULT_PATH,
-             contacts=None):
+             contacts=None, joints=DEFAULT_JOINTS):
     """One run; returns (vehicle, histories, wall seconds, CPU seconds) of the run proper
     (the settling to the static point, stored after the first run, and the set-up,
     Vehicle.prepare, excluded). contacts: the contacts' kernel, "compiled" or "numpy"
-    (default: compiled where it builds; vehicle/contacts_kernel.py)."""
+    (default: compiled where it builds; vehicle/contacts_kernel.py). joints: the track's
+    joints as one object with their Jacobian ("kernel", vehicle/joints.py) or as two
+    exudyn connectors each ("connectors")."""
     statics = statics or static_points(fmu_dir)
-    vehicle = Vehicle(None, speed, fmu_dir, linear, coupling, statics, path)
+    vehicle = Vehicle(None, speed, fmu_dir, linear, coupling, statics, path, joints)
     if contacts:
         vehicle.contacts.use(contacts)
     vehicle.course = COURSES[course_name](vehicle.layout.sprocket[0] + 0.3)
@@ -68,6 +71,10 @@ def main(argv=None):
     parser.add_argument("--contacts", choices=("compiled", "numpy"),
                         help="the contacts' kernel: C compiled on first use (the default "
                              "where gcc is found) or numpy (the readable reference)")
+    parser.add_argument("--joints", choices=JOINTS, default=DEFAULT_JOINTS,
+                        help="the track's joints: one object with their analytic Jacobian "
+                             f"(kernel) or two exudyn connectors each (default "
+                             f"{DEFAULT_JOINTS})")
     parser.add_argument("--out", type=Path, default=Path("reports") / "tracked_vehicle")
     args = parser.parse_args(argv)
     if args.speed < 0 or args.end_time <= 0 or args.step <= 0:
@@ -80,14 +87,15 @@ def main(argv=None):
         vehicle, result, wall, cpu = simulate(args.course, args.speed, args.end_time,
                                               args.step, args.coupling, None, statics,
                                               args.settle_time, args.fmu_dir, args.path,
-                                              args.contacts)
+                                              args.contacts, args.joints)
         runs["FMUs"] = result
         if args.linear:
             linear = Linear(statics, args.fmu_dir)
             print(f"Kelvin equivalents: {linear.describe()}")
             runs["linear"] = simulate(args.course, args.speed, args.end_time, args.step,
                                       args.coupling, linear, statics, args.settle_time,
-                                      args.fmu_dir, contacts=args.contacts)[1]
+                                      args.fmu_dir, contacts=args.contacts,
+                                      joints=args.joints)[1]
     except VehicleError as error:
         sys.exit(f"tracked_vehicle: {error}")
     simulated = result["time"][-1] - result["time"][0]
@@ -95,7 +103,8 @@ def main(argv=None):
     print(f"{vehicle.instances} FMU instances ({vehicle.links} links), course: "
           f"{vehicle.course.describe()}; {args.speed:g} m/s, host step {args.step * 1e3:g} ms, "
           f"coupling {args.coupling}, {'compiled' if vehicle.compiled else 'Python'} path, "
-          f"{vehicle.contacts.kernel} contacts")
+          f"{vehicle.contacts.kernel} contacts, joints by "
+          f"{vehicle.joints.kernel + ' kernel' if vehicle.joints else 'connectors'}")
     print(f"{simulated:.3f} s simulated in {wall:.1f} s wall, {cpu:.1f} s CPU: "
           f"{wall / simulated:.1f} s wall and {cpu / simulated:.1f} s CPU per simulated "
           f"second")

@@ -79,11 +79,11 @@ def test_a_link_through_a_wheel_stops_the_run_naming_wheel_and_time(native_fmus)
         vehicle.coupling.free()
 
 
-def _laid_out(native_fmus, settling=False):
+def _laid_out(native_fmus, settling=False, joints="kernel"):
     from vehicle.course import Bump
     from vehicle.model import Vehicle
 
-    vehicle = Vehicle(Bump(3.0), 5.0, native_fmus["RoadWheelTyre"].parent)
+    vehicle = Vehicle(Bump(3.0), 5.0, native_fmus["RoadWheelTyre"].parent, joints=joints)
     vehicle.settling = settling
     return vehicle
 
@@ -248,7 +248,7 @@ def test_the_components_start_at_the_runs_initial_state(native_fmus):
     q[turned] = 0.01
     data.SetODE2Coordinates(q, exu.ConfigurationType.Initial)
     result = vehicle.run(1e-3, 1e-3, settle=False)
-    offsets = [offset for _, offset in vehicle.torsion_connectors]
+    offsets = vehicle.torsion_offsets
     assert result["time"][0] == 0.0
     assert result["bush_angle"][0][k] == pytest.approx(0.01 + offsets[k], abs=1e-12)
     assert result["bush_angle"][0][k + 1] == pytest.approx(-0.01 + offsets[k + 1], abs=1e-12)
@@ -392,21 +392,23 @@ def test_a_wheel_above_a_convex_joint_stays_on_the_track(native_fmus):
         vehicle.coupling.free()
 
 
+@pytest.mark.parametrize("joints", ["kernel", "connectors"])
 @pytest.mark.parametrize("path", ["python", "compiled"])
 @pytest.mark.parametrize("load", [-3000.0, 3000.0])
-def test_the_radial_bushs_force_is_lipschitz_through_zero_distance(native_fmus, path, load):
+def test_the_radial_bushs_force_is_lipschitz_through_zero_distance(native_fmus, path, load,
+                                                                   joints):
     """A radial bush's law carries a load at zero distance (its memory: here -3 or +3 kN
-    at 0.01 mm, 1e8 N/m): the force its connector applies, along the line between the pin
-    seats, must still vanish there continuously, not flip with the line's direction. With
-    the seats displaced by +e and -e along one direction, e from 1 um to 0.1 nm, the force
-    goes to zero and its change over the 2 e stays bounded (a Lipschitz constant) on both
-    paths."""
+    at 0.01 mm, 1e8 N/m): the force applied at its seats (by the joints' object or by the
+    joint's connector), along the line between them, must still vanish there
+    continuously, not flip with the line's direction. With the seats displaced by +e and
+    -e along one direction, e from 1 um to 0.1 nm, the force goes to zero and its change
+    over the 2 e stays bounded (a Lipschitz constant) on both paths."""
     exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
     from fmu_components.coupling.law import LoadLaw
     from vehicle import layout as lay
     from vehicle.model import RADIAL_FADE
 
-    vehicle = _laid_out(native_fmus)
+    vehicle = _laid_out(native_fmus, joints=joints)
     mbs, j = vehicle.mbs, 40  # joint 40: between links 39 and 40, on the top run
     try:
         if path == "compiled":
@@ -415,6 +417,7 @@ def test_the_radial_bushs_force_is_lipschitz_through_zero_distance(native_fmus, 
             compiled.bank.start(0.0, *compiled.initial_state())
             compiled.bank._set_law(compiled.radial_rows[j], 1e-5, load, 1e8, 0.0)
             compiled.laws.update()
+            vehicle.bank = compiled.bank  # where the joints' object reads the laws
         else:
             vehicle.coupling.start(0.0)
             vehicle.radial[j].law = LoadLaw(1e-5, load, 1e8)
@@ -434,6 +437,11 @@ def test_the_radial_bushs_force_is_lipschitz_through_zero_distance(native_fmus, 
             centre = rear + half * np.array([math.cos(angle1), math.sin(angle1)])
             q[ahead:ahead + 2] = centre - reference[1][:2]
             data.SetODE2Coordinates(q, current)
+            if joints == "kernel":  # the force on link 39's front seat, along the line
+                index = vehicle.joints.system_index
+                _, joint, _, effort, _ = vehicle.joints.evaluate(q[index], 0.0 * q[index])
+                assert joint[j, 2] == pytest.approx(np.hypot(*offset), rel=1e-3)
+                return effort[j, 0] * joint[j, :2] / joint[j, 2]
             assert mbs.GetObjectOutput(vehicle.radial_connectors[j], exu.OutputVariableType
                                        .Distance) == pytest.approx(np.hypot(*offset), rel=1e-3)
             return np.array(mbs.GetObjectOutput(vehicle.radial_connectors[j],

@@ -13,7 +13,7 @@ import numpy as np
 
 import bank_path
 
-from . import layout as lay
+from .joints import Joints
 from .model import HORN_HEIGHT, radial_fade
 
 
@@ -30,12 +30,10 @@ class CompiledPath:
             np.array(rows[kind]) for kind in ("damper", "radial", "torsion"))
         links = v.link_nodes
         self.link_index = np.array([mbs.GetNodeODE2Index(n) for n in links])[:, None] + [0, 1, 2]
-        self.link_reference = np.array([mbs.GetNodeParameter(n, "referenceCoordinates")
-                                        for n in links], dtype=float)
         self.hull_rotation = mbs.GetNodeODE2Index(v.hull_node) + 2
         self.arm_rotation = np.array([mbs.GetNodeODE2Index(v.arm_nodes[i - 1]) + 2
                                       for i in v.dampers])
-        self.torsion_offset = np.array([offset for _, offset in v.torsion_connectors])
+        self.joints = v.joints or Joints(v)  # its kinematics, for the deflections
         self._compile_forces()
 
     def _compile_forces(self):
@@ -91,20 +89,11 @@ class CompiledPath:
         compression = np.where(v.contacts.in_contact, v.contacts.compression, -HORN_HEIGHT)
         deflection[self.tyre_rows] = compression[:, None]
         deflection[self.damper_rows] = q[self.hull_rotation] - q[self.arm_rotation]
-        moved = q[self.link_index]
-        x, y, angle = (self.link_reference + moved).T
-        # joint j: link j - 1's front seat to link j's rear seat (as exudyn places them:
-        # the node's position plus the rotated local position), their distance as
-        # model._seat_deflection has it
-        half = 0.5 * lay.LINK_PITCH
-        cos, sin = np.cos(angle), np.sin(angle)
-        front_x, front_y = x + cos * half, y + sin * half
-        rear_x, rear_y = x + cos * -half, y + sin * -half
-        dx = rear_x - np.roll(front_x, 1)
-        dy = rear_y - np.roll(front_y, 1)
-        deflection[self.radial_rows] = np.sqrt(dx * dx + dy * dy)
-        rotation = moved[:, 2]
-        deflection[self.torsion_rows] = (rotation - np.roll(rotation, 1)) + self.torsion_offset
+        # the joints' seat distances and relative angles, as the joints' object computes
+        # them (joints.py; model._seat_deflection has the same distance)
+        joint = self.joints.kinematics(q[self.link_index], np.zeros(self.link_index.shape))[1]
+        deflection[self.radial_rows] = joint[:, 2]
+        deflection[self.torsion_rows] = joint[:, 6]
         return deflection
 
 

@@ -9,7 +9,9 @@ a closed loop of links. The sprocket is part of the hull and turns with its trav
 Force elements:
 * joints between links: TrackBushRadial (distance between the pin seats, along that line)
   and TrackBushTorsion (the angle between the links, zero in line, positive bent towards
-  the loop's inside, as round the sprocket) FMU instances, as in examples/track_span.py;
+  the loop's inside, as round the sprocket) FMU instances, as in examples/track_span.py:
+  one object computing all their forces with their Jacobian (joints.py), or two exudyn
+  connectors each;
 * arms: a preloaded linear torsion bar, and a RotaryDamper at the damped stations (input
   the arm's rotation from static, positive in bump, as in examples/road_wheel_station.py);
 * tyres: two RoadWheelTyre instances per wheel, one per half-wheel, both compressed by the
@@ -69,6 +71,10 @@ NEWTON_TOLERANCE = 0.1
 # joint near slack (0.4 kN or less on the elastic rate) feels it. Wider fades (20, 50 um)
 # made exudyn shorten more steps at 5 m/s (docs/vehicle.md).
 RADIAL_FADE = 5e-6  # m
+# How the track's joints are built: one object computing all their forces and their
+# Jacobian (joints.py), or two exudyn connectors each (docs/vehicle.md, The joints)
+JOINTS = ("kernel", "connectors")
+DEFAULT_JOINTS = "kernel"
 
 
 def markers(mbs):
@@ -184,11 +190,16 @@ class Linear:
 
 class Vehicle:
     def __init__(self, course, speed, fmu_dir=None, linear=None, coupling="corrected",
-                 statics=None, path=bank_path.DEFAULT_PATH):
+                 statics=None, path=bank_path.DEFAULT_PATH, joints=DEFAULT_JOINTS):
         """path: "compiled", the coupling's bank (examples/bank_path.py: the FMUs' per-step
         work in C, the load laws in exudyn's compiled symbolic functions; compiled.py), or
         "python", the readable reference (a Python force function per connector); the
-        linear vehicle (no FMUs) takes the Python path."""
+        linear vehicle (no FMUs) takes the Python path. joints: "kernel", the track's
+        joints as one object with their analytic Jacobian (joints.py: `self.joints`), or
+        "connectors", two exudyn connectors per joint that exudyn differentiates."""
+        if joints not in JOINTS:
+            raise ValueError(f"joints {joints!r}: one of {', '.join(JOINTS)}")
+        self.joint_elements = joints
         self.course, self.speed = course, speed
         self.compiled = linear is None and bank_path.compiled(path, coupling)
         self.bank = None  # the compiled path's, while it runs
@@ -338,16 +349,27 @@ class Vehicle:
                                       at(body, [0.5 * lay.LINK_PITCH, 0.0])))
             self.link_angle0.append(angles[k])
         self.link_angle0 = np.array(self.link_angle0)
+        # joint j: between link j - 1 (behind) and link j; its torsion bush's angle is the
+        # links' relative rotation plus its offset, the angle between them as laid out
+        self.torsion_offsets = [float(np.angle(np.exp(1j * (angles[j] - angles[j - 1]))))
+                                for j in range(n)]
         self.radial_connectors, self.torsion_connectors = [], []
-        for j in range(n):  # joint j: between link j - 1 (behind) and link j
-            behind, ahead_ = (j - 1) % n, j
+        for j, offset in enumerate(self.torsion_offsets):
             radial = make("TrackBushRadial", f"radial_{j}")
             torsion = make("TrackBushTorsion", f"torsion_{j}")
-            offset = float(np.angle(np.exp(1j * (angles[ahead_] - angles[behind]))))
+            self.radial.append(radial)
+            self.torsion.append(torsion)
+            self.rows["radial"].append(len(self.components) - 2)
+            self.rows["torsion"].append(len(self.components) - 1)
+            if joints == "kernel":  # one object for all joints (joints.py), added below
+                self.coupling.add(radial, lambda j=j: self.joints.state(j, "radial"))
+                self.coupling.add(torsion, lambda j=j: self.joints.state(j, "torsion"))
+                continue
             # a scalar force along the line between the seats (exudyn's own geometry, as
             # the track-span example): a tension pulls them together (its Cartesian
             # spring-damper with the force as a vector cost a fifth more CPU); faded in
             # over the seats' first RADIAL_FADE of distance, where that line turns
+            behind, ahead_ = (j - 1) % n, j
             rc = mbs.AddObject(ObjectConnectorSpringDamper(
                 markerNumbers=[self.link_markers[behind][1], self.link_markers[ahead_][0]],
                 springForceUserFunction=lambda mbs, t, item, length, rate, *_, b=radial:
@@ -357,10 +379,6 @@ class Vehicle:
                                coordinate(self.link_nodes[ahead_], 2)],
                 springForceUserFunction=lambda mbs, t, item, x, v, *_, b=torsion, o=offset:
                     self.load(b, x + o, v)))
-            self.radial.append(radial)
-            self.torsion.append(torsion)
-            self.rows["radial"].append(len(self.components) - 2)
-            self.rows["torsion"].append(len(self.components) - 1)
             self.radial_connectors.append(rc)
             self.torsion_connectors.append((tc, offset))
             self.coupling.add(radial, lambda c=rc: _seat_deflection(*connector_state(mbs, c)))
@@ -373,10 +391,16 @@ class Vehicle:
                 loadVector=[0.0, -GRAVITY, 0.0]))
 
         from .contacts import Contacts
+        from .joints import Joints
+        self.joints = Joints(self) if joints == "kernel" else None
+        if self.joints is not None:
+            self.joints.add_object()
         self.contacts = Contacts(self)
         self.contacts.add_object()
         mbs.Assemble()
         self.contacts.index()
+        if self.joints is not None:
+            self.joints.index()
 
     def load(self, component, deflection, rate):
         """What a force element applies: the component's load law, or while the vehicle

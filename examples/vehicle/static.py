@@ -20,7 +20,7 @@ from fmu_components.coupling.bank_build import cache_directory
 
 from example_fmus import fmu_path
 
-from . import contact_math, contacts, contacts_kernel, layout, model
+from . import contact_math, contacts, contacts_kernel, joints, layout, model
 
 REST = 0.02  # m/s, rad/s: settled when no coordinate moves faster (a slow creep of the
 # front arm and the pitch remains, decaying by about 7 % per 0.1 s)
@@ -35,16 +35,18 @@ def _constants(module):
 
 def static_key(vehicle, step):
     """A digest of what decides the static point: the model's values and code (every
-    constant and the source of layout, model and contacts, and which contacts kernel),
+    constant and the source of layout, model, contacts and joints, and which kernels),
     the FMUs' files, the linear elements if any, the static values the layout was made
     from, and the settling's own step and rest."""
     files = {name: hashlib.sha256(Path(fmu_path(name, vehicle.fmu_dir)).read_bytes())
              .hexdigest() for name in FMUS}
     linear = vehicle.linear.coefficients if vehicle.linear is not None else None
     sources = [hashlib.sha256(Path(m.__file__).read_bytes()).hexdigest()
-               for m in (layout, model, contacts, contact_math)]
-    # the kernel that settles it, and the C kernel's sources
-    sources += [vehicle.contacts.kernel, contacts_kernel.LIBRARY.source_tag()]
+               for m in (layout, model, contacts, contact_math, joints)]
+    # the kernels that settle it (contacts, joints), and the C kernels' sources
+    sources += [vehicle.contacts.kernel, contacts_kernel.LIBRARY.source_tag(),
+                vehicle.joint_elements, vehicle.joints and vehicle.joints.kernel,
+                joints.LIBRARY.source_tag()]
     content = json.dumps([_constants(layout), _constants(model), _constants(contacts), sources,
                           files, repr(linear), repr(vehicle.statics), step, REST, CHUNK],
                          sort_keys=True)

@@ -9,11 +9,13 @@ $FMU_COMPONENTS_CACHE); where no compiler is found it says so and names the Pyth
 contacts, examples/vehicle/contacts_kernel.py).
 """
 
+import ctypes
 import hashlib
 import os
 import shutil
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
@@ -103,6 +105,17 @@ class Library:
             raise NoCompiler(f"{self.what} has no build for platform {platform}: "
                              f"{self.fallback}")
         return self.built() or self.compile(platform, cache_directory())
+
+    def load(self):
+        """The library loaded (ctypes), once per process; None where it cannot be built,
+        with a warning saying why and what to use instead (`fallback`)."""
+        if not hasattr(self, "_loaded"):
+            try:
+                self._loaded = ctypes.CDLL(str(self.path()))
+            except NoCompiler as missing:
+                warnings.warn(str(missing), stacklevel=2)
+                self._loaded = None
+        return self._loaded
 
 
 BANK = Library("bank", SOURCES, HEADERS, "the coupling bank (compiled per-step work)",

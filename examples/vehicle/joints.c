@@ -1,0 +1,170 @@
+/* The track's joints in C (joints.py loads it; its numpy kernel is the readable reference):
+ * per joint the radial bush's seat distance and the torsion bush's relative angle, with
+ * their rates (joints_kinematics); the two bushes' generalized forces on the links' (x, y,
+ * angle) once Python has read their laws' loads and slopes (joints_forces); their Jacobian
+ * as exudyn's triplets (joints_jacobian). The same operations in the same order as the
+ * numpy kernel, so that the two give the same bits. libc and libm only.
+ *
+ * Joint j joins link a = j - 1 (its front seat, local +half) to link b = j (its rear seat,
+ * local -half). Arrays, row-major: link (n x 2: cos, sin of the link's angle); joint (n x 8:
+ * the seats' separation dx, dy, their distance L, relative velocity wx, wy, the distance's
+ * rate, the torsion bush's angle and rate); law (n x 6: the radial law's load, its slope by
+ * deflection and by rate, the same for the torsion law); effort (n x 3: the radial force
+ * applied, g = load * fade(L), and its slopes by L and by its rate). */
+#include <math.h>
+
+#if defined(_WIN32)
+#define JOINTS_EXPORT __declspec(dllexport)
+#else
+#define JOINTS_EXPORT __attribute__((visibility("default")))
+#endif
+
+JOINTS_EXPORT void joints_kinematics(int n, double half, const double *reference,
+                                     const double *q, const double *qd, const double *offset,
+                                     double *link, double *joint)
+{
+    for (int k = 0; k < n; k++) {
+        double angle = reference[3 * k + 2] + q[3 * k + 2];
+        link[2 * k] = cos(angle);
+        link[2 * k + 1] = sin(angle);
+    }
+    for (int j = 0; j < n; j++) {
+        int a = (j + n - 1) % n, b = j;
+        const double *ca = link + 2 * a, *cb = link + 2 * b;
+        double xa = reference[3 * a] + q[3 * a], ya = reference[3 * a + 1] + q[3 * a + 1];
+        double xb = reference[3 * b] + q[3 * b], yb = reference[3 * b + 1] + q[3 * b + 1];
+        double front_x = xa + ca[0] * half, front_y = ya + ca[1] * half;
+        double rear_x = xb + cb[0] * -half, rear_y = yb + cb[1] * -half;
+        double *out = joint + 8 * j;
+        out[0] = rear_x - front_x;
+        out[1] = rear_y - front_y;
+        out[2] = sqrt(out[0] * out[0] + out[1] * out[1]);
+        /* the seats' velocities: the node's plus omega x (its arm from the node) */
+        double wa = qd[3 * a + 2], wb = qd[3 * b + 2];
+        double front_vx = qd[3 * a] - wa * (ca[1] * half);
+        double front_vy = qd[3 * a + 1] + wa * (ca[0] * half);
+        double rear_vx = qd[3 * b] - wb * (cb[1] * -half);
+        double rear_vy = qd[3 * b + 1] + wb * (cb[0] * -half);
+        out[3] = rear_vx - front_vx;
+        out[4] = rear_vy - front_vy;
+        out[5] = out[2] > 0.0 ? (out[0] * out[3] + out[1] * out[4]) / out[2] : 0.0;
+        out[6] = (q[3 * b + 2] - q[3 * a + 2]) + offset[j];
+        out[7] = wb - wa;
+    }
+}
+
+/* The seats' arms from their links' nodes: a's front seat, b's rear seat. */
+static void arms(const double *link, int a, int b, double half, double ra[2], double rb[2])
+{
+    ra[0] = link[2 * a] * half;
+    ra[1] = link[2 * a + 1] * half;
+    rb[0] = link[2 * b] * -half;
+    rb[1] = link[2 * b + 1] * -half;
+}
+
+/* The radial bush's force along the seats' line, faded in over their first `fade` of
+ * distance (model.radial_fade); the torsion bush's torque; each link's generalized force
+ * (its rows in `generalized`), the joint it is b of first, then the one it is a of. */
+JOINTS_EXPORT void joints_forces(int n, double half, double fade, const double *link,
+                                 const double *joint, const double *law, double *effort,
+                                 double *generalized)
+{
+    for (int j = 0; j < n; j++) {
+        const double *kin = joint + 8 * j, *l = law + 6 * j;
+        double distance = kin[2];
+        double s = distance / fade < 1.0 ? distance / fade : 1.0;
+        double share = s * (2.0 - s), share_slope = 2.0 * (1.0 - s) / fade;
+        double *e = effort + 3 * j;
+        e[0] = l[0] * share;
+        e[1] = l[1] * share + l[0] * share_slope;
+        e[2] = l[2] * share;
+    }
+    for (int k = 0; k < n; k++) {
+        double sum[3];
+        for (int side = 0; side < 2; side++) {
+            /* link k is b of joint k and a of joint k + 1 */
+            int j = side == 0 ? k : (k + 1) % n;
+            int a = (j + n - 1) % n, b = j;
+            const double *kin = joint + 8 * j;
+            double length = kin[2] > 0.0 ? kin[2] : 1.0;
+            double g = effort[3 * j];
+            double ux = g * (kin[0] / length), uy = g * (kin[1] / length);
+            double torque = law[6 * j + 3];
+            double ra[2], rb[2];
+            arms(link, a, b, half, ra, rb);
+            double part[3];
+            if (side == 0) {
+                part[0] = -ux;
+                part[1] = -uy;
+                part[2] = -(rb[0] * uy - rb[1] * ux) - torque;
+            } else {
+                part[0] = ux;
+                part[1] = uy;
+                part[2] = (ra[0] * uy - ra[1] * ux) + torque;
+            }
+            for (int i = 0; i < 3; i++) sum[i] = side == 0 ? part[i] : sum[i] + part[i];
+        }
+        for (int i = 0; i < 3; i++) generalized[3 * k + i] = sum[i];
+    }
+}
+
+/* Per joint its 6 x 6 block over (a's x, y, angle, b's x, y, angle), factor K + factor_t
+ * C, as 36 (row, column, value) triplets in row-major order: with B = d(seats'
+ * separation)/d(coordinates) = [-G_a, G_b], G = [[1, 0, -r_y], [0, 1, r_x]] (r the seat's
+ * arm), e the unit separation, c = B^T e, H the velocities' change with the angles:
+ *   K = (g_L - g/L) c c^T + g/L B^T B + g_v c (B^T w / L - (L'/L) c + H^T e)^T
+ *       + r_a.u at (a's angle)^2 - r_b.u at (b's angle)^2 + the torsion law's slope,
+ *   C = g_v c c^T + the torsion law's slope by rate,
+ * u = g e the force on a's seat (L' the distance's rate, w the seats' relative velocity). */
+JOINTS_EXPORT void joints_jacobian(int n, double half, const double *link, const double *joint,
+                                   const double *qd, const double *law, const double *effort,
+                                   double factor, double factor_t, double *triplets)
+{
+    for (int j = 0; j < n; j++) {
+        int a = (j + n - 1) % n, b = j;
+        const double *kin = joint + 8 * j, *l = law + 6 * j, *ef = effort + 3 * j;
+        double ra[2], rb[2];
+        arms(link, a, b, half, ra, rb);
+        double B[2][6] = {{-1.0, 0.0, ra[1], 1.0, 0.0, -rb[1]},
+                          {0.0, -1.0, -ra[0], 0.0, 1.0, rb[0]}};
+        double length = kin[2] > 0.0 ? kin[2] : 1.0;
+        double e0 = kin[0] / length, e1 = kin[1] / length;
+        double ratio = kin[5] / length, beta = ef[0] / length;
+        double alpha = ef[1] - beta;
+        double wa = qd[3 * a + 2], wb = qd[3 * b + 2];
+        double He[6] = {0.0, 0.0, (wa * ra[0]) * e0 + (wa * ra[1]) * e1, 0.0, 0.0,
+                        (-wb * rb[0]) * e0 + (-wb * rb[1]) * e1};
+        double c[6], row[6];
+        for (int i = 0; i < 6; i++) {
+            c[i] = B[0][i] * e0 + B[1][i] * e1;
+            double Bw = B[0][i] * kin[3] + B[1][i] * kin[4];
+            row[i] = Bw / length - ratio * c[i] + He[i];
+        }
+        double ux = ef[0] * e0, uy = ef[0] * e1;
+        double K[6][6], C[6][6];
+        for (int i = 0; i < 6; i++)
+            for (int k = 0; k < 6; k++) {
+                double BtB = B[0][i] * B[0][k] + B[1][i] * B[1][k];
+                K[i][k] = alpha * c[i] * c[k] + beta * BtB + ef[2] * c[i] * row[k];
+                C[i][k] = ef[2] * c[i] * c[k];
+            }
+        K[2][2] += ra[0] * ux + ra[1] * uy;
+        K[5][5] -= rb[0] * ux + rb[1] * uy;
+        K[2][2] += l[4];
+        K[2][5] -= l[4];
+        K[5][2] -= l[4];
+        K[5][5] += l[4];
+        C[2][2] += l[5];
+        C[2][5] -= l[5];
+        C[5][2] -= l[5];
+        C[5][5] += l[5];
+        double *out = triplets + 3 * 36 * j;
+        for (int i = 0; i < 6; i++)
+            for (int k = 0; k < 6; k++) {
+                double *entry = out + 3 * (6 * i + k);
+                entry[0] = 3 * (i < 3 ? a : b) + i % 3;
+                entry[1] = 3 * (k < 3 ? a : b) + k % 3;
+                entry[2] = factor * K[i][k] + factor_t * C[i][k];
+            }
+    }
+}

@@ -1,0 +1,222 @@
+"""The tracked vehicle's joints as one object (examples/vehicle/joints.py, docs/vehicle.md
+The joints): at states that bend, slacken and compress joints, the kernel's generalized
+forces are what exudyn's two connectors per joint apply, its Jacobian is the derivative of
+those forces, its C kernel gives its numpy kernel's bits, and the coupling's readers read
+the connectors' deflections."""
+
+import math
+import sys
+
+import numpy as np
+import pytest
+
+from conftest import ROOT
+
+sys.path.insert(0, str(ROOT / "examples"))  # the example scripts, imported as modules
+
+NO_EXUDYN = 'exudyn is not installed: pip install -e ".[examples]"'
+FACTORS = ((1.0, 0.0), (0.0, 1.0), (0.25, 250.0))  # exudyn's (factor, factor_t)
+
+
+@pytest.fixture(scope="module")
+def vehicle(native_fmus):
+    """The vehicle with its joints as connectors, the FMUs' laws started (5 m/s, laid out
+    at the static point's design: every joint at the track's tension), and a joints
+    kernel over the same links."""
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle.course import Bump
+    from vehicle.joints import Joints
+    from vehicle.model import Vehicle
+
+    built = Vehicle(Bump(3.0), 5.0, native_fmus["RoadWheelTyre"].parent, joints="connectors")
+    built.coupling.start(0.0)
+    built.kernel = Joints(built)
+    built.kernel.index()
+    built.fmu_laws = {c: c.law for c in built.radial + built.torsion}
+    yield built
+    built.coupling.free()
+
+
+def _laws(vehicle, joint):
+    """Load laws that reach each branch: rate-dependent (a damper term: the Kelvin
+    elements'), a clipped secant (LoadLaw's curvature beyond [K/2, 2K]) carrying a
+    compression, and the FMUs' own (the relaxed start's) on the rest."""
+    from fmu_components.coupling.law import LoadLaw
+
+    for j, component in enumerate(vehicle.radial):
+        x = float(joint[j, 2])
+        if j % 3 == 0:
+            component.law = lambda d, r, x0=x: 13e3 + 8e7 * (d - x0) + 2e4 * r
+        elif j % 3 == 1:
+            component.law = LoadLaw(x + 2e-5, -2e3, 8e7, 3 * 8e7 / 2e-5)
+    for j, component in enumerate(vehicle.torsion):
+        if j % 2:
+            x = float(joint[j, 6])
+            component.law = lambda d, r, x0=x: 10.0 + 300.0 * (d - x0) + 5.0 * r
+
+
+def _states(vehicle):
+    """(name, q, qd) of the whole system: the laid-out loop running at 5 m/s (its joints
+    bent 33 deg round the sprocket and the idler); every coordinate jostled (0.1 mm,
+    0.1 mrad) with random velocities; a joint on the top run pulled to 3 um, inside the
+    radial bush's fade (5 um); the sprocket's joints bent 5 deg more."""
+    import exudyn as exu
+
+    data = vehicle.mbs.systemData
+    q0 = np.array(data.GetODE2Coordinates(exu.ConfigurationType.Initial))
+    qd0 = np.array(data.GetODE2Coordinates_t(exu.ConfigurationType.Initial))
+    rng = np.random.default_rng(29)
+    yield "running", q0, qd0
+    jostled = q0 + rng.normal(0.0, 1e-4, q0.shape), qd0 + rng.normal(0.0, 0.3, q0.shape)
+    yield "jostled", *jostled
+    kernel, index = vehicle.kernel, vehicle.kernel.system_index
+    joint = kernel.kinematics(q0[index], qd0[index])[1]
+    j = 40  # top run: link 40 moved onto link 39's front seat, 3 um short of it
+    slack = jostled[0].copy()
+    separation = kernel.kinematics(slack[index], qd0[index])[1][j, :2]
+    x = index[3 * j:3 * j + 2]
+    slack[x] -= separation * (1.0 - 3e-6 / np.hypot(*separation))
+    yield "near slack", slack, jostled[1]
+    bent = jostled[0].copy()
+    sprocket = np.flatnonzero(joint[:, 6] > math.radians(20.0))
+    assert len(sprocket) >= 4  # the wrap round the sprocket and the idler
+    bent[index[3 * sprocket + 2]] += math.radians(5.0)
+    yield "bent", bent, jostled[1]
+
+
+def _connector_forces(vehicle, q, qd):
+    """What the 160 connectors apply at (q, qd): the system's ODE2 right-hand side with
+    them less without them, on the links' coordinates."""
+    import exudyn as exu
+
+    mbs, data = vehicle.mbs, vehicle.mbs.systemData
+    settings = exu.SimulationSettings()
+    settings.solution.file.write = False
+    solver = exu.MainSolverImplicitSecondOrder()
+    solver.InitializeSolver(mbs, settings)
+    connectors = vehicle.radial_connectors + [c for c, _ in vehicle.torsion_connectors]
+    sides = []
+    for active in (True, False):
+        for connector in connectors:
+            mbs.SetObjectParameter(connector, "activeConnector", active)
+        data.SetODE2Coordinates(q, exu.ConfigurationType.Current)
+        data.SetODE2Coordinates_t(qd, exu.ConfigurationType.Current)
+        solver.ComputeODE2RHS(mbs)
+        sides.append(np.array(solver.GetSystemResidual()))
+    for connector in connectors:
+        mbs.SetObjectParameter(connector, "activeConnector", True)
+    return (sides[0] - sides[1])[vehicle.kernel.system_index]
+
+
+def _dense(triplets, size):
+    matrix = np.zeros((size, size))
+    np.add.at(matrix, (triplets[:, 0].astype(int), triplets[:, 1].astype(int)), triplets[:, 2])
+    return matrix
+
+
+def test_the_kernels_forces_are_what_the_connectors_apply(vehicle):
+    """At each state, with the FMUs' laws and with laws that reach every branch, the
+    kernel's generalized forces equal the connectors' (exudyn's own geometry and force
+    functions) within 1e-9 of their largest; the near-slack joint is inside the fade."""
+    kernel, index = vehicle.kernel, vehicle.kernel.system_index
+    for laws in ("fmus", "branches"):
+        for name, q, qd in _states(vehicle):
+            if laws == "branches":
+                _laws(vehicle, kernel.kinematics(q[index], qd[index])[1])
+            else:
+                for component, law in vehicle.fmu_laws.items():
+                    component.law = law
+            expected = _connector_forces(vehicle, q, qd)
+            for which in ("numpy", "compiled"):
+                kernel.use(which)
+                _, joint, _, _, got = kernel.evaluate(q[index], qd[index])
+                scale = np.max(np.abs(expected))
+                assert scale > 5e3, name  # the tension's resultant round the wheels
+                assert np.max(np.abs(got.ravel() - expected)) <= 1e-9 * scale, (laws, name, which)
+            if name == "near slack":
+                assert 0.0 < joint[40, 2] < 5e-6 and abs(joint[40, 2] - 3e-6) < 1e-9
+
+
+def test_the_kernels_jacobian_is_the_derivative_of_its_forces(vehicle):
+    """The analytic stiffness and damping (the laws' slopes, the fade's, the seats' line
+    turning with the links, the damper terms) against central differences of the
+    kernel's forces by the coordinates and the velocities: within 1e-6 of the largest
+    entry, at each state."""
+    kernel, index = vehicle.kernel, vehicle.kernel.system_index
+    kernel.use("numpy")
+    for name, q, qd in _states(vehicle):
+        q, qd = q[index], qd[index]
+        _laws(vehicle, kernel.kinematics(q, qd)[1])
+        size = len(q)
+        for factor, factor_t, h in ((1.0, 0.0, 1e-8), (0.0, 1.0, 1e-4)):
+            analytic = _dense(kernel.triplets(q, qd, factor, factor_t), size)
+            numeric = np.zeros((size, size))
+            for i in range(size):
+                step = np.zeros(size)
+                step[i] = h
+                if factor:
+                    plus, minus = kernel.generalized(q + step, qd), kernel.generalized(q - step, qd)
+                else:
+                    plus, minus = kernel.generalized(q, qd + step), kernel.generalized(q, qd - step)
+                numeric[:, i] = -(plus - minus) / (2 * h)
+            worst = np.max(np.abs(analytic - numeric))
+            assert worst <= 1e-6 * np.max(np.abs(numeric)), (name, factor, worst)
+
+
+def test_the_c_kernel_gives_the_numpy_kernels_bits(vehicle):
+    """joints.c against the numpy kernel it follows operation for operation: kinematics,
+    the forces applied, the generalized forces and the triplets at each state (1e-13 of
+    each quantity's largest: another libm may round cos or sin differently; on this
+    machine they are the same bits)."""
+    kernel, index = vehicle.kernel, vehicle.kernel.system_index
+    for name, q, qd in _states(vehicle):
+        q, qd = q[index], qd[index]
+        _laws(vehicle, kernel.kinematics(q, qd)[1])
+        got = {}
+        for which in ("numpy", "compiled"):
+            kernel.use(which)
+            got[which] = list(kernel.evaluate(q, qd))
+            got[which] += [kernel.triplets(q, qd, *factors) for factors in FACTORS]
+        for numpy_value, c_value in zip(got["numpy"], got["compiled"]):
+            scale = max(np.max(np.abs(numpy_value)), 1e-300)
+            assert np.max(np.abs(numpy_value - c_value)) <= 1e-13 * scale, name
+
+
+def test_the_readers_read_the_connectors_deflections(vehicle):
+    """The coupling's readers with the kernel (seat distance and its rate, relative angle
+    plus offset and its rate) read what the connectors' readers read, at each state."""
+    import exudyn as exu
+
+    kernel, data = vehicle.kernel, vehicle.mbs.systemData
+    readers = dict(vehicle.coupling.entries)
+    for name, q, qd in _states(vehicle):
+        data.SetODE2Coordinates(q, exu.ConfigurationType.Current)
+        data.SetODE2Coordinates_t(qd, exu.ConfigurationType.Current)
+        for j in range(vehicle.links):
+            for kind, component in (("radial", vehicle.radial[j]),
+                                    ("torsion", vehicle.torsion[j])):
+                expected = readers[component]()
+                assert kernel.state(j, kind) == pytest.approx(expected, rel=1e-12, abs=1e-12), (
+                    name, j, kind)
+
+
+def test_a_short_run_takes_the_same_steps_on_both_kernels(native_fmus):
+    """Three host steps of 1 ms from the laid-out loop at 5 m/s on the compiled path, the
+    joints' object on its C kernel and on its numpy kernel: the same histories (the same
+    bits on this machine; 1e-9 of each history's range asked: another libm may round
+    cos or sin differently)."""
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle.course import Bump
+    from vehicle.model import Vehicle
+
+    runs = {}
+    for which in ("numpy", "compiled"):
+        vehicle = Vehicle(Bump(3.0), 5.0, native_fmus["RoadWheelTyre"].parent)
+        vehicle.joints.use(which)
+        runs[which] = vehicle.run(0.003, 1e-3, settle=False)
+        assert vehicle.compiled and vehicle.coupling.steps == 3
+    for key, value in runs["numpy"].items():
+        if isinstance(value, np.ndarray) and value.dtype.kind == "f":
+            span = max(np.ptp(value), 1e-300)
+            assert np.max(np.abs(runs["compiled"][key] - value)) <= 1e-9 * span, key
+    assert np.max(runs["compiled"]["bush_radial_force"][-1]) > 5e3  # the track's tension
