@@ -150,10 +150,41 @@ def test_the_contacts_jacobian_is_the_derivative_of_their_forces(native_fmus, se
         vehicle.coupling.free()
 
 
+def test_the_settling_dampings_jacobian_is_the_derivative_of_its_forces(native_fmus):
+    """While settling, the contacts' damping part of the Jacobian (factor_t) against
+    central differences of their generalized forces by the velocities, on both kernels:
+    linear in the velocities, so to rounding. Each arm is damped at its wheel's centre (its
+    force's moment on the arm in the force as in the Jacobian), the hull's pitch damper in
+    the Jacobian as in the force."""
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    vehicle = _laid_out(native_fmus, settling=True)
+    try:
+        contacts = vehicle.contacts
+        data = vehicle.mbs.systemData
+        q = np.asarray(data.GetODE2Coordinates(exu.ConfigurationType.Current))
+        q = q[contacts.system_index]
+        qd = np.random.default_rng(1).normal(0.0, 0.1, q.shape)
+        for kernel in ("numpy", "compiled"):
+            contacts.use(kernel)
+            analytic = contacts._jacobian(0.0, q, qd, 0.0, 1.0)
+            numeric = np.zeros_like(analytic)
+            h = 1e-6
+            for i in range(len(q)):
+                dqd = np.zeros_like(qd)
+                dqd[i] = h
+                numeric[:, i] = -(contacts._generalized(0.0, q, qd + dqd)
+                                  - contacts._generalized(0.0, q, qd - dqd)) / (2 * h)
+            # the arms' rows (the wheel 0.067 m from the arm's node: moments of 22 to
+            # 290 N.m.s) are 1e-3 of the largest entry (the hull's pitch damper)
+            assert np.max(np.abs(analytic - numeric)) < 1e-8 * np.max(np.abs(numeric)), kernel
+    finally:
+        vehicle.coupling.free()
+
+
 def test_the_stored_static_point_is_keyed_by_the_models_values(native_fmus, monkeypatch):
     """Same model, same key; a changed value (the torsion-bar rate) or FMU set, a new one."""
     pytest.importorskip("exudyn", reason=NO_EXUDYN)
-    from vehicle import layout, static
+    from vehicle import layout, settle_damping, static
 
     vehicle = _laid_out(native_fmus)
     try:
@@ -161,7 +192,11 @@ def test_the_stored_static_point_is_keyed_by_the_models_values(native_fmus, monk
         assert static.static_key(vehicle, 2e-3) == key
         assert static.static_key(vehicle, 1e-3) != key
         monkeypatch.setattr(layout, "TORSION_BAR_STIFFNESS", 16000.0)
-        assert static.static_key(vehicle, 2e-3) != key
+        changed = static.static_key(vehicle, 2e-3)
+        assert changed != key
+        # the settling's damping decides where it stops (its rest is a velocity)
+        monkeypatch.setitem(settle_damping.SETTLE_DAMPING, "arm", 6e3)
+        assert static.static_key(vehicle, 2e-3) != changed
     finally:
         vehicle.coupling.free()
 
