@@ -121,6 +121,19 @@ def test_every_wheel_starts_on_the_track_at_its_static_compression(native_fmus):
         vehicle.coupling.free()
 
 
+def _central_differences(contacts, q, qd, h, by_velocity=False):
+    """Minus the contacts' generalized forces' central differences by q (or qd): the
+    Jacobian exudyn takes from them."""
+    numeric = np.zeros((len(q), len(q)))
+    for i in range(len(q)):
+        d = np.zeros_like(q)
+        d[i] = h
+        plus, minus = ((q, qd + d), (q, qd - d)) if by_velocity else ((q + d, qd), (q - d, qd))
+        numeric[:, i] = -(contacts._generalized(0.0, *plus)
+                          - contacts._generalized(0.0, *minus)) / (2 * h)
+    return numeric
+
+
 @pytest.mark.parametrize("settling", [True, False])
 def test_the_contacts_jacobian_is_the_derivative_of_their_forces(native_fmus, settling):
     """The Jacobian the contacts give exudyn's Newton (tyres with the tangent of their load
@@ -138,13 +151,7 @@ def test_the_contacts_jacobian_is_the_derivative_of_their_forces(native_fmus, se
         q = q[contacts.system_index]
         qd = np.zeros_like(q)
         analytic = contacts._jacobian(0.0, q, qd, 1.0, 0.0)
-        numeric = np.zeros_like(analytic)
-        h = 1e-8
-        for i in range(len(q)):
-            dq = np.zeros_like(q)
-            dq[i] = h
-            numeric[:, i] = -(contacts._generalized(0.0, q + dq, qd)
-                              - contacts._generalized(0.0, q - dq, qd)) / (2 * h)
+        numeric = _central_differences(contacts, q, qd, 1e-8)
         assert np.max(np.abs(analytic - numeric)) < 0.01 * np.max(np.abs(numeric))
     finally:
         vehicle.coupling.free()
@@ -167,13 +174,7 @@ def test_the_settling_dampings_jacobian_is_the_derivative_of_its_forces(native_f
         for kernel in ("numpy", "compiled"):
             contacts.use(kernel)
             analytic = contacts._jacobian(0.0, q, qd, 0.0, 1.0)
-            numeric = np.zeros_like(analytic)
-            h = 1e-6
-            for i in range(len(q)):
-                dqd = np.zeros_like(qd)
-                dqd[i] = h
-                numeric[:, i] = -(contacts._generalized(0.0, q, qd + dqd)
-                                  - contacts._generalized(0.0, q, qd - dqd)) / (2 * h)
+            numeric = _central_differences(contacts, q, qd, 1e-6, by_velocity=True)
             # the arms' rows (the wheel 0.067 m from the arm's node: moments of 22 to
             # 290 N.m.s) are 1e-3 of the largest entry (the hull's pitch damper)
             assert np.max(np.abs(analytic - numeric)) < 1e-8 * np.max(np.abs(numeric)), kernel
