@@ -117,6 +117,9 @@ def main(argv=None):
         values = "  ".join(f"{model}: {outputs.figures(r)[key] * scale:.3g} {unit}"
                            for model, r in runs.items())
         print(f"  {label}: {values}")
+    for model, run in runs.items():
+        if run["across_track"]:
+            print(f"  {model}: {run['across_track']}")
     written = [args.out / f"{name}.png", args.out / f"{name}_shapes.png"]
     outputs.plot_histories(written[0], result, runs.get("linear"),
                            f"Tracked vehicle, {vehicle.course.describe()}, {args.speed:g} m/s")

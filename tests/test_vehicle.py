@@ -121,6 +121,19 @@ def test_every_wheel_starts_on_the_track_at_its_static_compression(native_fmus):
         vehicle.coupling.free()
 
 
+def _central_differences(contacts, q, qd, h, by_velocity=False):
+    """Minus the contacts' generalized forces' central differences by q (or qd): the
+    Jacobian exudyn takes from them."""
+    numeric = np.zeros((len(q), len(q)))
+    for i in range(len(q)):
+        d = np.zeros_like(q)
+        d[i] = h
+        plus, minus = ((q, qd + d), (q, qd - d)) if by_velocity else ((q + d, qd), (q - d, qd))
+        numeric[:, i] = -(contacts._generalized(0.0, *plus)
+                          - contacts._generalized(0.0, *minus)) / (2 * h)
+    return numeric
+
+
 @pytest.mark.parametrize("settling", [True, False])
 def test_the_contacts_jacobian_is_the_derivative_of_their_forces(native_fmus, settling):
     """The Jacobian the contacts give exudyn's Newton (tyres with the tangent of their load
@@ -138,14 +151,33 @@ def test_the_contacts_jacobian_is_the_derivative_of_their_forces(native_fmus, se
         q = q[contacts.system_index]
         qd = np.zeros_like(q)
         analytic = contacts._jacobian(0.0, q, qd, 1.0, 0.0)
-        numeric = np.zeros_like(analytic)
-        h = 1e-8
-        for i in range(len(q)):
-            dq = np.zeros_like(q)
-            dq[i] = h
-            numeric[:, i] = -(contacts._generalized(0.0, q + dq, qd)
-                              - contacts._generalized(0.0, q - dq, qd)) / (2 * h)
+        numeric = _central_differences(contacts, q, qd, 1e-8)
         assert np.max(np.abs(analytic - numeric)) < 0.01 * np.max(np.abs(numeric))
+    finally:
+        vehicle.coupling.free()
+
+
+def test_the_settling_dampings_jacobian_is_the_derivative_of_its_forces(native_fmus):
+    """While settling, the contacts' damping part of the Jacobian (factor_t) against
+    central differences of their generalized forces by the velocities, on both kernels:
+    linear in the velocities, so to rounding. Each arm is damped at its wheel's centre (its
+    force's moment on the arm in the force as in the Jacobian), the hull's pitch damper in
+    the Jacobian as in the force."""
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    vehicle = _laid_out(native_fmus, settling=True)
+    try:
+        contacts = vehicle.contacts
+        data = vehicle.mbs.systemData
+        q = np.asarray(data.GetODE2Coordinates(exu.ConfigurationType.Current))
+        q = q[contacts.system_index]
+        qd = np.random.default_rng(1).normal(0.0, 0.1, q.shape)
+        for kernel in ("numpy", "compiled"):
+            contacts.use(kernel)
+            analytic = contacts._jacobian(0.0, q, qd, 0.0, 1.0)
+            numeric = _central_differences(contacts, q, qd, 1e-6, by_velocity=True)
+            # the arms' rows (the wheel 0.067 m from the arm's node: moments of 22 to
+            # 290 N.m.s) are 1e-3 of the largest entry (the hull's pitch damper)
+            assert np.max(np.abs(analytic - numeric)) < 1e-8 * np.max(np.abs(numeric)), kernel
     finally:
         vehicle.coupling.free()
 
@@ -153,7 +185,7 @@ def test_the_contacts_jacobian_is_the_derivative_of_their_forces(native_fmus, se
 def test_the_stored_static_point_is_keyed_by_the_models_values(native_fmus, monkeypatch):
     """Same model, same key; a changed value (the torsion-bar rate) or FMU set, a new one."""
     pytest.importorskip("exudyn", reason=NO_EXUDYN)
-    from vehicle import layout, static
+    from vehicle import layout, settle_damping, static
 
     vehicle = _laid_out(native_fmus)
     try:
@@ -161,7 +193,11 @@ def test_the_stored_static_point_is_keyed_by_the_models_values(native_fmus, monk
         assert static.static_key(vehicle, 2e-3) == key
         assert static.static_key(vehicle, 1e-3) != key
         monkeypatch.setattr(layout, "TORSION_BAR_STIFFNESS", 16000.0)
-        assert static.static_key(vehicle, 2e-3) != key
+        changed = static.static_key(vehicle, 2e-3)
+        assert changed != key
+        # the settling's damping decides where it stops (its rest is a velocity)
+        monkeypatch.setitem(settle_damping.SETTLE_DAMPING, "arm", 6e3)
+        assert static.static_key(vehicle, 2e-3) != changed
     finally:
         vehicle.coupling.free()
 

@@ -65,7 +65,7 @@ CONTACTS_EXPORT Contacts *contacts_new(int wheels, int links, const double *refe
         ok &= (c->array[i] = calloc((size_t)array_size(c, i), sizeof(double))) != NULL;
     int pairs = wheels * links;
     /* ground, five of the sprocket, idler, roller per pin; the settling's dampers */
-    c->spring_capacity = 8 * links + 1 + wheels + 2 * links;
+    c->spring_capacity = 8 * links + 2 + wheels + 2 * links;
     ok &= (c->reference = malloc(sizeof(double) * 3 * c->bodies)) != NULL;
     ok &= (c->wheel_offset = malloc(sizeof(double) * 2 * wheels)) != NULL;
     ok &= (c->pair_wheel = malloc(sizeof(int) * pairs)) != NULL;

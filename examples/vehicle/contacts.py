@@ -28,11 +28,8 @@ from .contacts_kernel import CompiledContacts, KernelResults, as_vector, library
 from .model import (ENGAGEMENT_RAMP, GROUND_DAMPING, GROUND_STIFFNESS, HORN_HEIGHT,
                     SPROCKET_DAMPING, SPROCKET_STIFFNESS, VehicleError, WHEEL_DAMPING,
                     WHEEL_STIFFNESS)
+from .settle_damping import SETTLE_DAMPING, settle_damping  # noqa: F401 (the C kernel's)
 
-# Damping that brings the vehicle to rest while it settles (not in the run).
-# About critical for the hull's bounce and pitch on its suspension (its surge has the speed
-# hold's own); the track's and the arms' light.
-SETTLE_DAMPING = {"seat": 300.0, "arm": 5e3, "hull": (0.0, 1.8e5), "hull_pitch": 4e5}
 TOOTH_SPACING = 2 * math.pi / lay.SPROCKET_TEETH
 # The tyre's compression blends the overlaps of the links beneath a wheel: a smooth maximum
 # TYRE_BLEND wide (2 mm), each link's term faded in and out over HANDOVER (30 mm) about
@@ -521,8 +518,7 @@ class Contacts(KernelResults):
 
         seat = self.onto_seats(pin)
         if v.settling:  # to rest: damping of every body's velocity
-            seat -= SETTLE_DAMPING["seat"] * self.seats_v
-            self._settle_damping(bodies)
+            settle_damping(self, bodies, seat)
         self.onto_links(bodies, seat)
         self.generalized = bodies.reshape(-1) + tyres
 
@@ -548,24 +544,6 @@ class Contacts(KernelResults):
         (a, da, dda), (b, db, ddb) = smoothstep_derivatives(rise), smoothstep_derivatives(fall)
         return (a * b, (da * b - a * db) / ENGAGEMENT_RAMP,
                 (dda * b - 2.0 * da * db + a * ddb) / ENGAGEMENT_RAMP ** 2)
-
-    def _settle_damping(self, bodies):
-        c = SETTLE_DAMPING
-        bodies[0, :2] -= np.array(c["hull"]) * self.hull_v[:2]
-        bodies[0, 2] -= c["hull_pitch"] * self.hull_v[2]
-
-        def dampers(body, points, damping):
-            g = self._point_g(body, points)
-            count = len(points)
-            self._add_springs(np.zeros((count, 2, 2)), np.broadcast_to(damping, (count, 2, 2)),
-                              [(body, g, g, 1.0)])
-
-        dampers(np.zeros(1, dtype=int), self.body_pos[:1], np.diag(c["hull"]))
-        wheels = len(self.wheels)
-        bodies[1:1 + wheels, :2] -= c["arm"] * self.wheels_v
-        dampers(1 + np.arange(wheels), self.wheels, c["arm"] * np.eye(2))
-        links = self.link0 + np.repeat(np.arange(len(self.seats)), 2)
-        dampers(links, self.seats.reshape(-1, 2), c["seat"] * np.eye(2))
 
     # --- checks and records ---------------------------------------------------------------
 

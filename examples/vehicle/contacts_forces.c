@@ -296,7 +296,9 @@ static void damper(Contacts *c, int body, const double *point, double damping)
     add_member(new_spring(c, zero, c_m), body, g, g, 1.0);
 }
 
-/* To rest while settling: damping of every body's velocity (contacts._settle_damping). */
+/* To rest while settling: damping of every body's velocity (settle_damping.py): the hull's
+ * translation and pitch, each arm at its wheel's centre (the force there and its moment),
+ * each link at its seats. */
 static void settle_damping(Contacts *c, double *seat)
 {
     const double *hull_v = ARRAY(RATES), *seats_v = ARRAY(SEATS_V);
@@ -306,12 +308,22 @@ static void settle_damping(Contacts *c, double *seat)
     hull[1] -= P(SETTLE_HULL_Y) * hull_v[1];
     hull[2] -= P(SETTLE_HULL_PITCH) * hull_v[2];
     static const double zero[2][2] = {{0.0, 0.0}, {0.0, 0.0}};
+    static const double pitch_g[2][3] = {{0.0, 0.0, 1.0}, {0.0, 0.0, 0.0}};
     double g[2][3], c_m[2][2] = {{P(SETTLE_HULL_X), 0.0}, {0.0, P(SETTLE_HULL_Y)}};
     point_g(c, 0, ARRAY(STATE), g);
     add_member(new_spring(c, zero, c_m), 0, g, g, 1.0);
-    for (int w = 0; w < c->wheels; w++)
-        for (int k = 0; k < 2; k++)
-            c->bodies_force[3 * (1 + w) + k] -= P(SETTLE_ARM) * ARRAY(WHEELS_V)[2 * w + k];
+    double pitch_m[2][2] = {{P(SETTLE_HULL_PITCH), 0.0}, {0.0, 0.0}};
+    add_member(new_spring(c, zero, pitch_m), 0, pitch_g, pitch_g, 1.0);
+    for (int w = 0; w < c->wheels; w++) {
+        const double *wheel = ARRAY(WHEELS) + 2 * w, *arm = ARRAY(STATE) + 3 * (1 + w);
+        double force[2] = {-P(SETTLE_ARM) * ARRAY(WHEELS_V)[2 * w],
+                           -P(SETTLE_ARM) * ARRAY(WHEELS_V)[2 * w + 1]};
+        double r0 = wheel[0] - arm[0], r1 = wheel[1] - arm[1];
+        double *b = c->bodies_force + 3 * (1 + w);
+        b[0] += force[0];
+        b[1] += force[1];
+        b[2] += r0 * force[1] - r1 * force[0];
+    }
     for (int w = 0; w < c->wheels; w++)
         damper(c, 1 + w, ARRAY(WHEELS) + 2 * w, P(SETTLE_ARM));
     for (int i = 0; i < c->links; i++)

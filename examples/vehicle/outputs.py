@@ -11,6 +11,7 @@ from scipy.integrate import cumulative_trapezoid
 import exudyn as exu
 
 from . import layout as lay
+from .bush_shear import seat_offsets, warn_across_track
 
 
 def snapshot(vehicle, t):
@@ -28,6 +29,7 @@ def snapshot(vehicle, t):
     sprocket_joint, idler_joint = contacts.tension_joints()
     loads, deflections = vehicle.accepted()
     rows = {kind: np.array(rows) for kind, rows in vehicle.rows.items()}
+    along, across = seat_offsets(contacts)
     return {
         "time": t,
         "hull_vertical_acceleration": acceleration[1],
@@ -44,6 +46,7 @@ def snapshot(vehicle, t):
         "bush_radial_deflection": deflections[rows["radial"]],
         "bush_torque": loads[rows["torsion"]],
         "bush_angle": deflections[rows["torsion"]],
+        "bush_seat_along": along, "bush_seat_across": across,
         "track_tension_sprocket": loads[rows["radial"][sprocket_joint]],
         "track_tension_idler": loads[rows["radial"][idler_joint]],
         "drive_torque": contacts.drive_torque,
@@ -58,6 +61,8 @@ def histories(vehicle):
     records = vehicle.records
     result = {key: np.array([r[key] for r in records]) for key in records[0]}
     result["damper_stations"] = list(vehicle.dampers)
+    # radial loads across the track are not tension: the run says where (bush_shear.py)
+    result["across_track"] = warn_across_track(result, vehicle.contacts)
     # work done on each damper (J): what it dissipates, and what its gas spring holds
     result["damper_work"] = np.array([
         cumulative_trapezoid(result["damper_torque"][:, i], result["damper_angle"][:, i],

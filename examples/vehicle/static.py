@@ -5,7 +5,7 @@ everything that decides it, so that later runs start settled at no cost.
 exudyn's static solver does not converge on the loop from its laid-out geometry (the
 links' rotations, held only by the bushes and the contacts, run away in its first
 iterations), so the vehicle settles in time with heavy damping on every body
-(contacts.SETTLE_DAMPING), in chunks, until every velocity is below REST.
+(settle_damping.py), in chunks, until every velocity is below REST.
 """
 
 import hashlib
@@ -20,7 +20,7 @@ from fmu_components.coupling.bank_build import cache_directory
 
 from example_fmus import fmu_path
 
-from . import contact_math, contacts, contacts_kernel, joints, layout, model
+from . import contact_math, contacts, contacts_kernel, joints, layout, model, settle_damping
 
 REST = 0.02  # m/s, rad/s: settled when no coordinate moves faster (a slow creep of the
 # front arm and the pitch remains, decaying by about 7 % per 0.1 s)
@@ -42,12 +42,13 @@ def static_key(vehicle, step):
              .hexdigest() for name in FMUS}
     linear = vehicle.linear.coefficients if vehicle.linear is not None else None
     sources = [hashlib.sha256(Path(m.__file__).read_bytes()).hexdigest()
-               for m in (layout, model, contacts, contact_math, joints)]
+               for m in (layout, model, contacts, contact_math, joints, settle_damping)]
     # the kernels that settle it (contacts, joints), and the C kernels' sources
     sources += [vehicle.contacts.kernel, contacts_kernel.LIBRARY.source_tag(),
                 vehicle.joint_elements, vehicle.joints and vehicle.joints.kernel,
                 joints.LIBRARY.source_tag()]
-    content = json.dumps([_constants(layout), _constants(model), _constants(contacts), sources,
+    content = json.dumps([_constants(layout), _constants(model), _constants(contacts),
+                          _constants(settle_damping), sources,
                           files, repr(linear), repr(vehicle.statics), step, REST, CHUNK],
                          sort_keys=True)
     return hashlib.sha256(content.encode()).hexdigest()[:16]
