@@ -54,8 +54,8 @@ def newton_limit(iterations):
     `iterations` per solve."""
     settings = model.run_settings
 
-    def run_settings():
-        chosen = settings()
+    def run_settings(*args):
+        chosen = settings(*args)
         chosen.timeIntegration.newton.maxIterations = iterations
         return chosen
     return run_settings

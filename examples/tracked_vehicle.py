@@ -28,23 +28,25 @@ from coupling_study import write_csv
 from vehicle import outputs
 from vehicle.course import COURSES
 from vehicle.flags import add_run_arguments
-from vehicle.model import (DEFAULT_JOINTS, JOINTS, Linear, Vehicle, VehicleError,
-                           static_points)
+from vehicle.model import (DEFAULT_JOINTS, JOINTS, SPECTRAL_RADIUS, Linear, Vehicle,
+                           VehicleError, static_points)
 
 DEFAULT_STEP = 1e-3  # s
 
 
 def simulate(course_name, speed, end_time, step, coupling=DEFAULT_SCHEME, linear=None,
              statics=None, settle_time=3.0, fmu_dir=None, path=bank_path.DEFAULT_PATH,
-             contacts=None, joints=DEFAULT_JOINTS):
+             contacts=None, joints=DEFAULT_JOINTS, spectral_radius=SPECTRAL_RADIUS):
     """One run; returns (vehicle, histories, wall seconds, CPU seconds) of the run proper
     (the settling to the static point, stored after the first run, and the set-up,
     Vehicle.prepare, excluded). contacts: the contacts' kernel, "compiled" or "numpy"
     (default: compiled where it builds; vehicle/contacts_kernel.py). joints: the track's
     joints as one object with their Jacobian ("kernel", vehicle/joints.py) or as two
-    exudyn connectors each ("connectors")."""
+    exudyn connectors each ("connectors"). spectral_radius: generalized-alpha's, at
+    infinite frequency (model.SPECTRAL_RADIUS)."""
     statics = statics or static_points(fmu_dir)
     vehicle = Vehicle(None, speed, fmu_dir, linear, coupling, statics, path, joints)
+    vehicle.spectral_radius = spectral_radius
     if contacts:
         vehicle.contacts.use(contacts)
     vehicle.course = COURSES[course_name](vehicle.layout.sprocket[0] + 0.3)
@@ -75,10 +77,18 @@ def main(argv=None):
                         help="the track's joints: one object with their analytic Jacobian "
                              f"(kernel) or two exudyn connectors each (default "
                              f"{DEFAULT_JOINTS})")
+    parser.add_argument("--spectral-radius", type=float, default=SPECTRAL_RADIUS,
+                        help="generalized-alpha's spectral radius at infinite frequency, "
+                             f"0 to 1 (default {SPECTRAL_RADIUS:g}: damps the links' "
+                             "in-phase turning the 1 ms step does not resolve; exudyn's own "
+                             "default is 0.9)")
     parser.add_argument("--out", type=Path, default=Path("reports") / "tracked_vehicle")
     args = parser.parse_args(argv)
     if args.speed < 0 or args.end_time <= 0 or args.step <= 0:
         parser.error("--speed must be >= 0, --end-time and --step > 0")
+    if not 0.0 <= args.spectral_radius <= 1.0:
+        parser.error(f"--spectral-radius {args.spectral_radius:g}: give a value from 0 "
+                     "(most damping) to 1 (none)")
     args.out.mkdir(parents=True, exist_ok=True)
     warnings.simplefilter("once")
     statics = static_points(args.fmu_dir)
@@ -87,7 +97,8 @@ def main(argv=None):
         vehicle, result, wall, cpu = simulate(args.course, args.speed, args.end_time,
                                               args.step, args.coupling, None, statics,
                                               args.settle_time, args.fmu_dir, args.path,
-                                              args.contacts, args.joints)
+                                              args.contacts, args.joints,
+                                              args.spectral_radius)
         runs["FMUs"] = result
         if args.linear:
             linear = Linear(statics, args.fmu_dir)
@@ -95,7 +106,8 @@ def main(argv=None):
             runs["linear"] = simulate(args.course, args.speed, args.end_time, args.step,
                                       args.coupling, linear, statics, args.settle_time,
                                       args.fmu_dir, contacts=args.contacts,
-                                      joints=args.joints)[1]
+                                      joints=args.joints,
+                                      spectral_radius=args.spectral_radius)[1]
     except VehicleError as error:
         sys.exit(f"tracked_vehicle: {error}")
     simulated = result["time"][-1] - result["time"][0]
@@ -104,7 +116,8 @@ def main(argv=None):
           f"{vehicle.course.describe()}; {args.speed:g} m/s, host step {args.step * 1e3:g} ms, "
           f"coupling {args.coupling}, {'compiled' if vehicle.compiled else 'Python'} path, "
           f"{vehicle.contacts.kernel} contacts, joints by "
-          f"{vehicle.joints.kernel + ' kernel' if vehicle.joints else 'connectors'}")
+          f"{vehicle.joints.kernel + ' kernel' if vehicle.joints else 'connectors'}, "
+          f"spectral radius {vehicle.spectral_radius:g}")
     print(f"{simulated:.3f} s simulated in {wall:.1f} s wall, {cpu:.1f} s CPU: "
           f"{wall / simulated:.1f} s wall and {cpu / simulated:.1f} s CPU per simulated "
           f"second")

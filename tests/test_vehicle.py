@@ -248,13 +248,17 @@ def test_the_compiled_path_gives_the_python_paths_numbers(native_fmus):
 
     fmu_dir = native_fmus["RoadWheelTyre"].parent
     statics = static_points(fmu_dir)
-    runs = {}
+    runs, steps = {}, {}
     for path in ("python", "compiled"):
         vehicle, runs[path], _, _ = simulate("bump", 5.0, 0.003, 1e-3, "corrected", None,
                                              statics, 0.0, fmu_dir, path)
         assert vehicle.compiled == (path == "compiled")
         assert type(vehicle.coupling).__name__ == ("Bank" if vehicle.compiled else "Coupling")
-        assert vehicle.coupling.steps == 3 and vehicle.coupling.total_passes == 6
+        # every step (3 asked; exudyn may halve one in this start from the laid-out
+        # geometry) solved twice, the same steps on both paths
+        steps[path] = vehicle.coupling.steps
+        assert steps[path] >= 3 and vehicle.coupling.total_passes == 2 * steps[path]
+    assert steps["python"] == steps["compiled"]
     keys = [key for key, value in runs["python"].items() if isinstance(value, np.ndarray)]
     assert {"hull_vertical_acceleration", "tyre_force", "bush_radial_force", "bush_angle",
             "damper_torque", "track_tension_sprocket"} <= set(keys)

