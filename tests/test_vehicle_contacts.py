@@ -326,7 +326,9 @@ def test_without_a_compiler_the_contacts_say_so_and_use_numpy(native_fmus, monke
                              r"or vehicle\.contacts\.use\('numpy'\)\)$"):
         contacts_kernel.LIBRARY.compile(platform, tmp_path)
     monkeypatch.setattr(contacts_kernel.LIBRARY, "built", lambda beside=None: None)
-    monkeypatch.setattr(contacts_kernel, "_loaded", {})
+    # the loader's cache (bank_build.Library.load) emptied for this test
+    monkeypatch.setattr(contacts_kernel.LIBRARY, "_loaded", None, raising=False)
+    monkeypatch.delattr(contacts_kernel.LIBRARY, "_loaded")
     with pytest.warns(UserWarning, match="no-such-gcc not found.*use their numpy kernel"):
         assert contacts_kernel.library() is None
     assert contacts_kernel.library() is None  # once: no second warning, no second try

@@ -28,7 +28,7 @@ from .contacts_kernel import CompiledContacts, KernelResults, as_vector, library
 from .model import (ENGAGEMENT_RAMP, GROUND_DAMPING, GROUND_STIFFNESS, HORN_HEIGHT,
                     SPROCKET_DAMPING, SPROCKET_STIFFNESS, VehicleError, WHEEL_DAMPING,
                     WHEEL_STIFFNESS)
-from .settle_damping import SETTLE_DAMPING, settle_damping  # noqa: F401 (the C kernel's)
+from .settle_damping import settle_damping
 
 TOOTH_SPACING = 2 * math.pi / lay.SPROCKET_TEETH
 # The tyre's compression blends the overlaps of the links beneath a wheel: a smooth maximum

@@ -17,17 +17,17 @@ and the records, a few times a step, not at every iterate.
 
 import ctypes
 import math
-import warnings
 import weakref
 from pathlib import Path
 
 import numpy as np
 
-from fmu_components.coupling.bank_build import Library, NoCompiler
+from fmu_components.coupling.bank_build import Library
 
 from . import layout as lay
 from . import model
 from .course import Bump, Course, RandomRoad, Sine
+from .settle_damping import SETTLE_DAMPING
 
 HERE = Path(__file__).resolve().parent
 LIBRARY = Library("vehicle_contacts",
@@ -61,44 +61,38 @@ PUBLISHED = ("u", "n", "seats", "seats_v", "pins", "pins_v", "wheels", "wheels_v
              "drive_torque")
 # contacts.h's enum Course: the courses the kernel evaluates (contacts_course.c)
 COURSE_GIVEN, COURSE_KINDS = -1, {Course: 0, Bump: 1, Sine: 2, RandomRoad: 3}
-_loaded = {}
 
 
 def library():
-    """The kernel's library, loaded once per process; None, with a warning saying why and
-    what to use, where it cannot be built."""
-    if "lib" not in _loaded:
-        try:
-            lib = ctypes.CDLL(str(LIBRARY.path()))
-        except NoCompiler as missing:
-            warnings.warn(f"{missing}; the vehicle's contacts use their numpy kernel")
-            lib = None
-        if lib is not None:
-            pointer, handle = ctypes.POINTER(ctypes.c_double), ctypes.c_void_p
-            lib.contacts_new.restype = handle
-            lib.contacts_new.argtypes = [ctypes.c_int, ctypes.c_int, pointer, pointer]
-            lib.contacts_free.argtypes = [handle]
-            lib.contacts_array.restype = pointer
-            lib.contacts_array.argtypes = [handle, ctypes.c_int, ctypes.POINTER(ctypes.c_int)]
-            lib.contacts_kinematics.argtypes = [handle]
-            lib.contacts_forces.argtypes = [handle, ctypes.c_int]
-            lib.contacts_jacobian.restype = ctypes.c_long
-            lib.contacts_jacobian.argtypes = [handle, ctypes.c_double, ctypes.c_double,
-                                              pointer, ctypes.c_long]
-            lib.contacts_set_course.argtypes = [handle, ctypes.c_int, pointer, ctypes.c_int,
-                                                pointer, pointer, pointer]
-            lib.contacts_course_heights.argtypes = [handle]
-            lib.contacts_set_tyre_laws.argtypes = [handle, handle, handle, ctypes.c_int,
-                                                   ctypes.POINTER(ctypes.c_int)]
-            lib.contacts_evaluate.argtypes = [handle, ctypes.c_int]
-            counts = (ctypes.c_int(), ctypes.c_int())
-            lib.contacts_layout(*map(ctypes.byref, counts))
-            if (counts[0].value, counts[1].value) != (len(PARAMETERS), len(ARRAYS)):
-                raise RuntimeError("contacts.h and contacts_kernel.py disagree on the "
-                                   "kernel's parameters or arrays: rebuild both from one "
-                                   "revision")
-        _loaded["lib"] = lib
-    return _loaded["lib"]
+    """The kernel's library, its functions declared, loaded once per process
+    (bank_build.Library.load); None, with a warning saying why and what to use, where it
+    cannot be built."""
+    lib = LIBRARY.load("the vehicle's contacts use their numpy kernel")
+    if lib is not None and lib.contacts_new.argtypes is None:
+        pointer, handle = ctypes.POINTER(ctypes.c_double), ctypes.c_void_p
+        lib.contacts_new.restype = handle
+        lib.contacts_new.argtypes = [ctypes.c_int, ctypes.c_int, pointer, pointer]
+        lib.contacts_free.argtypes = [handle]
+        lib.contacts_array.restype = pointer
+        lib.contacts_array.argtypes = [handle, ctypes.c_int, ctypes.POINTER(ctypes.c_int)]
+        lib.contacts_kinematics.argtypes = [handle]
+        lib.contacts_forces.argtypes = [handle, ctypes.c_int]
+        lib.contacts_jacobian.restype = ctypes.c_long
+        lib.contacts_jacobian.argtypes = [handle, ctypes.c_double, ctypes.c_double,
+                                          pointer, ctypes.c_long]
+        lib.contacts_set_course.argtypes = [handle, ctypes.c_int, pointer, ctypes.c_int,
+                                            pointer, pointer, pointer]
+        lib.contacts_course_heights.argtypes = [handle]
+        lib.contacts_set_tyre_laws.argtypes = [handle, handle, handle, ctypes.c_int,
+                                               ctypes.POINTER(ctypes.c_int)]
+        lib.contacts_evaluate.argtypes = [handle, ctypes.c_int]
+        counts = (ctypes.c_int(), ctypes.c_int())
+        lib.contacts_layout(*map(ctypes.byref, counts))
+        if (counts[0].value, counts[1].value) != (len(PARAMETERS), len(ARRAYS)):
+            raise RuntimeError("contacts.h and contacts_kernel.py disagree on the "
+                               "kernel's parameters or arrays: rebuild both from one "
+                               "revision")
+    return lib
 
 
 def as_vector(values):
@@ -162,7 +156,7 @@ class CompiledContacts:
         for module in (lay, model, numpy_kernel):
             values.update({name: getattr(module, name) for name in PARAMETERS
                            if hasattr(module, name)})
-        settle = numpy_kernel.SETTLE_DAMPING
+        settle = SETTLE_DAMPING
         values.update(ENGAGEMENT_RAMP_SQUARED=model.ENGAGEMENT_RAMP ** 2,
                       SPROCKET_X=c.sprocket_local[0], SPROCKET_Y=c.sprocket_local[1],
                       ROLLER_X=c.roller_local[0], ROLLER_Y=c.roller_local[1],

@@ -25,7 +25,7 @@ from exudyn.itemInterface import ObjectGenericODE2
 from fmu_components.coupling.bank_build import Library
 
 from . import layout as lay
-from .model import RADIAL_FADE, radial_fade
+from .model import RADIAL_FADE, law_slope_step, radial_fade
 
 HERE = Path(__file__).resolve().parent
 LIBRARY = Library("vehicle_joints", [HERE / "joints.c"], [], "the track joints' kernel "
@@ -314,7 +314,7 @@ def _load_and_slopes(vehicle, component, x, rate):
     x as the bank's law_loads takes them (bank.c: a step of 1e-9 of |x|, at least 1e-15),
     by the rate a step of 1e-6 of |rate|, at least 1e-6 (a law's damper term: a Kelvin
     element's; an FMU's law has none)."""
-    step = 1e-9 * (abs(x) if abs(x) > 1e-6 else 1e-6)
+    step = law_slope_step(x)
     by_rate = 1e-6 * (abs(rate) if abs(rate) > 1.0 else 1.0)
     load = vehicle.load
     return (load(component, x, rate),

@@ -431,7 +431,7 @@ class Vehicle:
         loads, slopes = np.zeros(len(rows)), np.zeros(len(rows))
         for w, pair in enumerate(self.tyres):
             x = float(compression[w])
-            step = 1e-9 * (abs(x) if abs(x) > 1e-6 else 1e-6)
+            step = law_slope_step(x)
             for tyre in pair:
                 loads[w] += self.load(tyre, x, float(rate[w]))
                 slopes[w] += ((self.load(tyre, x + step, 0.0) - self.load(tyre, x - step, 0.0))
@@ -515,7 +515,8 @@ class Vehicle:
         try:
             if self.compiled:
                 from .compiled import solve_compiled
-                self.host = solve_compiled(self, end_time, step, run_settings(self.spectral_radius), check)
+                self.host = solve_compiled(self, end_time, step,
+                                           run_settings(self.spectral_radius), check)
             else:
                 self.host = solve(self.mbs, self.coupling, end_time, step,
                                   settings=run_settings(self.spectral_radius),
@@ -544,6 +545,13 @@ class Vehicle:
                 "passes_per_step": passes / max(self.coupling.steps, 1),
                 "steps": self.coupling.steps, "host_steps": self.host_steps,
                 "refused": self.host.refused}
+
+
+def law_slope_step(x):
+    """The step of the central difference by which the bank takes a law's slope at
+    deflection x (bank.c's bank_law_loads), for the Python path's slopes, which must be
+    its numbers."""
+    return 1e-9 * (abs(x) if abs(x) > 1e-6 else 1e-6)
 
 
 def run_settings(spectral_radius=SPECTRAL_RADIUS):

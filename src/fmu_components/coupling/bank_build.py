@@ -106,14 +106,16 @@ class Library:
                              f"{self.fallback}")
         return self.built() or self.compile(platform, cache_directory())
 
-    def load(self):
+    def load(self, consequence=None):
         """The library loaded (ctypes), once per process; None where it cannot be built,
-        with a warning saying why and what to use instead (`fallback`)."""
+        with a warning saying why and what to use instead (`fallback`), and what the
+        caller does then (`consequence`)."""
         if not hasattr(self, "_loaded"):
             try:
                 self._loaded = ctypes.CDLL(str(self.path()))
             except NoCompiler as missing:
-                warnings.warn(str(missing), stacklevel=2)
+                warnings.warn(f"{missing}; {consequence}" if consequence else str(missing),
+                              stacklevel=2)
                 self._loaded = None
         return self._loaded
 
