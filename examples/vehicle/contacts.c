@@ -359,8 +359,7 @@ CONTACTS_EXPORT void contacts_kinematics(Contacts *c)
 /* Where the bank's laws give the tyres' loads: bank.c's bank_law_loads (`law_loads`) and
  * the bank (`bank`, `size` instances), `rows` each wheel's two tyres' rows in it (wheels
  * x 2). NULL: the loads are given (Python writes ARRAY(LOADS), ARRAY(SLOPES),
- * ARRAY(RATE_SLOPES)). 0, or -1
- * where memory runs out (the loads are then given). */
+ * ARRAY(RATE_SLOPES)). 0, or -1 where memory runs out (the loads are then given). */
 CONTACTS_EXPORT int contacts_set_tyre_laws(Contacts *c, LawLoads law_loads, const void *bank,
                                            int size, const int *rows)
 {
