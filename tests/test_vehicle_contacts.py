@@ -202,15 +202,15 @@ def test_the_c_kernel_gives_the_numpy_kernels_numbers(native_fmus, request, mode
 
 
 def test_the_linear_vehicles_tyre_damping_is_in_the_contacts_jacobian(linear_vehicle):
-    """The linear vehicle's contacts on both kernels, at the laid-out state with the track
-    running and with every coordinate jostled (0.1 mm, 0.1 mrad; 0.1 m/s, rad/s), the
-    tyres in contact (five or six loaded) and their compressions changing: the Jacobian's velocity part
-    (factor_t: the damped Kelvin tyres', the penalty contacts') equals minus the central
-    differences of the generalized forces by the velocities to 1e-8 of its largest entry
-    (the forces are linear in them); at rest its position part (factor) to 1 %, as the
-    FMU vehicle's (tests/test_vehicle.py). In motion the position part leaves out the
-    rate's derivative by the coordinates (as it leaves out each link's term's second
-    derivatives)."""
+    """The linear vehicle's contacts on both kernels, at the laid-out state with the
+    track running and with every coordinate jostled (0.1 mm, 0.1 mrad; 0.1 m/s, rad/s),
+    the tyres in contact (five or six loaded) and their compressions changing: the
+    Jacobian's velocity part (factor_t: the damped Kelvin tyres', the penalty contacts')
+    equals minus the central differences of the generalized forces by the velocities to
+    1e-8 of its largest entry (the forces are linear in them); at rest its position part
+    (factor) to 1 %, as the FMU vehicle's (tests/test_vehicle.py). In motion the position
+    part leaves out the rate's derivative by the coordinates (as it leaves out each
+    link's term's second derivatives)."""
     from test_vehicle import _central_differences
 
     contacts = linear_vehicle.contacts

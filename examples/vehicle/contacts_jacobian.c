@@ -63,8 +63,9 @@ static void tyre_triplets(Contacts *c, double factor, double factor_t, Triplets 
             for (int b = 0; b < 12; b++)
                 put(t, coordinate[a], coordinate[b], scale * gradient[a] * gradient[b]);
     }
-    /* (factor (F' - F/b) + factor_t F_rate) (p.D)^T (p.D): p.D's entries, the arm's summed over the wheel's links,
-     * in the numpy kernel's order (every wheel's arm entries, then every pair's links') */
+    /* (factor (F' - F/b) + factor_t F_rate) (p.D)^T (p.D): p.D's entries, the arm's summed
+     * over the wheel's links, in the numpy kernel's order (every wheel's arm entries, then
+     * every pair's links') */
     int entries = 0;
     for (int w = 0; w < c->wheels; w++) {
         if (!(force[w] > 0.0)) continue;
