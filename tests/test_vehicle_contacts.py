@@ -2,7 +2,8 @@
 kernel compiled on first use (examples/vehicle/contacts_kernel.py) against the numpy
 kernel it was written from (examples/vehicle/contacts.py, the readable reference): the
 same generalized forces, records and Jacobian at states that reach every contact's
-branches, the same short run, and the message where no compiler is found."""
+branches, the same short run, and the message where no compiler is found; the linear
+vehicle's (damped Kelvin tyres) Jacobian against its forces' derivatives."""
 
 import math
 import sys
@@ -27,6 +28,20 @@ def _vehicle(native_fmus):
     from vehicle.model import Vehicle
 
     return Vehicle(Bump(3.0), 5.0, native_fmus["RoadWheelTyre"].parent)
+
+
+@pytest.fixture(scope="module")
+def linear_vehicle(native_fmus):
+    """The vehicle with linear Kelvin elements in place of the FMUs (model.Linear, as
+    tracked_vehicle.py --linear builds it), laid out at 3 m/s: its tyres' load moves with
+    the compression's rate (c about 3.6e4 N.s/m a half-wheel)."""
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle.course import Bump
+    from vehicle.model import Linear, Vehicle, static_points
+
+    fmu_dir = native_fmus["RoadWheelTyre"].parent
+    statics = static_points(fmu_dir)
+    return Vehicle(Bump(3.0), 3.0, fmu_dir, linear=Linear(statics, fmu_dir), statics=statics)
 
 
 def _both_kernels(contacts, q, qd):
@@ -148,16 +163,18 @@ def _start_state(vehicle):
             np.array(data.GetODE2Coordinates_t(exu.ConfigurationType.Initial))[index])
 
 
-@pytest.mark.parametrize("settling", [True, False])
-def test_the_c_kernel_gives_the_numpy_kernels_numbers(native_fmus, settling):
+@pytest.mark.parametrize("model, settling", [("FMUs", True), ("FMUs", False),
+                                             ("linear", False)])
+def test_the_c_kernel_gives_the_numpy_kernels_numbers(native_fmus, request, model, settling):
     """At each state of _states, settling (its damping springs) and running (the tyres'
-    FMU laws): the C kernel's generalized forces, the records the run and the checks read
-    and the Jacobian (at two of exudyn's factor pairs) equal the numpy kernel's to 1e-12
-    of each one's largest magnitude (they are the same bits on this machine; other
-    builds of numpy or libm may differ in the last bits); and the states reach every
-    contact's branches."""
+    FMU laws, or the linear vehicle's damped Kelvin tyres): the C kernel's generalized
+    forces, the records the run and the checks read and the Jacobian (at two of exudyn's
+    factor pairs) equal the numpy kernel's to 1e-12 of each one's largest magnitude (they
+    are the same bits on this machine; other builds of numpy or libm may differ in the
+    last bits); and the states reach every contact's branches."""
     exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
-    vehicle = _vehicle(native_fmus)
+    vehicle = (_vehicle(native_fmus) if model == "FMUs"
+               else request.getfixturevalue("linear_vehicle"))
     try:
         contacts = vehicle.contacts
         assert contacts.kernel == "compiled"  # the default where gcc is found
@@ -182,6 +199,37 @@ def test_the_c_kernel_gives_the_numpy_kernels_numbers(native_fmus, settling):
         assert np.any(values["numpy"]["generalized"] != 0.0)
     finally:
         vehicle.coupling.free()
+
+
+def test_the_linear_vehicles_tyre_damping_is_in_the_contacts_jacobian(linear_vehicle):
+    """The linear vehicle's contacts on both kernels, at the laid-out state with the
+    track running and with every coordinate jostled (0.1 mm, 0.1 mrad; 0.1 m/s, rad/s),
+    the tyres in contact (five or six loaded) and their compressions changing: the
+    Jacobian's velocity part (factor_t: the damped Kelvin tyres', the penalty contacts')
+    equals minus the central differences of the generalized forces by the velocities to
+    1e-8 of its largest entry (the forces are linear in them); at rest its position part
+    (factor) to 1 %, as the FMU vehicle's (tests/test_vehicle.py). In motion the position
+    part leaves out the rate's derivative by the coordinates (as it leaves out each
+    link's term's second derivatives)."""
+    from test_vehicle import _central_differences
+
+    contacts = linear_vehicle.contacts
+    q0, qd0 = _start_state(linear_vehicle)
+    rng = np.random.default_rng(11)
+    jostled = (q0 + rng.normal(0.0, 1e-4, q0.shape), qd0 + rng.normal(0.0, 0.1, q0.shape))
+    for kernel in ("numpy", "compiled"):
+        contacts.use(kernel)
+        for q, qd in ((q0, qd0), jostled):
+            contacts._update(0.0, q, qd)
+            assert np.all(contacts.in_contact) and np.sum(contacts.tyre_force > 0.0) >= 5
+            assert np.any(contacts.compression_rate != 0.0)
+            analytic = contacts._jacobian(0.0, q, qd, 0.0, 1.0)
+            numeric = _central_differences(contacts, q, qd, 1e-6, by_velocity=True)
+            assert np.max(np.abs(analytic - numeric)) < 1e-8 * np.max(np.abs(numeric)), kernel
+            rest = np.zeros_like(qd)
+            analytic = contacts._jacobian(0.0, q, rest, 1.0, 0.0)
+            numeric = _central_differences(contacts, q, rest, 1e-8)
+            assert np.max(np.abs(analytic - numeric)) < 0.01 * np.max(np.abs(numeric)), kernel
 
 
 def test_the_c_kernel_calls_the_banks_laws_as_the_vehicle_does(native_fmus):

@@ -21,7 +21,7 @@ static int array_size(const Contacts *c, int index)
     case A_SEATS: case A_SEATS_V: return 4 * c->links;
     case A_WHEELS: case A_WHEELS_V: return 2 * c->wheels;
     case A_COMPRESSION: case A_COMPRESSION_RATE: case A_LOADS: case A_SLOPES:
-    case A_TYRE_FORCE: return c->wheels;
+    case A_RATE_SLOPES: case A_TYRE_FORCE: return c->wheels;
     case A_GROUND: case A_GROUND_LOAD: case A_TOOTH_GAP: return c->links;
     case A_DRIVE_TORQUE: return 1;
     default: return 0;
@@ -358,8 +358,8 @@ CONTACTS_EXPORT void contacts_kinematics(Contacts *c)
 
 /* Where the bank's laws give the tyres' loads: bank.c's bank_law_loads (`law_loads`) and
  * the bank (`bank`, `size` instances), `rows` each wheel's two tyres' rows in it (wheels
- * x 2). NULL: the loads are given (Python writes ARRAY(LOADS), ARRAY(SLOPES)). 0, or -1
- * where memory runs out (the loads are then given). */
+ * x 2). NULL: the loads are given (Python writes ARRAY(LOADS), ARRAY(SLOPES),
+ * ARRAY(RATE_SLOPES)). 0, or -1 where memory runs out (the loads are then given). */
 CONTACTS_EXPORT int contacts_set_tyre_laws(Contacts *c, LawLoads law_loads, const void *bank,
                                            int size, const int *rows)
 {
@@ -382,7 +382,7 @@ CONTACTS_EXPORT int contacts_set_tyre_laws(Contacts *c, LawLoads law_loads, cons
 
 /* model.Vehicle.tyre_loads on the compiled path: each wheel's two tyres at its
  * compression (-HORN_HEIGHT out of contact), their loads and slopes summed as numpy sums
- * a row */
+ * a row; the bank's laws are rate-free (no slope by the rate) */
 static void tyre_loads(Contacts *c)
 {
     for (int w = 0; w < c->wheels; w++) {
@@ -397,6 +397,7 @@ static void tyre_loads(Contacts *c)
         double slopes[2] = {c->law_slope[row[0]], c->law_slope[row[1]]};
         ARRAY(LOADS)[w] = numpy_sum(loads, 2);
         ARRAY(SLOPES)[w] = numpy_sum(slopes, 2);
+        ARRAY(RATE_SLOPES)[w] = 0.0;
     }
 }
 

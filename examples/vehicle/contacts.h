@@ -25,8 +25,8 @@ enum Parameter {
  * the order of contacts_kernel.ARRAYS. */
 enum Array {
     A_STATE, A_RATES, A_U, A_N, A_SEATS, A_SEATS_V, A_PINS, A_PINS_V, A_WHEELS, A_WHEELS_V,
-    A_COMPRESSION, A_COMPRESSION_RATE, A_LOADS, A_SLOPES, A_TYRE_FORCE, A_GROUND,
-    A_GROUND_LOAD, A_TOOTH_GAP, A_GENERALIZED, A_DRIVE_TORQUE, A_COUNT
+    A_COMPRESSION, A_COMPRESSION_RATE, A_LOADS, A_SLOPES, A_RATE_SLOPES, A_TYRE_FORCE,
+    A_GROUND, A_GROUND_LOAD, A_TOOTH_GAP, A_GENERALIZED, A_DRIVE_TORQUE, A_COUNT
 };
 
 /* bank.c's bank_law_loads: the bank's laws' loads and slopes at its deflections. */

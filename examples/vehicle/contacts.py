@@ -191,18 +191,20 @@ class Contacts(KernelResults):
         parts = [(np.broadcast_to(first[:, :, None, :, None], blocks.shape)[kept],
                   np.broadcast_to(first[:, None, :, None, :], blocks.shape)[kept],
                   blocks[kept])]
-        parts += self._tyre_triplets(factor)
+        parts += self._tyre_triplets(factor, factor_t)
         return tuple(np.concatenate(part).astype(float) for part in zip(*parts))
 
-    def _tyre_triplets(self, factor):
-        """d(generalized tyre force)/dq of each wheel in contact, from the blend's
-        gradient D (a row per link beneath) and weights p: F' (p.D)^T (p.D) +
+    def _tyre_triplets(self, factor, factor_t):
+        """The tyres' factor K + factor_t C of each wheel in contact, from the blend's
+        gradient D (a row per link beneath) and weights p: K = F' (p.D)^T (p.D) +
         F/b D^T (diag(p) - p p^T) D (b TYRE_BLEND; the second derivatives of each link's
-        own term left out), on the few coordinates D touches (the arm's, the links')."""
+        own term left out, and the rate's derivative by q), C = F_rate (p.D)^T (p.D) (the
+        rate is p.D times the velocities: a Kelvin tyre's damping), on the few coordinates
+        D touches (the arm's, the links')."""
         count = len(self.wheels)
-        force, slope = np.zeros(count), np.zeros(count)
-        for w, f, k in self.tyre_terms:
-            force[w], slope[w] = f, k
+        force, slope, rate_slope = np.zeros(count), np.zeros(count), np.zeros(count)
+        for w, f, k, c in self.tyre_terms:
+            force[w], slope[w], rate_slope[w] = f, k, c
         pairs = np.flatnonzero(force[self.pair_wheel] > 0.0)
         wheel, weights = self.pair_wheel[pairs], self.pair_weight[pairs]
         gradient = self.pair_gradient[pairs]
@@ -213,7 +215,8 @@ class Contacts(KernelResults):
         own = (np.broadcast_to(coordinates[:, :, None], (len(pairs), size, size)).ravel(),
                np.broadcast_to(coordinates[:, None, :], (len(pairs), size, size)).ravel(),
                (scale[:, None, None] * gradient[:, :, None] * gradient[:, None, :]).ravel())
-        # (F' - F/b) (p.D)^T (p.D): p.D's entries, the wheel's summed over its links
+        # (factor (F' - F/b) + factor_t F_rate) (p.D)^T (p.D): p.D's entries, the wheel's
+        # summed over its links
         wheels = np.flatnonzero(force > 0.0)
         by_wheel = np.stack([np.bincount(wheel, weights * gradient[:, j], minlength=count)
                              for j in range(3)], axis=1)[wheels]
@@ -225,8 +228,8 @@ class Contacts(KernelResults):
         first, second = np.nonzero(entry_wheel[:, None] == entry_wheel[None, :])
         w = entry_wheel[first]
         mean = (entry_coordinate[first], entry_coordinate[second],
-                factor * (slope[w] - force[w] / TYRE_BLEND) * entry_value[first]
-                * entry_value[second])
+                (factor * (slope[w] - force[w] / TYRE_BLEND) + factor_t * rate_slope[w])
+                * entry_value[first] * entry_value[second])
         return [own, mean]
 
     def _point_g(self, bodies, points):
@@ -505,9 +508,9 @@ class Contacts(KernelResults):
         # tyres: both half-wheels at the wheel's compression, the generalized force minus
         # the load times the compression's gradient (shared among the links beneath by
         # their weights in the blend, each along its own normal)
-        loads, slopes = v.tyre_loads(self.compression, self.compression_rate)
+        loads, slopes, rate_slopes = v.tyre_loads(self.compression, self.compression_rate)
         self.tyre_force = np.where(self.in_contact, loads, 0.0)
-        self.tyre_terms = [(w, self.tyre_force[w], slopes[w])
+        self.tyre_terms = [(w, self.tyre_force[w], slopes[w], rate_slopes[w])
                            for w in np.flatnonzero(self.tyre_force > 0.0)]
         # pushes the compression back: minus the load times the gradient, by weight
         share = -(self.tyre_force[self.pair_wheel] * self.pair_weight)[:, None] * self.pair_gradient

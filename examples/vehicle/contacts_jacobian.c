@@ -45,12 +45,13 @@ static void spring_triplets(const Contacts *c, double factor, double factor_t, T
     }
 }
 
-/* d(generalized tyre force)/dq of each wheel in contact, from the blend's gradient D (a
- * row per link beneath) and weights p: F' (p.D)^T (p.D) + F/b D^T (diag(p) - p p^T) D (b
- * TYRE_BLEND), on the coordinates D touches. */
-static void tyre_triplets(Contacts *c, double factor, Triplets *t)
+/* The tyres' factor K + factor_t C of each wheel in contact, from the blend's gradient D
+ * (a row per link beneath) and weights p: K = F' (p.D)^T (p.D) + F/b D^T (diag(p) - p p^T)
+ * D (b TYRE_BLEND), C = F_rate (p.D)^T (p.D), on the coordinates D touches. */
+static void tyre_triplets(Contacts *c, double factor, double factor_t, Triplets *t)
 {
     const double *force = ARRAY(TYRE_FORCE), *slope = ARRAY(SLOPES);
+    const double *rate_slope = ARRAY(RATE_SLOPES);
     double blend = P(TYRE_BLEND);
     for (int i = 0; i < c->pairs; i++) {
         int w = c->pair_wheel[i];
@@ -62,8 +63,9 @@ static void tyre_triplets(Contacts *c, double factor, Triplets *t)
             for (int b = 0; b < 12; b++)
                 put(t, coordinate[a], coordinate[b], scale * gradient[a] * gradient[b]);
     }
-    /* (F' - F/b) (p.D)^T (p.D): p.D's entries, the arm's summed over the wheel's links,
-     * in the numpy kernel's order (every wheel's arm entries, then every pair's links') */
+    /* (factor (F' - F/b) + factor_t F_rate) (p.D)^T (p.D): p.D's entries, the arm's summed
+     * over the wheel's links, in the numpy kernel's order (every wheel's arm entries, then
+     * every pair's links') */
     int entries = 0;
     for (int w = 0; w < c->wheels; w++) {
         if (!(force[w] > 0.0)) continue;
@@ -92,7 +94,8 @@ static void tyre_triplets(Contacts *c, double factor, Triplets *t)
             int w = c->entry_wheel[a];
             if (c->entry_wheel[b] != w) continue;
             put(t, c->entry_coordinate[a], c->entry_coordinate[b],
-                factor * (slope[w] - force[w] / blend) * c->entry_value[a] * c->entry_value[b]);
+                (factor * (slope[w] - force[w] / blend) + factor_t * rate_slope[w])
+                * c->entry_value[a] * c->entry_value[b]);
         }
 }
 
@@ -103,6 +106,6 @@ CONTACTS_EXPORT long contacts_jacobian(Contacts *c, double factor, double factor
 {
     Triplets t = {out, 0, capacity};
     spring_triplets(c, factor, factor_t, &t);
-    tyre_triplets(c, factor, &t);
+    tyre_triplets(c, factor, factor_t, &t);
     return t.count;
 }

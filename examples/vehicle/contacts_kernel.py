@@ -50,9 +50,9 @@ ARRAYS = (("state", ("b", 3)), ("rates", ("b", 3)), ("u", ("l", 2)), ("n", ("l",
           ("seats", ("l", 2, 2)), ("seats_v", ("l", 2, 2)), ("pins", ("l", 2)),
           ("pins_v", ("l", 2)), ("wheels", ("w", 2)), ("wheels_v", ("w", 2)),
           ("compression", ("w",)), ("compression_rate", ("w",)), ("loads", ("w",)),
-          ("slopes", ("w",)), ("tyre_force", ("w",)), ("ground", ("l",)),
-          ("ground_load", ("l",)), ("tooth_gap", ("l",)), ("generalized", ("g",)),
-          ("drive_torque", (1,)))
+          ("slopes", ("w",)), ("rate_slopes", ("w",)), ("tyre_force", ("w",)),
+          ("ground", ("l",)), ("ground_load", ("l",)), ("tooth_gap", ("l",)),
+          ("generalized", ("g",)), ("drive_torque", (1,)))
 # the numpy kernel's results that the run's readers read, as `publish` sets them
 PUBLISHED = ("u", "n", "seats", "seats_v", "pins", "pins_v", "wheels", "wheels_v",
              "compression", "compression_rate", "tyre_force", "ground_load", "tooth_gap",
@@ -183,8 +183,9 @@ class CompiledContacts:
             self.lib.contacts_evaluate(self.handle, bool(v.settling))
             return
         self.lib.contacts_kinematics(self.handle)
-        views["loads"][:], views["slopes"][:] = v.tyre_loads(views["compression"],
-                                                              views["compression_rate"])
+        for name, values in zip(("loads", "slopes", "rate_slopes"),
+                                v.tyre_loads(views["compression"], views["compression_rate"])):
+            views[name][:] = values
         if given:
             views["ground"][:] = v.course.height(views["pins"][:, 0])
         self.lib.contacts_forces(self.handle, bool(v.settling))

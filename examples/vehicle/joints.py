@@ -25,7 +25,8 @@ from exudyn.itemInterface import ObjectGenericODE2
 from fmu_components.coupling.bank_build import Library
 
 from . import layout as lay
-from .model import RADIAL_FADE, law_slope_step, radial_fade
+from .law_slopes import load_and_slopes
+from .model import RADIAL_FADE, radial_fade
 
 HERE = Path(__file__).resolve().parent
 LIBRARY = Library("vehicle_joints", [HERE / "joints.c"], [], "the track joints' kernel "
@@ -246,8 +247,8 @@ class Joints:
         for column, components, x, rate in ((0, v.radial, joint[:, 2], joint[:, 5]),
                                             (3, v.torsion, joint[:, 6], joint[:, 7])):
             for j, component in enumerate(components):
-                law[j, column:column + 3] = _load_and_slopes(v, component, float(x[j]),
-                                                             float(rate[j]))
+                law[j, column:column + 3] = load_and_slopes(v, component, float(x[j]),
+                                                            float(rate[j]))
         return law
 
     def _laws_key(self):
@@ -308,16 +309,3 @@ class Joints:
         deflection, rate = (2, 5) if kind == "radial" else (6, 7)
         return float(self._read[j, deflection]), float(self._read[j, rate])
 
-
-def _load_and_slopes(vehicle, component, x, rate):
-    """A component's load at (x, rate) and its slopes by both, by central differences: by
-    x as the bank's law_loads takes them (bank.c: a step of 1e-9 of |x|, at least 1e-15),
-    by the rate a step of 1e-6 of |rate|, at least 1e-6 (a law's damper term: a Kelvin
-    element's; an FMU's law has none)."""
-    step = law_slope_step(x)
-    by_rate = 1e-6 * (abs(rate) if abs(rate) > 1.0 else 1.0)
-    load = vehicle.load
-    return (load(component, x, rate),
-            (load(component, x + step, rate) - load(component, x - step, rate)) / (2.0 * step),
-            (load(component, x, rate + by_rate) - load(component, x, rate - by_rate))
-            / (2.0 * by_rate))

@@ -41,6 +41,7 @@ import bank_path
 from example_fmus import fmu_path
 
 from . import layout as lay
+from .law_slopes import load_and_slopes
 from .layout import GRAVITY
 
 # Penalty contacts (assumed; docs/vehicle.md): steel on a hard road, steel teeth.
@@ -417,26 +418,23 @@ class Vehicle:
 
     def tyre_loads(self, compression, rate):
         """Each wheel's tyre load (both half-wheels) at its compression and rate, and its
-        slope by the compression (for the contacts' Jacobian: the load law's tangent, not
-        its secant; central differences as the bank's law_loads takes them). On the
-        compiled path the bank's laws, in one call for every tyre (the contacts' C kernel
-        makes that call itself, the same operations: contacts_kernel.py)."""
+        slopes by the compression and by the rate, for the contacts' Jacobian (the load
+        law's tangent, not its secant; a Kelvin tyre's damping: law_slopes.py). On the
+        compiled path the bank's laws, rate-free, in one call for every tyre (the
+        contacts' C kernel makes that call itself, the same operations:
+        contacts_kernel.py)."""
         compression = np.where(np.isfinite(compression), compression, -HORN_HEIGHT)
         rows = self.tyre_rows
         if self.bank is not None:
             deflection = np.zeros(len(self.components))
             deflection[rows] = compression[:, None]
             loads, slopes = self.bank.law_loads(deflection, slopes=True)
-            return loads[rows].sum(axis=1), slopes[rows].sum(axis=1)
-        loads, slopes = np.zeros(len(rows)), np.zeros(len(rows))
+            return loads[rows].sum(axis=1), slopes[rows].sum(axis=1), np.zeros(len(rows))
+        laws = np.zeros((len(rows), 3))  # load, slope by compression, by rate
         for w, pair in enumerate(self.tyres):
-            x = float(compression[w])
-            step = law_slope_step(x)
             for tyre in pair:
-                loads[w] += self.load(tyre, x, float(rate[w]))
-                slopes[w] += ((self.load(tyre, x + step, 0.0) - self.load(tyre, x - step, 0.0))
-                              / (2.0 * step))
-        return loads, slopes
+                laws[w] += load_and_slopes(self, tyre, float(compression[w]), float(rate[w]))
+        return tuple(laws.T)
 
     @functools.cached_property
     def tyre_rows(self):
@@ -545,13 +543,6 @@ class Vehicle:
                 "passes_per_step": passes / max(self.coupling.steps, 1),
                 "steps": self.coupling.steps, "host_steps": self.host_steps,
                 "refused": self.host.refused}
-
-
-def law_slope_step(x):
-    """The step of the central difference by which the bank takes a law's slope at
-    deflection x (bank.c's bank_law_loads), for the Python path's slopes, which must be
-    its numbers."""
-    return 1e-9 * (abs(x) if abs(x) > 1e-6 else 1e-6)
 
 
 def run_settings(spectral_radius=SPECTRAL_RADIUS):
