@@ -29,6 +29,7 @@ span) and that lifts the last joint by lift (1 - cos 2 pi f t) / 2 without turni
 """
 
 import argparse
+import ctypes
 import math
 import time
 from pathlib import Path
@@ -42,6 +43,7 @@ from exudyn.itemInterface import (CoordinateConstraint, LoadForceVector, MarkerB
                                   ObjectConnectorSpringDamper, ObjectGround, ObjectRigidBody2D)
 
 from fmu_components.coupling import DEFAULT_SCHEME, Coupling, FmuComponent
+from fmu_components.coupling.bank_build import Library
 from fmu_components.coupling.bank_exudyn import symbolic_function
 from fmu_components.coupling.exudyn_host import connector_state, quiet_settings, solve
 
@@ -65,6 +67,12 @@ WHEEL_MASS = 100.0  # kg, the lifting wheel's share moving along the span (estim
 # docs/coupling.md). None: exudyn's default.
 NEWTON_TOLERANCE = 1e-5
 DEFAULT_STEP = 5e-4  # s
+# the compiled path's deflections from the coordinates (twice a host step), compiled on
+# first use; numpy_deflections where it cannot be built
+DEFLECTIONS = Library("track_span_deflections",
+                      [Path(__file__).resolve().parent / "track_span_deflections.c"], [],
+                      "the span's deflections kernel (track_span_deflections.c)",
+                      "the span takes them from numpy")
 
 
 class TrackSpan:
@@ -220,14 +228,32 @@ class TrackSpan:
                        np.empty((2, joints)))
         self._index_rows = np.ascontiguousarray(self._index.T)  # rows x, y, angle
         self._reference_rows = np.ascontiguousarray(self._reference.T)
+        self._deflections = self.compiled_deflections() or self.numpy_deflections
 
-    def _node_coordinates(self, derivative=0):
-        data = self.mbs.systemData
-        if derivative == 2:
-            return data.GetODE2Coordinates_tt()[self._index]
-        return self._reference + data.GetODE2Coordinates()[self._index]
+    def compiled_deflections(self):
+        """numpy_deflections in C (track_span_deflections.c: the same operations, the same
+        bits, a tenth of the time), its arrays' addresses taken once; None where the
+        kernel cannot be built (DEFLECTIONS.load warns)."""
+        lib = DEFLECTIONS.load("the span takes its deflections from numpy")
+        if lib is None:
+            return None
+        function = lib.span_deflections
+        function.argtypes = [ctypes.c_int, ctypes.c_double] + [ctypes.c_void_p] * 4
+        function.restype = None
+        index = self._index_rows.astype(np.int64)
+        nodes, half = index.shape[1], 0.5 * PITCH
+        deflections = np.empty(2 * nodes)
+        self._kernel_arrays = (index, deflections)  # alive as long as the span
+        arrays = (index.ctypes.data, self._reference_rows.ctypes.data, deflections.ctypes.data)
+        coordinates = self.mbs.systemData.GetODE2Coordinates
 
-    def _deflections(self):
+        def compiled():
+            now = coordinates()  # held while the kernel reads it
+            function(nodes, half, now.ctypes.data, *arrays)
+            return deflections
+        return compiled
+
+    def numpy_deflections(self):
         """Every instance's deflection from the system's coordinates, in one pass: radial,
         the distance between the pin seats of a joint; torsion, the left link's rotation
         minus the right one's (the Python path's connector_state, vectorised, its
@@ -276,11 +302,19 @@ class TrackSpan:
                              [c.load for c in self.radial], heights, accelerations))
 
     def _record_bank(self, t):
-        bank = self.bank
-        coordinates = self._node_coordinates()[:-1]
-        loads = bank.loads
-        self.records.append((t, loads[1::2], bank.accepted[1::2, 1].copy(), loads[0::2],
-                             coordinates[:, 1], self._node_coordinates(2)[:-1, 1]))
+        """The bank's loads and the system's vectors as they are (the links' heights and
+        accelerations are picked out after the run: _bank_histories)."""
+        data, bank = self.mbs.systemData, self.bank
+        self.records.append((t, bank.loads, bank.accepted[1::2, 1].copy(),
+                             data.GetODE2Coordinates(), data.GetODE2Coordinates_tt()))
+
+    def _bank_histories(self):
+        """_record's histories from _record_bank's: the links' heights (reference plus
+        coordinate, as exudyn's node output has it) and accelerations."""
+        t, loads, angles, coordinates, accelerations = (np.array(a) for a in zip(*self.records))
+        y = self._index[:-1, 1]
+        return (t, loads[:, 1::2], angles, loads[:, 0::2],
+                self._reference[:-1, 1] + coordinates[:, y], accelerations[:, y])
 
     def run(self, end_time, step):
         self.solve_static()
@@ -289,10 +323,11 @@ class TrackSpan:
             self.host = bank_path.solve(self.mbs, self.bank, self.laws, self._deflections,
                                         end_time, step, settings=solver_settings())
             self.coupling = self.bank
+            t, torques, angles, forces, heights, accelerations = self._bank_histories()
         else:
             self.host = solve(self.mbs, self.coupling, end_time, step,
                               settings=solver_settings())
-        t, torques, angles, forces, heights, accelerations = zip(*self.records)
+            t, torques, angles, forces, heights, accelerations = zip(*self.records)
         return {"time": np.array(t), "joint_torque": np.array(torques),
                 "joint_angle": np.array(angles), "radial_force": np.array(forces),
                 "link_height": np.array(heights), "link_acceleration": np.array(accelerations),

@@ -139,6 +139,34 @@ def test_the_track_span_compiled_path_gives_the_python_paths_numbers(native_fmus
     assert all(0.0 < run["solve_cpu"] < 60.0 for run in runs.values())
 
 
+def test_the_track_spans_c_deflections_are_its_numpy_deflections_to_the_bit(native_fmus):
+    """The compiled path's deflections from the coordinates (track_span_deflections.c)
+    against the numpy function it replaces, at the laid-out span and at states moved by
+    up to a millimetre and half a radian per coordinate."""
+    sys.path.insert(0, str(EXAMPLES))
+    try:
+        import track_span
+    finally:
+        sys.path.remove(str(EXAMPLES))
+    span = track_span.TrackSpan(links=6, fmu_dir=Path(native_fmus["TrackBushRadial"]).parent,
+                                path="compiled")
+    try:
+        span._compile_forces()
+        compiled = span._deflections
+        assert compiled != span.numpy_deflections  # the compiled path's, where gcc is
+        data, generator = span.mbs.systemData, np.random.default_rng(7)
+        laid_out = data.GetODE2Coordinates()
+        for position, angle in ((0.0, 0.0), (1e-6, 1e-6), (1e-3, 0.5), (0.1, 0.5)):
+            scale = np.tile([position, position, angle], len(laid_out) // 3)
+            data.SetODE2Coordinates(laid_out + scale * generator.uniform(-1.0, 1.0,
+                                                                         laid_out.shape))
+            expected = span.numpy_deflections()
+            assert compiled().tobytes() == expected.tobytes()
+        assert np.ptp(expected[0::2]) > 1e-3 and np.ptp(expected[1::2]) > 0.1
+    finally:
+        span.bank.free()
+
+
 def announced_run(fmus, announce, steps=120):
     """A corrected bank of the four FMUs over `steps` host steps of 1 ms, the damper turned
     0.1 rad within step 60 (a Discard: the host retries it shorter), the host announcing each next
