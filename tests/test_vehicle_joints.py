@@ -182,6 +182,30 @@ def test_the_c_kernel_gives_the_numpy_kernels_bits(vehicle):
             assert np.max(np.abs(numpy_value - c_value)) <= 1e-13 * scale, name
 
 
+def test_a_radial_bush_never_pushes_its_seats_apart(vehicle):
+    """A radial law's load below zero is not applied (model.radial_pull), its slopes with
+    it, by either kernel; at or above zero the law's load is applied as it was."""
+    from vehicle.joints import forces
+    from vehicle.model import radial_fade, radial_pull
+
+    kernel, index = vehicle.kernel, vehicle.kernel.system_index
+    name, q, qd = next(_states(vehicle))
+    link, joint = kernel.kinematics(q[index], qd[index])
+    law = np.zeros((len(joint), 6))
+    law[:, 0] = np.where(np.arange(len(joint)) % 2, -2e3, 2e3)  # pushing, pulling
+    law[:, 1], law[:, 2], law[:, 3] = 8e7, 2e4, 10.0
+    kernel.use("compiled")
+    kernel._compiled.kinematics(q[index].reshape(-1, 3), qd[index].reshape(-1, 3))
+    for effort in (forces(link, joint, law)[0], kernel._compiled.forces(law)[0]):
+        pushing = law[:, 0] < 0.0
+        assert np.all(effort[pushing] == 0.0)
+        share = np.array([radial_fade(d) for d in joint[~pushing, 2]])
+        assert np.array_equal(effort[~pushing, 0], 2e3 * share)
+        assert np.all(effort[~pushing, 1] > 0.0) and np.all(effort[~pushing, 2] > 0.0)
+    assert radial_pull(-2e3) == 0.0 and radial_pull(2e3) == 2e3
+    assert math.isnan(radial_pull(math.nan))
+
+
 def test_the_readers_read_the_connectors_deflections(vehicle):
     """The coupling's readers with the kernel (seat distance and its rate, relative angle
     plus offset and its rate) read what the connectors' readers read, at each state."""

@@ -14,7 +14,7 @@ import numpy as np
 import bank_path
 
 from .joints import Joints
-from .model import HORN_HEIGHT, radial_fade
+from .model import HORN_HEIGHT, radial_fade, radial_pull
 
 
 class CompiledPath:
@@ -45,7 +45,8 @@ class CompiledPath:
             # the law of the seats' distance, along their line (exudyn's spring-damper),
             # faded in near zero distance as the Python path's (model.radial_fade)
             def radial_force(mbs, t, itemNumber, deltaL, deltaL_t, stiffness, damping, force):
-                return laws.load(i, deltaL) * radial_fade(deltaL, laws.esym.min)
+                return (radial_pull(laws.load(i, deltaL), laws.esym.max)
+                        * radial_fade(deltaL, laws.esym.min))
             return radial_force
 
         def coordinate(i, offset=None):

@@ -62,8 +62,8 @@ static void arms(const double *link, int a, int b, double half, double ra[2], do
     rb[1] = link[2 * b + 1] * -half;
 }
 
-/* The radial bush's force along the seats' line, faded in over their first `fade` of
- * distance (model.radial_fade); the torsion bush's torque; each link's generalized force
+/* The radial bush's force along the seats' line, never pushing, faded in over their first
+ * `fade` of distance (model.radial_fade); the torsion bush's torque; each link's generalized force
  * (its rows in `generalized`), the joint it is b of first, then the one it is a of. */
 JOINTS_EXPORT void joints_forces(int n, double half, double fade, const double *link,
                                  const double *joint, const double *law, double *effort,
@@ -75,9 +75,13 @@ JOINTS_EXPORT void joints_forces(int n, double half, double fade, const double *
         double s = distance / fade < 1.0 ? distance / fade : 1.0;
         double share = s * (2.0 - s), share_slope = 2.0 * (1.0 - s) / fade;
         double *e = effort + 3 * j;
-        e[0] = l[0] * share;
-        e[1] = l[1] * share + l[0] * share_slope;
-        e[2] = l[2] * share;
+        /* the bush never pushes its seats apart (model.radial_pull): a load below zero
+         * is cut, its slopes with it (NaN passes) */
+        int cut = l[0] < 0.0;
+        double load = cut ? 0.0 : l[0];
+        e[0] = load * share;
+        e[1] = (cut ? 0.0 : l[1]) * share + load * share_slope;
+        e[2] = (cut ? 0.0 : l[2]) * share;
     }
     for (int k = 0; k < n; k++) {
         double sum[3];

@@ -76,8 +76,12 @@ def forces(link, joint, law):
     s = np.minimum(distance / RADIAL_FADE, 1.0)
     share = radial_fade(distance, np.minimum)
     share_slope = 2.0 * (1.0 - s) / RADIAL_FADE
-    effort = np.stack([law[:, 0] * share, law[:, 1] * share + law[:, 0] * share_slope,
-                       law[:, 2] * share], axis=1)
+    # the bush never pushes its seats apart (model.radial_pull): a load below zero is cut,
+    # its slopes with it
+    cut = law[:, 0] < 0.0
+    load = np.where(cut, 0.0, law[:, 0])
+    effort = np.stack([load * share, np.where(cut, 0.0, law[:, 1]) * share + load * share_slope,
+                       np.where(cut, 0.0, law[:, 2]) * share], axis=1)
     length = np.where(distance > 0.0, distance, 1.0)
     ux, uy = effort[:, 0] * (joint[:, 0] / length), effort[:, 0] * (joint[:, 1] / length)
     torque = law[:, 3]

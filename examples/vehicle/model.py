@@ -75,7 +75,11 @@ SPECTRAL_RADIUS = 0.6
 # distance and is Lipschitz through it (2 |load| / RADIAL_FADE), whatever the load. 5 um
 # is 1/32 of the bush's deflection at the track's tension (0.159 mm at 13 kN): only a
 # joint near slack (0.4 kN or less on the elastic rate) feels it. Wider fades (20, 50 um)
-# made exudyn shorten more steps at 5 m/s (docs/vehicle.md).
+# made exudyn shorten more steps at 5 m/s (docs/vehicle.md). A load below zero (the
+# law's unloading branch near zero deflection) is not applied (radial_pull, assumed): it
+# would push the seats apart along a line whose direction is lost as they meet, a negative
+# stiffness across it (-load / distance) that gave a step several solutions and Newton
+# cycles (docs/vehicle.md, The radial bush never pushes).
 RADIAL_FADE = 5e-6  # m
 # How the track's joints are built: one object computing all their forces and their
 # Jacobian (joints.py), or two exudyn connectors each (docs/vehicle.md, The joints)
@@ -103,6 +107,14 @@ def radial_fade(distance, smaller=min):
     same operations on both paths."""
     s = smaller(distance / RADIAL_FADE, 1.0)
     return s * (2.0 - s)
+
+
+def radial_pull(load, larger=max):
+    """The radial bush's load as the vehicle applies it along its seats' line: never
+    pushing them apart, a load below zero cut to zero (NaN passes). `larger` is max for
+    numbers and exudyn's symbolic max (b > a ? b : a, as max) for the compiled path's
+    expression; the joints' kernels cut it the same way (joints.py, joints.c)."""
+    return larger(load, 0.0)
 
 
 class VehicleError(RuntimeError):
@@ -380,7 +392,7 @@ class Vehicle:
             rc = mbs.AddObject(ObjectConnectorSpringDamper(
                 markerNumbers=[self.link_markers[behind][1], self.link_markers[ahead_][0]],
                 springForceUserFunction=lambda mbs, t, item, length, rate, *_, b=radial:
-                    self.load(b, length, rate) * radial_fade(length)))
+                    radial_pull(self.load(b, length, rate)) * radial_fade(length)))
             tc = mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
                 markerNumbers=[coordinate(self.link_nodes[behind], 2),
                                coordinate(self.link_nodes[ahead_], 2)],
