@@ -232,7 +232,7 @@ class TrackSpan:
 
     def compiled_deflections(self):
         """numpy_deflections in C (track_span_deflections.c: the same operations, the same
-        bits, a tenth of the time), its arrays' addresses taken once; None where the
+        bits, a quarter of the time), its arrays' addresses taken once; None where the
         kernel cannot be built (DEFLECTIONS.load warns)."""
         lib = DEFLECTIONS.load("the span takes its deflections from numpy")
         if lib is None:
