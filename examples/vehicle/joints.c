@@ -2,7 +2,8 @@
  * per joint the radial bush's seat distance and the torsion bush's relative angle, with
  * their rates (joints_kinematics); the two bushes' generalized forces on the links' (x, y,
  * angle) once Python has read their laws' loads and slopes (joints_forces); their Jacobian
- * as exudyn's triplets (joints_jacobian). The same operations in the same order as the
+ * as exudyn's triplets (joints_jacobian); on the compiled path the three at once, the bank's
+ * laws called from here (joints_evaluate, joints_evaluate_jacobian). The same operations in the same order as the
  * numpy kernel, so that the two give the same bits. libc and libm only.
  *
  * Joint j joins link a = j - 1 (its front seat, local +half) to link b = j (its rear seat,

@@ -9,9 +9,13 @@ differentiating 160 connectors numerically.
 Two kernels, one set of equations: `kinematics`, `forces` and `jacobian` below (numpy, the
 readable reference and the fallback) and joints.c (compiled on first use, as the contacts'
 kernel: bank_build.Library, -ffp-contract=off), the same operations in the same order.
-The laws' loads and slopes come from the coupling's bank on the compiled path (one call
-for every row, Bank.law_loads) and from the components on the Python path
-(Vehicle.load); while the vehicle settles, from their relaxed tables.
+The laws' loads and slopes come from the coupling's bank on the compiled path and from
+the components on the Python path (Vehicle.load); while the vehicle settles, from their
+relaxed tables. On the compiled path exudyn's force function is one C call
+(joints_evaluate: kinematics, the bank's laws called from C through
+Bank.law_loads_entry, forces) and its Jacobian function one more (`Joints.one_call`);
+`evaluate` and `triplets`, three calls with Bank.law_loads, are the same operations
+(tests/test_vehicle_joints.py: the same bits).
 """
 
 import ctypes
