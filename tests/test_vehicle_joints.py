@@ -247,3 +247,57 @@ def test_a_short_run_takes_the_same_steps_on_both_kernels(native_fmus):
             span = max(np.ptp(value), 1e-300)
             assert np.max(np.abs(runs["compiled"][key] - value)) <= 1e-9 * span, key
     assert np.max(runs["compiled"]["bush_radial_force"][-1]) > 5e3  # the track's tension
+
+
+def test_the_one_call_path_gives_the_three_call_paths_bits(native_fmus):
+    """On the compiled path (the bank's laws, the C kernel) exudyn's force and Jacobian
+    functions take one C call each (kinematics, the bank's laws called from C, forces):
+    at each state, with the bank's relaxed laws and with laws set on a few rows (a
+    clipped secant, a compression), their forces and triplets are the three-call path's
+    (Joints.evaluate and Joints.triplets: kinematics, Bank.law_loads, forces) to the bit,
+    in either order of the calls."""
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    import exudyn as exu
+    from vehicle.course import Bump
+    from vehicle.model import Vehicle
+
+    vehicle = Vehicle(Bump(3.0), 5.0, native_fmus["RoadWheelTyre"].parent)
+    joints = vehicle.joints
+    if joints.kernel != "compiled":
+        pytest.skip("the joints' C kernel does not build here")
+    vehicle.prepare()
+    compiled = vehicle.compiled_path
+    try:
+        compiled.bank.start(0.0, *compiled.initial_state())
+        vehicle.bank = compiled.bank
+        data = vehicle.mbs.systemData
+        q0 = np.array(data.GetODE2Coordinates(exu.ConfigurationType.Initial))
+        qd0 = np.array(data.GetODE2Coordinates_t(exu.ConfigurationType.Initial))
+        index, rng = joints.system_index, np.random.default_rng(31)
+        states = [(q0, qd0)] + [(q0 + rng.normal(0.0, 1e-4, q0.shape),
+                                 qd0 + rng.normal(0.0, 0.3, q0.shape)) for _ in range(3)]
+        for laws in ("relaxed", "set"):
+            if laws == "set":
+                joint = joints.kinematics(q0[index], qd0[index])[1]
+                for j in (3, 40, 41):
+                    row = compiled.radial_rows[j]
+                    compiled.bank._set_law(row, joint[j, 2] + 2e-5, -2e3, 8e7, 1e13)
+                compiled.bank._set_law(compiled.torsion_rows[5], joint[5, 6], 10.0, 300.0, 0.0)
+            for q, qd in states:
+                q, qd = list(q[index]), list(qd[index])  # as exudyn hands them
+                three = joints.evaluate(np.array(q), np.array(qd))[-1].reshape(-1)
+                expected = [joints.triplets(np.array(q), np.array(qd), *f) for f in FACTORS]
+                assert joints.one_call() is not None
+                for order in ("forces first", "jacobian first"):
+                    if order == "forces first":
+                        forces = joints.generalized(q, qd).copy()
+                    got = [joints.jacobian(q, qd, *f).copy() for f in FACTORS]
+                    if order == "jacobian first":
+                        forces = joints.generalized(q, qd).copy()
+                    assert np.array_equal(forces, three), (laws, order)
+                    for e, g in zip(expected, got):
+                        assert np.array_equal(e, g), (laws, order)
+        assert np.max(np.abs(three)) > 5e3  # the track's tension
+    finally:
+        vehicle.bank = None
+        compiled.bank.free()

@@ -2,7 +2,8 @@
  * per joint the radial bush's seat distance and the torsion bush's relative angle, with
  * their rates (joints_kinematics); the two bushes' generalized forces on the links' (x, y,
  * angle) once Python has read their laws' loads and slopes (joints_forces); their Jacobian
- * as exudyn's triplets (joints_jacobian). The same operations in the same order as the
+ * as exudyn's triplets (joints_jacobian); on the compiled path the three at once, the bank's
+ * laws called from here (joints_evaluate, joints_evaluate_jacobian). The same operations in the same order as the
  * numpy kernel, so that the two give the same bits. libc and libm only.
  *
  * Joint j joins link a = j - 1 (its front seat, local +half) to link b = j (its rear seat,
@@ -12,6 +13,7 @@
  * deflection and by rate, the same for the torsion law); effort (n x 3: the radial force
  * applied, g = load * fade(L), and its slopes by L and by its rate). */
 #include <math.h>
+#include <stdlib.h>
 
 #if defined(_WIN32)
 #define JOINTS_EXPORT __declspec(dllexport)
@@ -171,4 +173,76 @@ JOINTS_EXPORT void joints_jacobian(int n, double half, const double *link, const
                 entry[2] = factor * K[i][k] + factor_t * C[i][k];
             }
     }
+}
+
+/* --- one call per evaluation (the compiled path: the bank's laws called from here) ------- */
+
+/* bank.c's bank_law_loads: the bank's current laws' loads at `deflection` and their slopes */
+typedef void (*LawLoads)(const void *bank, const double *deflection, double *loads,
+                         double *slopes);
+
+/* What joints_evaluate works on, its arrays the caller's (allocated once): the links'
+ * reference, the torsion offsets, q, qd (the caller writes them), link, joint, law, effort, generalized
+ * as above; the bank's rows of each joint's radial and torsion bush and its deflection,
+ * loads and slopes (n_bank each; the other rows' deflections stay the caller's). */
+typedef struct {
+    int n, n_bank;
+    double half, fade;
+    LawLoads law_loads;
+    const void *bank;
+    const int *radial_rows, *torsion_rows;
+    const double *reference, *offset;
+    double *q, *qd, *link, *joint, *law, *effort, *generalized;
+    double *deflection, *loads, *slopes;
+} Bound;
+
+JOINTS_EXPORT void *joints_bind(int n, double half, double fade, LawLoads law_loads,
+                                const void *bank, int n_bank, const int *radial_rows,
+                                const int *torsion_rows, double **arrays)
+{
+    Bound *b = malloc(sizeof *b);
+    if (!b) return NULL;
+    *b = (Bound){n, n_bank, half, fade, law_loads, bank, radial_rows, torsion_rows,
+                 arrays[0], arrays[1], arrays[2], arrays[3], arrays[4], arrays[5],
+                 arrays[6], arrays[7], arrays[8], arrays[9], arrays[10], arrays[11]};
+    return b;
+}
+
+JOINTS_EXPORT void joints_unbind(void *bound) { free(bound); }
+
+/* joints_kinematics, the bank's laws at the joints' deflections (joints.py's Joints.laws:
+ * loads and slopes by deflection; the bank's laws are rate-free), joints_forces: the
+ * three calls of the three-call path, the same operations. */
+JOINTS_EXPORT void joints_evaluate(void *bound)
+{
+    Bound *b = bound;
+    int n = b->n;
+    joints_kinematics(n, b->half, b->reference, b->q, b->qd, b->offset, b->link, b->joint);
+    for (int j = 0; j < n; j++) {
+        b->deflection[b->radial_rows[j]] = b->joint[8 * j + 2];
+        b->deflection[b->torsion_rows[j]] = b->joint[8 * j + 6];
+    }
+    b->law_loads(b->bank, b->deflection, b->loads, b->slopes);
+    for (int j = 0; j < n; j++) {
+        double *l = b->law + 6 * j;
+        l[0] = b->loads[b->radial_rows[j]];
+        l[1] = b->slopes[b->radial_rows[j]];
+        l[2] = 0.0;
+        l[3] = b->loads[b->torsion_rows[j]];
+        l[4] = b->slopes[b->torsion_rows[j]];
+        l[5] = 0.0;
+    }
+    joints_forces(n, b->half, b->fade, b->link, b->joint, b->law, b->effort, b->generalized);
+}
+
+/* The Jacobian at the bound q, qd with the bank's current laws: evaluated again there
+ * (exudyn may ask at another iterate than its last forces', or after the laws changed),
+ * then joints_jacobian over what that left. */
+JOINTS_EXPORT void joints_evaluate_jacobian(void *bound, double factor, double factor_t,
+                                            double *triplets)
+{
+    Bound *b = bound;
+    joints_evaluate(bound);
+    joints_jacobian(b->n, b->half, b->link, b->joint, b->qd, b->law, b->effort, factor,
+                    factor_t, triplets);
 }

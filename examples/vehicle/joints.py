@@ -9,9 +9,13 @@ differentiating 160 connectors numerically.
 Two kernels, one set of equations: `kinematics`, `forces` and `jacobian` below (numpy, the
 readable reference and the fallback) and joints.c (compiled on first use, as the contacts'
 kernel: bank_build.Library, -ffp-contract=off), the same operations in the same order.
-The laws' loads and slopes come from the coupling's bank on the compiled path (one call
-for every row, Bank.law_loads) and from the components on the Python path
-(Vehicle.load); while the vehicle settles, from their relaxed tables.
+The laws' loads and slopes come from the coupling's bank on the compiled path and from
+the components on the Python path (Vehicle.load); while the vehicle settles, from their
+relaxed tables. On the compiled path exudyn's force function is one C call
+(joints_evaluate: kinematics, the bank's laws called from C through
+Bank.law_loads_entry, forces) and its Jacobian function one more (`Joints.one_call`);
+`evaluate` and `triplets`, three calls with Bank.law_loads, are the same operations
+(tests/test_vehicle_joints.py: the same bits).
 """
 
 import ctypes
@@ -142,6 +146,12 @@ def library():
         lib.joints_kinematics.argtypes = [integer, real] + [pointer] * 6
         lib.joints_forces.argtypes = [integer, real, real] + [pointer] * 5
         lib.joints_jacobian.argtypes = [integer, real] + [pointer] * 5 + [real, real, pointer]
+        lib.joints_bind.argtypes = [integer, real, real, pointer, pointer, integer, pointer,
+                                    pointer, pointer]
+        lib.joints_bind.restype = pointer
+        lib.joints_unbind.argtypes = [pointer]
+        lib.joints_evaluate.argtypes = [pointer]
+        lib.joints_evaluate_jacobian.argtypes = [pointer, real, real, pointer]
     return lib
 
 
@@ -183,6 +193,57 @@ class CompiledJoints:
         triplets = self.arrays["triplets"]
         return triplets.copy() if copy else triplets
 
+    # --- one call per evaluation: the bank's laws called from C (Bank.law_loads_entry) ----
+
+    def bind(self, bank, radial_rows, torsion_rows):
+        """Let joints_evaluate call `bank`'s laws (again where the bank is another one)."""
+        if getattr(self, "_bank", None) is bank:
+            return
+        self.unbind()
+        a = self.arrays
+        a.update(radial_rows=np.ascontiguousarray(radial_rows, dtype=ctypes.c_int),
+                 torsion_rows=np.ascontiguousarray(torsion_rows, dtype=ctypes.c_int),
+                 deflection=np.zeros(bank.n), loads=np.zeros(bank.n), slopes=np.zeros(bank.n))
+        self.at.update((name, a[name].ctypes.data) for name in (
+            "radial_rows", "torsion_rows", "deflection", "loads", "slopes"))
+        names = ("reference", "offset", "q", "qd", "link", "joint", "law", "effort",
+                 "generalized", "deflection", "loads", "slopes")
+        self._bound_arrays = (ctypes.c_void_p * len(names))(*(self.at[n] for n in names))
+        self.bound = self.lib.joints_bind(self.n, 0.5 * lay.LINK_PITCH, RADIAL_FADE,
+                                          *bank.law_loads_entry(), bank.n,
+                                          self.at["radial_rows"], self.at["torsion_rows"],
+                                          self._bound_arrays)
+        if not self.bound:
+            raise MemoryError("the vehicle's joints kernel: out of memory")
+        self._bank = bank
+        self._generalized = a["generalized"].reshape(-1)
+        self._q, self._qd = a["q"].reshape(-1), a["qd"].reshape(-1)  # views
+        self._triplets_at = self.at["triplets"]
+
+    def unbind(self):
+        if getattr(self, "bound", None):
+            self.lib.joints_unbind(self.bound)
+        self.bound, self._bank = None, None
+
+    def __del__(self):
+        self.unbind()
+
+    def evaluate_once(self, q, qd):
+        """The links' generalized forces at (q, qd: 3 n each, exudyn's lists or arrays),
+        one C call (kinematics, the bound bank's laws, forces): a view of the kernel's
+        memory, valid until its next call. q and qd are written into the arrays the kernel
+        reads (the cheapest conversion of exudyn's lists: docs/vehicle.md)."""
+        self._q[:], self._qd[:] = q, qd
+        self.lib.joints_evaluate(self.bound)
+        return self._generalized
+
+    def jacobian_once(self, q, qd, factor, factor_t):
+        """The triplets at (q, qd) with the bound bank's laws, one C call (evaluated
+        again there, then joints_jacobian): a view of the kernel's memory."""
+        self._q[:], self._qd[:] = q, qd
+        self.lib.joints_evaluate_jacobian(self.bound, factor, factor_t, self._triplets_at)
+        return self.arrays["triplets"]
+
 
 class Joints:
     """The vehicle's 80 joints (radial and torsion bush) as one exudyn generic ODE2 object
@@ -196,11 +257,11 @@ class Joints:
         self.offset = np.asarray(v.torsion_offsets, dtype=float)
         self.radial_rows, self.torsion_rows = (np.array(v.rows[kind])
                                                for kind in ("radial", "torsion"))
-        self.kernel, self._compiled, self._reading = "numpy", None, None
-        if library() is not None:  # one for exudyn's calls, one for the readers
+        self.kernel, self._compiled, self._reading, self._once = "numpy", None, None, None
+        if library() is not None:  # the three-call path's, the readers', the one-call path's
             self.kernel = "compiled"
-            self._compiled, self._reading = (CompiledJoints(library(), self.reference,
-                                                            self.offset) for _ in range(2))
+            self._compiled, self._reading, self._once = (
+                CompiledJoints(library(), self.reference, self.offset) for _ in range(3))
         self._key, self._read_key = None, None
         self._deflection = np.zeros(len(v.components))
 
@@ -281,7 +342,21 @@ class Joints:
         self._key, self._evaluated = key, (link, joint, law, effort, generalized)
         return self._evaluated
 
+    def one_call(self):
+        """The C kernel bound to the bank's laws where the compiled path runs (the bank
+        present, the C kernel in use): one C call per evaluation; else None."""
+        bank = self.v.bank
+        if bank is None or self.kernel != "compiled":
+            return None
+        self._once.bind(bank, self.radial_rows, self.torsion_rows)
+        return self._once
+
     def generalized(self, q, qd):
+        """The links' generalized forces at (q, qd) (exudyn's force function; on the
+        one-call path a view of the kernel's memory, valid until its next call)."""
+        once = self.one_call()
+        if once is not None:
+            return once.evaluate_once(q, qd)
         return self.evaluate(q, qd)[-1].reshape(-1)
 
     def triplets(self, q, qd, factor, factor_t, copy=True):
@@ -292,11 +367,18 @@ class Joints:
             return self._compiled.jacobian(factor, factor_t, copy)
         return jacobian(link, joint, np.reshape(qd, (-1, 3)), law, effort, factor, factor_t)
 
+    def jacobian(self, q, qd, factor, factor_t):
+        """exudyn's Jacobian function's triplets (`triplets`; on the one-call path
+        evaluated with it in one C call): a view of the kernel's memory."""
+        once = self.one_call()
+        if once is not None:
+            return once.jacobian_once(q, qd, factor, factor_t)
+        return self.triplets(q, qd, factor, factor_t, copy=False)
+
     def _sparse_jacobian(self, q, qd, factor, factor_t):
         size = 3 * len(self.v.link_nodes)
         matrix = exu.MatrixContainer()  # copies the triplets
-        matrix.SetWithSparseMatrix(self.triplets(q, qd, factor, factor_t, copy=False), size,
-                                   size)
+        matrix.SetWithSparseMatrix(self.jacobian(q, qd, factor, factor_t), size, size)
         return matrix
 
     # --- the coupling's readers ----------------------------------------------------------------
