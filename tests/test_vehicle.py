@@ -499,34 +499,43 @@ def test_the_radial_bushs_force_is_lipschitz_through_zero_distance(native_fmus, 
         (vehicle.compiled_path.bank if path == "compiled" else vehicle.coupling).free()
 
 
+def _checked_step(vehicle):
+    """A step of 1 ms from the vehicle's present state at t = 0.1 s, its start's
+    velocities the initial ones, and the run's step check on it: (q0, v0, judged), judged(q)
+    the check's verdict on the solution q."""
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle.step_check import StepCheck
+
+    mbs = vehicle.mbs
+    data = mbs.systemData
+    current, start = exu.ConfigurationType.Current, exu.ConfigurationType.StartOfStep
+    q0 = np.array(data.GetODE2Coordinates(current))
+    v0 = np.array(data.GetODE2Coordinates_t(exu.ConfigurationType.Initial))
+    data.SetODE2Coordinates(q0, start)
+    data.SetODE2Coordinates_t(v0, start)
+    data.SetODE2Coordinates_t(v0, current)
+    data.SetTime(0.1, start)
+    check = StepCheck(vehicle)
+    vehicle.contacts.evaluate(0.1)
+    check.accepted()
+
+    def judged(q):
+        data.SetODE2Coordinates(q, current)
+        return check(mbs, 0.101)
+
+    return q0, v0, judged
+
+
 def test_a_step_whose_solution_jumps_is_refused_naming_the_part(native_fmus):
     """The run's step check (vehicle/step_check.py) against a step of 1 ms from the
     laid-out state, the track running at 5 m/s: the state its start's velocities carry it
     to passes; the link beneath road wheel 1 turned by 21 deg and moved 47 mm (a stop at
     5 m/s replayed showed that) is refused, naming the link and the wheel; so is road
     wheel 2 pressed 5 mm further into its tyre."""
-    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
-    from vehicle.step_check import StepCheck
-
     vehicle = _laid_out(native_fmus, settling=True)
     try:
         mbs, contacts = vehicle.mbs, vehicle.contacts
-        data = mbs.systemData
-        current, start = exu.ConfigurationType.Current, exu.ConfigurationType.StartOfStep
-        q0 = np.array(data.GetODE2Coordinates(current))
-        v0 = np.array(data.GetODE2Coordinates_t(exu.ConfigurationType.Initial))
-        data.SetODE2Coordinates(q0, start)
-        data.SetODE2Coordinates_t(v0, start)
-        data.SetODE2Coordinates_t(v0, current)
-        data.SetTime(0.1, start)
-        check = StepCheck(vehicle)
-        contacts.evaluate(0.1)
-        check.accepted()
-
-        def judged(q):
-            data.SetODE2Coordinates(q, current)
-            return check(mbs, 0.101)
-
+        q0, v0, judged = _checked_step(vehicle)
         assert judged(q0 + 1e-3 * v0) is None
         wheel = contacts.wheels[0]
         ground = np.flatnonzero(contacts.link_pos[:, 1] < 0.1)
@@ -541,5 +550,28 @@ def test_a_step_whose_solution_jumps_is_refused_naming_the_part(native_fmus):
         pressed[mbs.GetNodeODE2Index(vehicle.arm_nodes[1]) + 1] -= 5e-3
         assert re.match(r"road wheel 2: its tyre's compression jumped by 5\.\d mm",
                         judged(pressed))
+    finally:
+        vehicle.coupling.free()
+
+
+def test_a_pin_whose_tooth_space_jumps_is_refused_naming_the_joint(native_fmus):
+    """The step check's teeth (each part tests its largest value first; beyond a
+    threshold, the full comparison and the message): from the laid-out state, the track
+    at 5 m/s, the hull moved 20 mm further in a step of 1 ms (the sprocket's tooth spaces
+    with it, past the engaged pins) is refused as a tooth skipped at an engaged joint."""
+    from vehicle.step_check import TOOTH_JUMP
+
+    vehicle = _laid_out(native_fmus, settling=True)
+    try:
+        q0, v0, judged = _checked_step(vehicle)
+        engaged = np.flatnonzero(vehicle.contacts.tooth_gap > 0.0)
+        assert len(engaged) > 0
+        q = q0 + 1e-3 * v0
+        q[vehicle.mbs.GetNodeODE2Index(vehicle.hull_node)] += 0.02
+        message = judged(q)
+        found = re.fullmatch(r"joint (\d+): its pin's gap to its sprocket tooth space jumped "
+                             r"by ([\d.]+) mm in one step \(a tooth skipped\)", message)
+        assert found, message
+        assert int(found.group(1)) in engaged and float(found.group(2)) > TOOTH_JUMP * 1e3
     finally:
         vehicle.coupling.free()

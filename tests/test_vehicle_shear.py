@@ -19,7 +19,7 @@ TURN = 4e-3  # rad: the top run's links 30 to 40 turned in phase about their cen
 def _record(contacts, t):
     from vehicle.bush_shear import seat_offsets
 
-    along, across = seat_offsets(contacts)
+    along, across = seat_offsets(contacts.seats, contacts.u)
     hull = contacts.hull
     return {"time": t, "bush_seat_along": along, "bush_seat_across": across,
             "pins": contacts.pins.copy(), "wheels": contacts.wheels.copy(),
@@ -75,3 +75,23 @@ def test_links_turning_in_phase_part_their_seats_across_the_track_and_the_run_sa
     assert "1 of 2 steps" in message
     load[1, 35] = 0.0
     assert across_track(result, contacts) is None
+
+
+def test_seat_offsets_of_a_run_stacked_are_each_steps_to_the_bit():
+    """The histories take the seats' offsets after the run, over all steps at once
+    (outputs.histories): the same bits as each step's alone."""
+    from vehicle.bush_shear import seat_offsets
+
+    rng = np.random.default_rng(7)
+    steps, links = 5, 12
+    angle = rng.uniform(-np.pi, np.pi, (steps, links))
+    directions = np.stack([np.cos(angle), np.sin(angle)], axis=-1)
+    centres = rng.normal(0.0, 1.0, (steps, links, 2))
+    seats = np.stack([centres - 0.1 * directions, centres + 0.1 * directions], axis=-2)
+    seats += rng.normal(0.0, 1e-3, seats.shape)  # the seats off the links' line
+    along, across = seat_offsets(seats, directions)
+    assert along.shape == across.shape == (steps, links)
+    for k in range(steps):
+        along_k, across_k = seat_offsets(seats[k], directions[k])
+        assert np.array_equal(along[k], along_k) and np.array_equal(across[k], across_k)
+    assert np.all(across > 0.0) and np.any(np.abs(along) > 0.0)

@@ -25,15 +25,17 @@ ACROSS_LOAD = 2 * lay.TRACK_TENSION  # N: a radial load across the track worth a
 ACROSS_SHARE = 2.0  # across: the seats this many times further apart across than along
 
 
-def seat_offsets(contacts):
+def seat_offsets(seats, directions):
     """Each joint's seat offset (link j - 1's front seat to link j's rear seat, at pin j)
     along the track (the two links' mean direction; positive stretched) and across it
-    (its size), at the contacts' last evaluation."""
-    offset = contacts.seats[:, 0] - np.roll(contacts.seats[:, 1], 1, axis=0)
-    along = contacts.u + np.roll(contacts.u, 1, axis=0)
-    along /= np.hypot(along[:, 0], along[:, 1])[:, None]
-    return (along[:, 0] * offset[:, 0] + along[:, 1] * offset[:, 1],
-            np.abs(along[:, 0] * offset[:, 1] - along[:, 1] * offset[:, 0]))
+    (its size). seats: (..., links, 2 seats, 2), directions: the links' unit vectors
+    (..., links, 2), as the contacts hold them (Contacts.seats, Contacts.u); leading axes
+    (the steps of a run) are kept."""
+    offset = seats[..., 0, :] - np.roll(seats[..., 1, :], 1, axis=-2)
+    along = directions + np.roll(directions, 1, axis=-2)
+    along /= np.hypot(along[..., 0], along[..., 1])[..., None]
+    return (along[..., 0] * offset[..., 0] + along[..., 1] * offset[..., 1],
+            np.abs(along[..., 0] * offset[..., 1] - along[..., 1] * offset[..., 0]))
 
 
 def across_track(result, contacts):

@@ -15,7 +15,9 @@ from .bush_shear import seat_offsets, warn_across_track
 
 
 def snapshot(vehicle, t):
-    """Everything recorded after an accepted step."""
+    """What is kept after an accepted step: the system's values as they are (copies), the
+    histories picked out of them after the run (histories), so that a step's record costs
+    little."""
     mbs, contacts = vehicle.mbs, vehicle.contacts
     contacts.evaluate(t)
     node = vehicle.hull_node
@@ -23,43 +25,59 @@ def snapshot(vehicle, t):
     angular = mbs.GetNodeOutput(node, exu.OutputVariableType.AngularAcceleration)[2]
     omega = contacts.hull_v[2]
     theta = contacts.hull[2]
-    seat = np.array([math.cos(theta) * lay.SEAT[0] - math.sin(theta) * lay.SEAT[1],
-                     math.sin(theta) * lay.SEAT[0] + math.cos(theta) * lay.SEAT[1]])
-    seat_vertical = acceleration[1] + angular * seat[0] - omega ** 2 * seat[1]
-    sprocket_joint, idler_joint = contacts.tension_joints()
+    seat = (math.cos(theta) * lay.SEAT[0] - math.sin(theta) * lay.SEAT[1],
+            math.sin(theta) * lay.SEAT[0] + math.cos(theta) * lay.SEAT[1])
     loads, deflections = vehicle.accepted()
-    rows = {kind: np.array(rows) for kind, rows in vehicle.rows.items()}
-    along, across = seat_offsets(contacts)
     return {
         "time": t,
         "hull_vertical_acceleration": acceleration[1],
         "hull_pitch_acceleration": angular,
         "hull_surge_acceleration": acceleration[0],
-        "seat_vertical_acceleration": seat_vertical,
+        "seat_vertical_acceleration": acceleration[1] + angular * seat[0] - omega ** 2 * seat[1],
         "hull_x": contacts.hull[0], "hull_y": contacts.hull[1], "hull_pitch": theta,
         "hull_surge_velocity": contacts.hull_v[0],
-        "tyre_force": loads[rows["tyre"]].sum(axis=1),
+        "tension_joints": contacts.tension_joints(),
+        "loads": loads, "deflections": deflections,
         "tyre_compression": contacts.compression.copy(),
-        "damper_torque": loads[rows["damper"]],
-        "damper_angle": deflections[rows["damper"]],
-        "bush_radial_force": loads[rows["radial"]],
-        "bush_radial_deflection": deflections[rows["radial"]],
-        "bush_torque": loads[rows["torsion"]],
-        "bush_angle": deflections[rows["torsion"]],
-        "bush_seat_along": along, "bush_seat_across": across,
-        "track_tension_sprocket": loads[rows["radial"][sprocket_joint]],
-        "track_tension_idler": loads[rows["radial"][idler_joint]],
         "drive_torque": contacts.drive_torque,
         "ground_load": contacts.ground_load.sum(),
         "pins": contacts.pins.copy(),
         "wheels": contacts.wheels.copy(),
         "idler": contacts.idler.copy(),
+        "seats": contacts.seats.copy(), "directions": contacts.u.copy(),
     }
 
 
 def histories(vehicle):
+    """The run's histories from its records (snapshot): each column one step."""
     records = vehicle.records
-    result = {key: np.array([r[key] for r in records]) for key in records[0]}
+    stacked = {key: np.array([r[key] for r in records]) for key in records[0]}
+    loads, deflections = stacked.pop("loads"), stacked.pop("deflections")
+    sprocket_joint, idler_joint = stacked.pop("tension_joints").T
+    rows = {kind: np.array(rows) for kind, rows in vehicle.rows.items()}
+    radial = loads[:, rows["radial"]]
+    steps = np.arange(len(records))
+    result = {key: stacked[key] for key in ("time", "hull_vertical_acceleration",
+                                            "hull_pitch_acceleration",
+                                            "hull_surge_acceleration",
+                                            "seat_vertical_acceleration", "hull_x", "hull_y",
+                                            "hull_pitch", "hull_surge_velocity")}
+    along, across = seat_offsets(stacked.pop("seats"), stacked.pop("directions"))
+    result.update({
+        "tyre_force": loads[:, rows["tyre"]].sum(axis=2),
+        "tyre_compression": stacked["tyre_compression"],
+        "damper_torque": loads[:, rows["damper"]],
+        "damper_angle": deflections[:, rows["damper"]],
+        "bush_radial_force": radial,
+        "bush_radial_deflection": deflections[:, rows["radial"]],
+        "bush_torque": loads[:, rows["torsion"]],
+        "bush_angle": deflections[:, rows["torsion"]],
+        "bush_seat_along": along, "bush_seat_across": across,
+        "track_tension_sprocket": radial[steps, sprocket_joint],
+        "track_tension_idler": radial[steps, idler_joint],
+    })
+    result.update({key: stacked[key] for key in ("drive_torque", "ground_load", "pins",
+                                                 "wheels", "idler")})
     result["damper_stations"] = list(vehicle.dampers)
     # radial loads across the track are not tension: the run says where (bush_shear.py)
     result["across_track"] = warn_across_track(result, vehicle.contacts)
