@@ -62,7 +62,8 @@ class StepCheck:
                   - h * np.asarray(data.GetODE2Coordinates_t(start)))[self.links]
         moved = np.hypot(beyond[:, 0], beyond[:, 1])
         turned = np.abs(beyond[:, 2])
-        if moved.max() > LINK_JUMP or turned.max() > LINK_TURN:
+        # not all within (rather than max above): a NaN takes the full comparison
+        if not ((moved <= LINK_JUMP).all() and (turned <= LINK_TURN).all()):
             k = int(np.argmax(np.maximum(moved / LINK_JUMP, turned / LINK_TURN)))
             if moved[k] > LINK_JUMP or turned[k] > LINK_TURN:
                 return (f"link {k}{self._where(k, q1[self.links[k]])} moved "
@@ -74,7 +75,8 @@ class StepCheck:
         contacts = self.v.contacts
         contacts.evaluate(t)  # the coupling's deflections use this evaluation
         jump = np.abs(contacts.compression - compression0 - h * rate0)
-        if jump.max() > TYRE_JUMP:
+        # a wheel out of contact has compression -inf at both ends: NaN here
+        if not (jump <= TYRE_JUMP).all():
             jump = np.where(contact0 & contacts.in_contact, jump, 0.0)
             w = int(np.argmax(jump))
             if jump[w] > TYRE_JUMP:
@@ -83,7 +85,7 @@ class StepCheck:
                         f"{contacts.compression[w] * 1e3:.1f} mm)")
         gap = contacts.tooth_gap
         skip = np.abs(gap - gap0)
-        if skip.max() > TOOTH_JUMP:
+        if not (skip <= TOOTH_JUMP).all():
             skip = np.where((gap0 > 0.0) & (gap > 0.0), skip, 0.0)
             j = int(np.argmax(skip))
             if skip[j] > TOOTH_JUMP:
