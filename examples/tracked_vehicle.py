@@ -28,25 +28,28 @@ from coupling_study import write_csv
 from vehicle import outputs
 from vehicle.course import COURSES
 from vehicle.flags import add_run_arguments
-from vehicle.model import (DEFAULT_JOINTS, JOINTS, SPECTRAL_RADIUS, Linear, Vehicle,
-                           VehicleError, static_points)
+from vehicle.model import (DEFAULT_JOINTS, JOINTS, NEWTON_TOLERANCE, SPECTRAL_RADIUS, Linear,
+                           Vehicle, VehicleError, static_points)
 
 DEFAULT_STEP = 1e-3  # s
 
 
 def simulate(course_name, speed, end_time, step, coupling=DEFAULT_SCHEME, linear=None,
              statics=None, settle_time=3.0, fmu_dir=None, path=bank_path.DEFAULT_PATH,
-             contacts=None, joints=DEFAULT_JOINTS, spectral_radius=SPECTRAL_RADIUS):
+             contacts=None, joints=DEFAULT_JOINTS, spectral_radius=SPECTRAL_RADIUS,
+             newton_tolerance=NEWTON_TOLERANCE):
     """One run; returns (vehicle, histories, wall seconds, CPU seconds) of the run proper
     (the settling to the static point, stored after the first run, and the set-up,
     Vehicle.prepare, excluded). contacts: the contacts' kernel, "compiled" or "numpy"
     (default: compiled where it builds; vehicle/contacts_kernel.py). joints: the track's
     joints as one object with their Jacobian ("kernel", vehicle/joints.py) or as two
     exudyn connectors each ("connectors"). spectral_radius: generalized-alpha's, at
-    infinite frequency (model.SPECTRAL_RADIUS)."""
+    infinite frequency (model.SPECTRAL_RADIUS). newton_tolerance: exudyn's Newton's
+    absolute tolerance (model.NEWTON_TOLERANCE)."""
     statics = statics or static_points(fmu_dir)
     vehicle = Vehicle(None, speed, fmu_dir, linear, coupling, statics, path, joints)
     vehicle.spectral_radius = spectral_radius
+    vehicle.newton_tolerance = newton_tolerance
     if contacts:
         vehicle.contacts.use(contacts)
     vehicle.course = COURSES[course_name](vehicle.layout.sprocket[0] + 0.3)
@@ -82,6 +85,11 @@ def main(argv=None):
                              f"0 to 1 (default {SPECTRAL_RADIUS:g}: damps the links' "
                              "in-phase turning the 1 ms step does not resolve; exudyn's own "
                              "default is 0.9)")
+    parser.add_argument("--newton-tolerance", type=float, default=NEWTON_TOLERANCE,
+                        help="exudyn's Newton stops where its residual per coordinate is "
+                             f"below this (default {NEWTON_TOLERANCE:g}; 1 takes about 10 %% "
+                             "fewer iterations and moves the hull's accelerations by "
+                             "0.004 %% of their range: docs/vehicle.md, What remains 2)")
     parser.add_argument("--out", type=Path, default=Path("reports") / "tracked_vehicle")
     args = parser.parse_args(argv)
     if args.speed < 0 or args.end_time <= 0 or args.step <= 0:
@@ -89,6 +97,9 @@ def main(argv=None):
     if not 0.0 <= args.spectral_radius <= 1.0:
         parser.error(f"--spectral-radius {args.spectral_radius:g}: give a value from 0 "
                      "(most damping) to 1 (none)")
+    if not args.newton_tolerance > 0.0:
+        parser.error(f"--newton-tolerance {args.newton_tolerance:g}: give a value above 0 "
+                     f"(default {NEWTON_TOLERANCE:g})")
     args.out.mkdir(parents=True, exist_ok=True)
     warnings.simplefilter("once")
     statics = static_points(args.fmu_dir)
@@ -98,7 +109,8 @@ def main(argv=None):
                                               args.step, args.coupling, None, statics,
                                               args.settle_time, args.fmu_dir, args.path,
                                               args.contacts, args.joints,
-                                              args.spectral_radius)
+                                              args.spectral_radius,
+                                              args.newton_tolerance)
         runs["FMUs"] = result
         if args.linear:
             linear = Linear(statics, args.fmu_dir)
@@ -107,7 +119,8 @@ def main(argv=None):
                                       args.coupling, linear, statics, args.settle_time,
                                       args.fmu_dir, contacts=args.contacts,
                                       joints=args.joints,
-                                      spectral_radius=args.spectral_radius)[1]
+                                      spectral_radius=args.spectral_radius,
+                                      newton_tolerance=args.newton_tolerance)[1]
     except VehicleError as error:
         sys.exit(f"tracked_vehicle: {error}")
     simulated = result["time"][-1] - result["time"][0]
@@ -117,7 +130,8 @@ def main(argv=None):
           f"coupling {args.coupling}, {'compiled' if vehicle.compiled else 'Python'} path, "
           f"{vehicle.contacts.kernel} contacts, joints by "
           f"{vehicle.joints.kernel + ' kernel' if vehicle.joints else 'connectors'}, "
-          f"spectral radius {vehicle.spectral_radius:g}")
+          f"spectral radius {vehicle.spectral_radius:g}, Newton tolerance "
+          f"{vehicle.newton_tolerance:g}")
     print(f"{simulated:.3f} s simulated in {wall:.1f} s wall, {cpu:.1f} s CPU: "
           f"{wall / simulated:.1f} s wall and {cpu / simulated:.1f} s CPU per simulated "
           f"second")

@@ -209,13 +209,14 @@ def test_a_short_run_prints_its_summary_and_writes_the_csv(native_fmus, tmp_path
     pytest.importorskip("exudyn", reason=NO_EXUDYN)
     run = subprocess.run(
         [sys.executable, str(ROOT / "examples" / "tracked_vehicle.py"), "--end-time", "0.004",
-         "--settle-time", "0", "--csv", "--out", str(tmp_path),
+         "--settle-time", "0", "--csv", "--out", str(tmp_path), "--newton-tolerance", "2.5",
          "--fmu-dir", str(native_fmus["RoadWheelTyre"].parent)],
         capture_output=True, text=True, timeout=900)
     assert run.returncode == 0, run.stderr[-2000:]
     assert "175 FMU instances" in run.stdout and "compiled path" in run.stdout
     assert re.search(r"s wall and [0-9.]+ s CPU per simulated second", run.stdout)
     assert re.search(r"exudyn: [0-9.]+ Newton iterations per solve", run.stdout)
+    assert "Newton tolerance 2.5" in run.stdout
     assert f"wrote {tmp_path}" in run.stdout
     with open(tmp_path / "bump_3mps.csv") as stream:
         rows = list(csv.DictReader(stream))
@@ -235,6 +236,18 @@ def test_a_short_run_prints_its_summary_and_writes_the_csv(native_fmus, tmp_path
     assert max(stretch) < 1e-3
     for w in range(1, 7):
         assert 0.0 < float(rows[-1][f"tyre_compression_{w}"]) < 0.0375
+
+
+def test_the_newton_tolerance_reaches_exudyn_and_a_bad_one_is_refused_naming_it():
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle.model import NEWTON_TOLERANCE, run_settings
+    assert run_settings().timeIntegration.newton.absoluteTolerance == NEWTON_TOLERANCE
+    assert run_settings(0.6, 2.5).timeIntegration.newton.absoluteTolerance == 2.5
+    run = subprocess.run(
+        [sys.executable, str(ROOT / "examples" / "tracked_vehicle.py"),
+         "--newton-tolerance", "-1"], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 2
+    assert "--newton-tolerance -1: give a value above 0" in run.stderr
 
 
 def test_the_compiled_path_gives_the_python_paths_numbers(native_fmus):

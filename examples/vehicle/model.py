@@ -219,6 +219,7 @@ class Vehicle:
             raise ValueError(f"joints {joints!r}: one of {', '.join(JOINTS)}")
         self.joint_elements = joints
         self.spectral_radius = SPECTRAL_RADIUS
+        self.newton_tolerance = NEWTON_TOLERANCE
         self.course, self.speed = course, speed
         self.compiled = linear is None and bank_path.compiled(path, coupling)
         self.bank = None  # the compiled path's, while it runs
@@ -522,14 +523,13 @@ class Vehicle:
         self.host_steps = math.ceil(end_time / step - 1e-9)
         from .step_check import StepCheck
         self.step_check = check = StepCheck(self)
+        settings = run_settings(self.spectral_radius, self.newton_tolerance)
         try:
             if self.compiled:
                 from .compiled import solve_compiled
-                self.host = solve_compiled(self, end_time, step,
-                                           run_settings(self.spectral_radius), check)
+                self.host = solve_compiled(self, end_time, step, settings, check)
             else:
-                self.host = solve(self.mbs, self.coupling, end_time, step,
-                                  settings=run_settings(self.spectral_radius),
+                self.host = solve(self.mbs, self.coupling, end_time, step, settings=settings,
                                   step_check=check)
         except exu.SolverError:
             raise VehicleError(f"exudyn's solver gave up at t = {self.coupling.time:.4f} s "
@@ -557,9 +557,9 @@ class Vehicle:
                 "refused": self.host.refused}
 
 
-def run_settings(spectral_radius=SPECTRAL_RADIUS):
+def run_settings(spectral_radius=SPECTRAL_RADIUS, newton_tolerance=NEWTON_TOLERANCE):
     """The settings of the coupled run (exudyn_host.solve adds what the coupling needs)."""
-    settings = quiet_settings(NEWTON_TOLERANCE)
+    settings = quiet_settings(newton_tolerance)
     settings.timeIntegration.generalizedAlpha.spectralRadius = spectral_radius
     settings.timeIntegration.verboseMode = VERBOSE
     # a Jacobian per iteration: the contacts change from step to step (the modified
