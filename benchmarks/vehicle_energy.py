@@ -27,11 +27,19 @@ sys.path[:0] = [str(ROOT / "examples"), str(ROOT / "src")]
 from fmu_components.coupling import DEFAULT_SCHEME  # noqa: E402
 
 from vehicle.course import COURSES  # noqa: E402
-from vehicle.energy import audited_run, radial_account, work as _work  # noqa: E402
+from vehicle.energy import audited_run, radial_account, window_account  # noqa: E402
 from vehicle.model import Vehicle, static_points  # noqa: E402
 
 CLASSES = ("tyres", "ground", "sprocket", "idler", "roller", "speed hold", "drive")
-ON_BODIES = CLASSES[:-1]  # the drive is a part of the sprocket's work
+ACCOUNT = ("applied", "fmu", "cut", "rest", "torsion", "dampers", "linear", "stored",
+           "balance", "torsion_fmu", "balance_fmu")
+
+
+def windows(time, window):
+    """(start, first step, last step) of each window of the audited steps."""
+    for start in np.arange(0.0, time[-1] - 1e-9, window):
+        inside = np.flatnonzero((time >= start - 1e-12) & (time <= start + window + 1e-12))
+        yield start, inside[0], inside[-1]
 
 
 def nearest_part(vehicle, result, step, joint):
@@ -57,32 +65,16 @@ def account_table(vehicle, time, power, account, result, window):
           "account before the cut); joint-steps cut (%), the lowest law load (kN)")
     print("window (s)       applied       fmu       cut  fmu-rest   torsion   dampers"
           "    linear   dstored   balance  tors fmu  bal(fmu)  cut %  lowest")
-    bodies = sum(cumulative_trapezoid(power[c], time, initial=0.0) for c in ON_BODIES)
-    linear = cumulative_trapezoid(power["linear dampers"], time, initial=0.0)
-    t = result["time"]
-    for start in np.arange(0.0, time[-1] - 1e-9, window):
-        rows = np.flatnonzero((time >= start - 1e-12) & (time <= start + window + 1e-12))
-        a, b = rows[0], rows[-1]
-        part = {key: value[a:b + 1] for key, value in account.items()
-                if isinstance(value, np.ndarray)}
-        radial = radial_account(part)
-        torsion = _work(part["torsion_applied"], part["torsion_angle"])
-        dampers = _work(part["damper_torque"], part["damper_angle"])
-        stored = part["stored"][-1] - part["stored"][0]
-        balance = (bodies[b] - bodies[a] - radial["applied"] - torsion - dampers
-                   - (linear[b] - linear[a]) - stored)
-        torsion_fmu = _work(part["torsion_fmu"], part["torsion_deflection"])
-        as_fmu = balance + radial["applied"] - radial["fmu"] + torsion - torsion_fmu
-        rest = radial["fmu"] - radial["applied"] - radial["cut"]
+    for start, a, b in windows(time, window):
+        row = window_account(time, power, account, a, b)
+        row["rest"] = row["fmu"] - row["applied"] - row["cut"]
         print(f"{start:5.3f}-{start + window:5.3f} "
-              + " ".join(f"{v:9.2f}" for v in (radial["applied"], radial["fmu"],
-                                                 radial["cut"], rest, torsion, dampers,
-                                                 linear[b] - linear[a], stored, balance,
-                                                 torsion_fmu, as_fmu))
-              + f" {100 * radial['share_cut']:6.2f} {radial['lowest'][0] / 1e3:7.3f}")
+              + " ".join(f"{row[key]:9.2f}" for key in ACCOUNT)
+              + f" {100 * row['share_cut']:6.2f} {row['lowest'][0] / 1e3:7.3f}")
     whole = radial_account(account)
     law = account["radial_law"]
     load, step, joint = whole["lowest"]
+    t = result["time"]
     row = int(np.argmin(np.abs(t - time[step])))
     places = {}
     for s, j in zip(*np.nonzero(law < 0.0)):
@@ -134,15 +126,10 @@ def main(argv=None):
     print("window (s)     " + " ".join(f"{c[:10]:>10}" for c in columns)
           + "     bushes   dampers  swing  sprocket tension  idler tension")
     t = result["time"]
-    for start in np.arange(0.0, time[-1] - 1e-9, args.window):
-        inside = np.flatnonzero((time >= start - 1e-12) & (time <= start + args.window + 1e-12))
-        a, b = inside[0], inside[-1]
+    for start, a, b in windows(time, args.window):
         rows = (t >= start - 1e-12) & (t <= start + args.window + 1e-12)
-        part = {key: value[a:b + 1] for key, value in account.items()
-                if isinstance(value, np.ndarray)}
-        bushes = (_work(part["radial_applied"], part["radial_distance"])
-                  + _work(part["torsion_applied"], part["torsion_angle"]))
-        dampers = _work(result["damper_torque"][rows], result["damper_angle"][rows])
+        row = window_account(time, power, account, a, b)
+        bushes, dampers = row["applied"] + row["torsion"], row["dampers"]
         load = result["tyre_force"][rows]
         swing = np.max(load.max(axis=0) - load.min(axis=0)) / 1e3
         sprocket, idler = (result[f"track_tension_{k}"][rows] / 1e3 for k in ("sprocket", "idler"))

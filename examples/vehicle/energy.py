@@ -9,6 +9,10 @@ change of the stored energy (benchmarks/vehicle_energy.py, docs/vehicle.md)."""
 
 import numpy as np
 
+# the classes of force whose power on the bodies the audit keeps (the drive is a part of
+# the sprocket's)
+ON_BODIES = ("tyres", "ground", "sprocket", "idler", "roller", "speed hold")
+
 
 class Audit:
     """Kept by Contacts._forces while set as `contacts.audit`: `power` by class (W) at the
@@ -102,6 +106,33 @@ def radial_account(account):
             "fmu": work(account["radial_fmu"], account["radial_deflection"]),
             "share_cut": float(np.mean(law < 0.0)),
             "lowest": (float(law[lowest]), int(lowest[0]), int(lowest[1]))}
+
+
+def window_account(time, power, account, a, b):
+    """The account (J) from step a to step b of an audited run: the radial bushes'
+    (radial_account), the work done on the torsion bushes by their laws' torque (applied)
+    and by their FMUs' (torsion_fmu), on the dampers by their FMUs' torque, the linear
+    dampers' loss, the change of the stored energy, the work of the audited forces on the
+    bodies, and the balance: that work less the bushes', dampers' and linear dampers' and
+    the change of the stored energy, with the loads applied and with the FMUs' (the
+    account before the cut). What remains in it is the integrator's own dissipation
+    (generalized-alpha's numerical damping) and the trapezoids' error."""
+    span = slice(a, b + 1)
+    part = {key: value[span] for key, value in account.items() if isinstance(value, np.ndarray)}
+    t = time[span]
+    result = radial_account(part)
+    result.update(
+        torsion=work(part["torsion_applied"], part["torsion_angle"]),
+        torsion_fmu=work(part["torsion_fmu"], part["torsion_deflection"]),
+        dampers=work(part["damper_torque"], part["damper_angle"]),
+        linear=float(np.trapezoid(power["linear dampers"][span], t)),
+        stored=float(part["stored"][-1] - part["stored"][0]),
+        bodies=sum(float(np.trapezoid(power[c][span], t)) for c in ON_BODIES))
+    result["balance"] = (result["bodies"] - result["applied"] - result["torsion"]
+                         - result["dampers"] - result["linear"] - result["stored"])
+    result["balance_fmu"] = (result["balance"] + result["applied"] - result["fmu"]
+                             + result["torsion"] - result["torsion_fmu"])
+    return result
 
 
 def audited_run(vehicle, end_time, step):
