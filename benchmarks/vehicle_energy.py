@@ -3,6 +3,7 @@ test (a minute or more of CPU per tenth of a second simulated).
 
     python benchmarks/vehicle_energy.py --speed 3 --end-time 0.4
     python benchmarks/vehicle_energy.py --speed 5 --course sine --end-time 2 --window 0.1
+    python benchmarks/vehicle_energy.py --speed 3 --end-time 0.2 --spectral-radius 1
 
 Runs the vehicle from its stored static point and prints, for each window of time, the
 work each class of contact force did on the bodies (J: tyres, pins on the ground, sprocket
@@ -44,7 +45,8 @@ def windows(time, window):
 
 def nearest_part(vehicle, result, step, joint):
     """The running-gear part nearest joint `joint` at history row `step`, in the hull's
-    frame (the layout's positions at the static point)."""
+    frame (the layout's positions at the static point); by a road wheel, the run (top
+    or bottom) the joint is on."""
     geo = vehicle.layout
     theta = result["hull_pitch"][step]
     rel = result["pins"][step][joint] - (result["hull_x"][step], result["hull_y"][step])
@@ -52,7 +54,10 @@ def nearest_part(vehicle, result, step, joint):
     at = np.array([c * rel[0] + s * rel[1], -s * rel[0] + c * rel[1]]) + geo.cg
     parts = {"sprocket": geo.sprocket, "idler": geo.idler, "roller": geo.roller}
     parts.update({f"road wheel {i + 1}": w for i, w in enumerate(geo.wheel_centres)})
-    return min(parts, key=lambda name: np.hypot(*(at - parts[name])))
+    name = min(parts, key=lambda part: np.hypot(*(at - parts[part])))
+    if name.startswith("road wheel"):
+        return f"{'top' if at[1] > parts[name][1] else 'bottom'} run at {name}"
+    return name
 
 
 def account_table(vehicle, time, power, account, result, window):

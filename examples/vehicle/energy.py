@@ -9,6 +9,8 @@ change of the stored energy (benchmarks/vehicle_energy.py, docs/vehicle.md)."""
 
 import numpy as np
 
+from fmu_components.coupling.exudyn_host import connector_state
+
 # the classes of force whose power on the bodies the audit keeps (the drive is a part of
 # the sprocket's)
 ON_BODIES = ("tyres", "ground", "sprocket", "idler", "roller", "speed hold")
@@ -47,14 +49,14 @@ class Stored:
     linear spring-dampers (no user function: the torsion bars, the tensioner)."""
 
     def __init__(self, vehicle):
-        from fmu_components.coupling.exudyn_host import connector_state
-
         mbs = self.mbs = vehicle.mbs
-        self.state = connector_state
         objects = [mbs.GetObject(i) for i in range(mbs.systemData.NumberOfObjects())]
         bodies = [o for o in objects if o["objectType"] == "RigidBody2D"]
-        if any(np.any(o["centerOfMass"]) for o in bodies):
-            raise ValueError("the audit's bodies have their nodes at their centres of mass")
+        for o in bodies:
+            if np.any(o["centerOfMass"]):
+                raise ValueError(f"body {o['name']!r}: centre of mass {o['centerOfMass']} "
+                                 f"off its node; the audit's energies take the node as "
+                                 f"the centre: put the node there")
         nodes = [o["nodeNumber"] for o in bodies]
         self.index = np.array([mbs.GetNodeODE2Index(n) for n in nodes])[:, None] + [0, 1, 2]
         self.height = np.array([mbs.GetNodeParameter(n, "referenceCoordinates")[1]
@@ -78,7 +80,7 @@ class Stored:
                               + self.mass * GRAVITY * (self.height + q[:, 1])))
         loss = 0.0
         for connector, stiffness, damping, offset in self.springs:
-            x, v = (float(np.ravel(value)[0]) for value in self.state(self.mbs, connector))
+            x, v = (float(np.ravel(value)[0]) for value in connector_state(self.mbs, connector))
             energy += 0.5 * stiffness * (x - offset) ** 2
             loss += damping * v * v
         return energy, loss
@@ -141,7 +143,8 @@ def audited_run(vehicle, end_time, step):
     step: the radial bushes' distance, law load, applied force (the joints' kernel's, as
     its last force evaluation left them: the accepted state's) and the FMUs' load and
     deflection; the torsion bushes' angle and applied torque (the kernel's: their laws'),
-    their FMUs' torque and angle; the dampers' FMU torque and angle; the stored energy and the linear dampers' loss (Stored)."""
+    their FMUs' torque and angle; the dampers' FMU torque and angle; the stored energy
+    and the linear dampers' loss (Stored)."""
     from .model import VehicleError
 
     joints = vehicle.joints
