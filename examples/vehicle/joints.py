@@ -359,6 +359,16 @@ class Joints:
             return once.evaluate_once(q, qd)
         return self.evaluate(q, qd)[-1].reshape(-1)
 
+    def last_forces(self):
+        """(joint, law, effort) of the last force evaluation, copies: the radial force the
+        kernel applied (effort[:, 0], the law's load cut and faded) beside the law's load
+        (law[:, 0]), read where they were computed (the energy audit: energy.py)."""
+        once = self.one_call()
+        if once is not None:
+            return tuple(once.arrays[name].copy() for name in ("joint", "law", "effort"))
+        _, joint, law, effort, _ = self._evaluated
+        return joint.copy(), law.copy(), effort.copy()
+
     def triplets(self, q, qd, factor, factor_t, copy=True):
         """The Jacobian's (row, column, value) rows at (q, qd): exudyn's factor K +
         factor_t C, K and C minus the forces' derivatives by q and by qd."""
