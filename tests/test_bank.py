@@ -216,6 +216,14 @@ def test_a_host_that_announces_its_next_step_saves_a_call_and_changes_no_number(
     assert calls >= 121 and announced_calls == calls - 119
 
 
+def test_a_step_begun_again_saves_no_state_again(native_fmus):
+    """A step begun again (the retry after step 60's Discard in announced_run) has every
+    instance restored to the state saved at the step's start, and saves none again: one
+    save per instance per accepted step, the retry's restores on top."""
+    _, _, costs = announced_run(native_fmus, announce=False)
+    assert costs["saves"] == 1.0 and costs["restores"] > 1.0
+
+
 def test_the_law_loads_entry_called_from_c_gives_law_loads(native_fmus):
     """law_loads_entry's function (bank.c's bank_law_loads, as the vehicle's contacts
     kernel calls it) at the bank's handle gives law_loads' loads and slopes to the bit,
