@@ -250,7 +250,8 @@ EXPORT int bank_augmented_expm(int d, double *m) {
             int block = r < s && k < s && r / n == k / n;
             if (block && r < n) compact.block[r * n + k] = x;
             else if (block) {
-                if (x != compact.block[(r - n) * n + k - n]) return -1; /* blocks differ */
+                double first = compact.block[(r - n) * n + k - n];
+                if (x != first && !(isnan(x) && isnan(first))) return -1; /* blocks differ */
             } else if (r < s && k >= s) compact.u[r][k - s] = x;
             else if (r == s && k == s) compact.ss = x;
             else if (r == s && k == t) compact.st = x;
