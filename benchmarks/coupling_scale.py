@@ -104,7 +104,9 @@ def run_bank(fmus, names, x, second, steps):
         bank.begin_step(t)  # begun already by the accept before it, but for the first
         bank.end_pass(t, columns[k])
         bank.end_pass(t, seconds[k])
-        bank.accept(t, t + STEP if k < steps else None)  # the next step begins in its call
+        # the next step begins in accept's call: its end as begin_step will be given it
+        # ((k + 1) * STEP, not t + STEP: a different float begins the step again)
+        bank.accept(t, (k + 1) * STEP if k < steps else None)
     wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
     bank.free()
     return wall / steps, cpu / steps
@@ -134,7 +136,7 @@ def long_run(fmus, steps):
         bank.begin_step(t)
         bank.end_pass(t, columns[j])
         bank.end_pass(t, seconds[j])
-        bank.accept(t, t + STEP if k < steps else None)
+        bank.accept(t, (k + 1) * STEP if k < steps else None)
         if k == 10_000:
             early = rss_mib()
     wall = time.perf_counter() - started

@@ -105,6 +105,29 @@ def test_the_c_exponential_is_linearised_pys_to_the_bit():
         assert [list(row) for row in linearised.augmented_expm(m)] == python
 
 
+def test_the_compact_exponential_takes_every_state_count_to_the_bit():
+    """bank_linearised.c keeps the augmented matrix on its pattern (the diagonal block
+    once): 4 to 8 states, entries exactly zero, norms that need no squaring, against
+    linearised.py's full-matrix expm, to the bit; a matrix off the pattern (the two
+    blocks differing) is refused."""
+    rng = np.random.default_rng(11)
+    for trial in range(60):
+        n = int(rng.integers(4, 9))
+        d = 2 * n + 2
+        a = rng.normal(size=(n, n)) * 10.0 ** rng.uniform(-3, 4)
+        a[rng.random((n, n)) < 0.3] = 0.0
+        m = np.zeros((d, d))
+        m[:n, :n] = m[n:2 * n, n:2 * n] = a
+        m[:2 * n, 2 * n:] = rng.uniform(-1e4, 1e4, (2 * n, 2)) * (rng.random((2 * n, 2)) > 0.2)
+        m[2 * n, 2 * n + 1] = 1.0
+        m = (m * (1e-6 if trial % 3 == 0 else 1e-3)).tolist()
+        python = linearised.expm(m, linearised.augmented_pattern(d))
+        assert [list(row) for row in linearised.augmented_expm(m)] == python
+    m[n][n] += 1.0  # the second block no longer the first
+    flat = np.array(m)
+    assert linearised.compiled_expm()(d, flat.ctypes.data) == -1
+
+
 @pytest.mark.parametrize("scheme", ["corrected", "explicit", "converged"])
 def test_the_bank_gives_the_python_paths_numbers(native_fmus, scheme, python_exponential):
     """A tyre, both bushes and the damper, every pass's law and every accepted load: to
@@ -214,6 +237,14 @@ def test_a_host_that_announces_its_next_step_saves_a_call_and_changes_no_number(
     assert np.array_equal(got, expected)
     assert announced_costs == costs
     assert calls >= 121 and announced_calls == calls - 119
+
+
+def test_a_step_begun_again_saves_no_state_again(native_fmus):
+    """A step begun again (the retry after step 60's Discard in announced_run) has every
+    instance restored to the state saved at the step's start, and saves none again: one
+    save per instance per accepted step, the retry's restores on top."""
+    _, _, costs = announced_run(native_fmus, announce=False)
+    assert costs["saves"] == 1.0 and costs["restores"] > 1.0
 
 
 def test_the_law_loads_entry_called_from_c_gives_law_loads(native_fmus):

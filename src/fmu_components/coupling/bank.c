@@ -241,22 +241,26 @@ static int restore(Bank *bank, int i) {
     return 0;
 }
 
-/* Every instance: undo a trial of a step given up, save the state, and the first law of
-   the step to `time`. Instances whose first law is their linearised step and which have no
-   Model Exchange instance here are listed in `flagged` (their number returned). */
+/* Every instance: undo a trial of a step given up, save the state (where the saved one
+   is not this step's start already: a step begun again, after a retry or a reject), and
+   the first law of the step to `time`. Instances whose first law is their linearised step
+   and which have no Model Exchange instance here are listed in `flagged` (their number
+   returned). */
 static int begin(Bank *bank, double time) {
     int result = 0;
     bank->n_flagged = 0;
     for (int i = 0; i < bank->n && result == 0; i++) {
         Instance *c = &bank->instances[i];
         if (c->stepped && (result = restore(bank, i)) != 0) break;
-        int status = save_state(c);
-        if (status > STATUS_OK) {
-            result = fail(bank, i, FAILED_GET_STATE, status, bank->accepted[3 * i], 0.0);
-            break;
+        if (!c->saved) {
+            int status = save_state(c);
+            if (status > STATUS_OK) {
+                result = fail(bank, i, FAILED_GET_STATE, status, bank->accepted[3 * i], 0.0);
+                break;
+            }
+            bank->counts[3 * i + 1]++;
+            c->saved = 1;
         }
-        bank->counts[3 * i + 1]++;
-        c->saved = 1;
         c->tried = 0;
         lagged_law(bank, i);
         if (bank->scheme != EXPLICIT && (c->flags & LINEARISED)) {
@@ -413,8 +417,11 @@ EXPORT int bank_end_pass(Bank *bank) {
             break;
         }
 done:
-    if (verdict == ACCEPT || verdict == REPEAT) call->mismatch = worst;
     call->n_flagged = bank->n_flagged;
+    if (verdict == ACCEPT || verdict == REPEAT) {
+        call->mismatch = worst;
+        if (*cut || bank->n_flagged) verdict += NOTICE;
+    }
     __sync_lock_release(&bank->busy);
     return verdict;
 }

@@ -66,8 +66,10 @@ enum { FAILED_NONE, FAILED_SET, FAILED_GET, FAILED_DO_STEP, FAILED_GET_STATE,
 enum { UNILATERAL = 1, STEP_TANGENT = 2, CURVATURE = 4, LINEARISABLE = 8, LINEARISED = 16 };
 /* schemes (schemes.py) */
 enum { EXPLICIT, CORRECTED, CONVERGED };
-/* end_pass's verdicts */
-enum { ACCEPT = 0, REPEAT = 1, RETRY = 2, FAILED = -1, BUSY = -2 };
+/* end_pass's verdicts; ACCEPT and REPEAT with NOTICE added where the pass cut a step or
+   listed instances for Python (the call block says which), so that a pass with neither
+   costs Python no look into the block */
+enum { ACCEPT = 0, REPEAT = 1, RETRY = 2, FAILED = -1, BUSY = -2, NOTICE = 4 };
 
 typedef struct {
     int fmi_version; /* 2 or 3 */

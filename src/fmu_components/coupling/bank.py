@@ -41,7 +41,7 @@ MAX_OUTPUTS = 8
 LAW_COLUMNS = 8  # x*, F*, K, Q, K_touch; then Q/2, and the secant's bounds (law.py)
 SCHEME_CODES = {"explicit": 0, "corrected": 1, "converged": 2}
 UNILATERAL, STEP_TANGENT, CURVATURE, LINEARISABLE, LINEARISED = 1, 2, 4, 8, 16
-ACCEPT, REPEAT, RETRY, FAILED, BUSY = 0, 1, 2, -1, -2
+ACCEPT, REPEAT, RETRY, FAILED, BUSY, NOTICE = 0, 1, 2, -1, -2, 4
 FUNCTIONS = {2: ("fmi2SetReal", "fmi2GetReal", "fmi2DoStep", "fmi2GetFMUstate",
                  "fmi2SetFMUstate", "fmi2GetDirectionalDerivative"),
              3: ("fmi3SetFloat64", "fmi3GetFloat64", "fmi3DoStep", "fmi3GetFMUState",
@@ -293,13 +293,21 @@ class Bank:
         call = self._call
         call.time = time
         verdict = self._end(self._bank)
-        if call.cut:
-            self.retries += call.cut
-        if verdict == ACCEPT:
+        if verdict == ACCEPT:  # nothing cut, no law for Python (else NOTICE is added)
             mismatch = call.mismatch
             if mismatch > self._warn_above:
                 count_unconverged(self, time, mismatch)
             return _verdict(mismatch)
+        if verdict == REPEAT:
+            return _verdict(call.mismatch, repeat=True)
+        return self._noticed(verdict, time)
+
+    def _noticed(self, verdict, time):
+        """end_pass's verdict where the pass cut a step, listed laws for Python, was
+        discarded or failed."""
+        call = self._call
+        if call.cut:
+            self.retries += call.cut
         if verdict in (FAILED, BUSY):
             self._raise(busy=verdict == BUSY)
         if verdict == RETRY:
@@ -307,6 +315,11 @@ class Bank:
                 self._raise(cut_too=True)
             self.retries += 1
             return Verdict(retry_step=0.5 * (time - self.time))
+        if verdict == ACCEPT + NOTICE:
+            mismatch = call.mismatch
+            if mismatch > self._warn_above:
+                count_unconverged(self, time, mismatch)
+            return _verdict(mismatch)
         if call.n_flagged:
             for i in self._flagged[:call.n_flagged]:
                 self._corrected_law(i, time)
