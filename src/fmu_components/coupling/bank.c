@@ -239,8 +239,10 @@ static void set_kink(Bank *bank, int i, double kink, double beyond, double side)
 
 static double sign_of(double value) { return value > 0.0 ? 1.0 : value < 0.0 ? -1.0 : 0.0; }
 
-/* fmu.py's reversible_law: about the last accepted step with the mean of the tangents for
-   motion either way, the other the stiffness output at the mirrored rate */
+/* fmu.py's reversible_law: about the last accepted step with the tangent of its direction,
+   or where the step may reverse (the last rate changed by as much as it extrapolates to)
+   the mean of the tangents for motion either way; the other way's is the stiffness output
+   at the mirrored rate */
 static int reversible_law(Bank *bank, int i) {
     Instance *c = &bank->instances[i];
     const double *accepted = bank->accepted + 3 * i;
@@ -254,8 +256,10 @@ static int reversible_law(Bank *bank, int i) {
         status = get_stiffness(c, &c->reverse_stiffness);
         if (status > STATUS_OK) return fail(bank, i, FAILED_GET, status, accepted[0], 0.0);
     }
-    set_law(bank, i, accepted[1], out[c->load], 0.5 * (out[c->stiffness] + c->reverse_stiffness),
-            0.0);
+    double tangent = out[c->stiffness];
+    if (!(fabs(2.0 * accepted[2] - c->previous_rate) > fabs(accepted[2] - c->previous_rate)))
+        tangent = 0.5 * (tangent + c->reverse_stiffness);
+    set_law(bank, i, accepted[1], out[c->load], tangent, 0.0);
     return 0;
 }
 
@@ -279,8 +283,12 @@ static void lagged_law(Bank *bank, int i) {
             (c->flags & STEP_TANGENT) ? out[c->stiffness] : 0.0, 0.0);
 }
 
+/* At the start: the laws about the host's initial state, whose rates are the last ones. */
 EXPORT void bank_lagged_laws(Bank *bank) {
-    for (int i = 0; i < bank->n; i++) lagged_law(bank, i);
+    for (int i = 0; i < bank->n; i++) {
+        bank->instances[i].previous_rate = bank->accepted[3 * i + 2];
+        lagged_law(bank, i);
+    }
 }
 
 /* --- the step protocol (master.py) ----------------------------------------------------- */
@@ -491,6 +499,7 @@ EXPORT int bank_accept(Bank *bank) {
         Instance *c = &bank->instances[i];
         if (!c->tried) return fail(bank, i, FAILED_NO_STEP, 0, time, 0.0);
         double *accepted = bank->accepted + 3 * i;
+        c->previous_rate = accepted[2];
         accepted[0] = time;
         accepted[1] = c->trial_deflection;
         accepted[2] = c->trial_secant;

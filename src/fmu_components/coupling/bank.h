@@ -85,6 +85,7 @@ typedef struct {
        (fmu.py's reverse_stiffness; reversible 0: not asked) */
     double reverse_stiffness;
     int reversible;
+    double previous_rate; /* the secant rate of the step before the last accepted one */
     /* its Model Exchange side instance (linearised.py), where the bank linearises */
     void *model;
     void *model_functions[ME_FUNCTIONS];

@@ -93,6 +93,7 @@ class FmuComponent:
         self.time = None  # last accepted point
         self.deflection = 0.0
         self.rate = 0.0  # the secant rate of the last accepted step
+        self.previous_rate = 0.0  # the one before it
         self.outputs = {}  # after the last accepted step
         self.trial_outputs = None  # after the last trial, until accept or reject
         self._trial_point = None
@@ -188,19 +189,24 @@ class FmuComponent:
     def reversible_law(self):
         """The law for the first solve of a step of a component whose tangent depends on
         the direction of motion (the rubber's: law.py, A reversal): about the last
-        accepted point, with the mean of the tangents for motion either way, as the step
-        may go either way (the lagged law's tangent is the last step's direction's: a
-        reversal meets up to four times it). The tangent for motion the other way is the
-        `stiffness` output at the mirrored rate (the FMU's states are not changed, and the
-        next trial sets its inputs again); the law about the step's answer keeps it for
-        the kink (_reversal)."""
+        accepted point with the `stiffness` output, the tangent of the last step's
+        direction; where the step may reverse, the mean of the tangents for motion either
+        way (a reversal meets up to four times the loading tangent). It may where the
+        last rate, extrapolated by its last change, is no larger than that change: the
+        direction is not known (the track bushes ringing from step to step; a wheel's
+        tyre moving smoothly keeps its direction's tangent). The tangent for motion the
+        other way is the `stiffness` output at the mirrored rate (the FMU's states are
+        not changed, and the next trial sets its inputs again); the law about the step's
+        answer keeps it for the kink (_reversal)."""
         self.reverse_stiffness = self.stiffness
         if self.rate:
             self.instance.time = self.time
             self.instance.set(self._inputs, [self.deflection, -self.rate])
             self.reverse_stiffness = self.instance.get(self._stiffness_output)[0]
-        return self._law(self.deflection, self.load,
-                         0.5 * (self.stiffness + self.reverse_stiffness))
+        tangent = self.stiffness
+        if not abs(2.0 * self.rate - self.previous_rate) > abs(self.rate - self.previous_rate):
+            tangent = 0.5 * (tangent + self.reverse_stiffness)
+        return self._law(self.deflection, self.load, tangent)
 
     def _reversal(self, deflection):
         """The kink of a law about a trial that ended at `deflection`: at the accepted
@@ -274,6 +280,7 @@ class FmuComponent:
         self.instance.exit_initialization()
         self.started = True
         self.time, self.deflection, self.rate = time, deflection, rate
+        self.previous_rate = rate
         self.outputs = self._read(time)
         self._seen(self.outputs)
         self.law = self.lagged_law()
@@ -333,6 +340,7 @@ class FmuComponent:
         """The host accepted its step: the last trial becomes the accepted point."""
         if self._trial_point is None:
             raise RuntimeError(f"{self.name}: accept() without a trial")
+        self.previous_rate = self.rate
         self.time, self.deflection, self.rate = self._trial_point
         self.outputs = self.trial_outputs
         self.trial_outputs = self._trial_point = None
