@@ -125,7 +125,8 @@ class Bank:
     """FmuComponents (fmu.py: instantiated, in initialization mode, not started) coupled
     to one host by one scheme, their per-step work done in C. The arrays a host reads:
     `laws` (rows x*, F*, K, Q, K_touch: the law of law.py, with each component's
-    `unilateral`; then Q/2, K/2 and 2K, the lower bound first), `outputs` and `trial_outputs` (columns as each component's
+    `unilateral`; then Q/2, K/2 and 2K, the lower bound first; then the reversal's kink:
+    where, the law's load there, the tangent beyond, the side), `outputs` and `trial_outputs` (columns as each component's
     output_names), `accepted` (time, deflection, secant rate of the last accepted step)."""
 
     def __init__(self, components, scheme="corrected", host_can_retry=True, record=None,
