@@ -380,34 +380,42 @@ def test_a_bank_used_from_a_second_thread_is_refused(native_fmus):
 
 def test_the_symbolic_laws_are_the_load_laws_to_the_bit():
     """exudyn's compiled expression of the law against LoadLaw, on random laws (curved,
-    straight, contacts in and out of touch)."""
+    straight, contacts in and out of touch, with and without a reversal's kink)."""
     exudyn = pytest.importorskip("exudyn")
     from fmu_components.coupling.bank_exudyn import SymbolicLaws
 
     class Laws:
-        laws = np.zeros((4, 8))
-        unilateral = np.array([False, True, False, True])
+        laws = np.zeros((6, 12))
+        unilateral = np.array([False, True, False, True, False, True])
+        reversible = np.array([False, False, True, True, True, True])
 
     laws = SymbolicLaws(Laws, name="test_laws")
     x = exudyn.symbolic.Real("test_x", 0.0)
-    expressions = [laws.load(i, x) for i in range(4)]
+    expressions = [laws.load(i, x) for i in range(6)]
     rng = np.random.default_rng(1)
     for _ in range(2000):
-        Laws.laws[:, :5] = rng.normal(size=(4, 5)) * [1e-3, 1e4, 1e7, 1e10, 1e7]
-        Laws.laws[rng.random(4) < 0.3, 3] = 0.0
-        k = Laws.laws[:, 2]
-        Laws.laws[:, 5:] = np.c_[0.5 * Laws.laws[:, 3], np.where(k >= 0, 0.5 * k, 2 * k),
-                                 np.where(k >= 0, 2 * k, 0.5 * k)]  # as the bank writes them
+        Laws.laws[:, :5] = rng.normal(size=(6, 5)) * [1e-3, 1e4, 1e7, 1e10, 1e7]
+        Laws.laws[rng.random(6) < 0.3, 3] = 0.0
+        kinks = [(Laws.laws[i, 0] + rng.normal() * 1e-3 * rng.integers(0, 2),
+                  rng.normal() * 1e7, float(rng.integers(-1, 2)) * Laws.reversible[i])
+                 for i in range(6)]
+        for i, (where, beyond, side) in enumerate(kinks):  # as the bank writes them
+            row = Laws.laws[i]
+            k, q = row[2], row[3]
+            law = LoadLaw(*row[:4], kink=where, beyond=beyond, side=side)
+            row[5:] = (0.5 * q, 0.5 * k if k >= 0 else 2 * k, 2 * k if k >= 0 else 0.5 * k,
+                       where, law.kink_load, beyond, side)
         laws.update()
         value = rng.normal() * 2e-3
         x.SetValue(value)
         for i, expression in enumerate(expressions):
             law = LoadLaw(*Laws.laws[i, :4], unilateral=bool(Laws.unilateral[i]),
-                          touch_stiffness=Laws.laws[i, 4])
+                          touch_stiffness=Laws.laws[i, 4], kink=kinks[i][0],
+                          beyond=kinks[i][1], side=kinks[i][2])
             assert expression.Evaluate() == law(value)
     # a contact's law about a point with no number (x* NaN) out of touch: max(x*, 0) is
     # NaN in Python, so the touch gives no load; so in exudyn
-    Laws.laws[1] = [math.nan, -1.0, 1e7, 0.0, 1e7, 0.0, 5e6, 2e7]
+    Laws.laws[1] = [math.nan, -1.0, 1e7, 0.0, 1e7, 0.0, 5e6, 2e7, math.nan, math.nan, 1e7, 0.0]
     laws.update()
     x.SetValue(1e-3)
     law = LoadLaw(math.nan, -1.0, 1e7, 0.0, unilateral=True, touch_stiffness=1e7)

@@ -156,6 +156,12 @@ static int stiffness_by_deflection(Instance *c, double *value) {
                                                         &c->inputs[0], 1, &seed, value);
 }
 
+static int get_stiffness(Instance *c, double *value) {
+    if (c->fmi_version == 3)
+        return ((Fmi3GetFloat64)c->functions[GET])(c->instance, &c->stiffness_vr, 1, value, 1);
+    return ((Fmi2GetReal)c->functions[GET])(c->instance, &c->stiffness_vr, 1, value);
+}
+
 int fail(Bank *bank, int i, int call, int status, double time, double step) {
     bank->failed_instance = i;
     bank->failed_call = call;
@@ -185,7 +191,8 @@ static double law_load(const double *law, int unilateral, double x) {
             return touch > 0.0 ? touch : 0.0;
         }
     }
-    double load = law[1] + secant(law, x) * (x - law[0]);
+    double load = law[11] * (x - law[8]) < 0.0 ? law[9] + law[10] * (x - law[8])
+                                                : law[1] + secant(law, x) * (x - law[0]);
     return unilateral ? (load > 0.0 ? load : 0.0) : load;
 }
 
@@ -205,6 +212,8 @@ EXPORT void bank_law_loads(const Bank *bank, const double *deflection, double *l
     }
 }
 
+static void set_kink(Bank *bank, int i, double kink, double beyond, double side);
+
 void set_law(Bank *bank, int i, double x, double load, double k, double q) {
     double *law = bank->laws + (size_t)i * LAW_COLUMNS;
     law[0] = x;
@@ -215,6 +224,55 @@ void set_law(Bank *bank, int i, double x, double load, double k, double q) {
     law[5] = 0.5 * q;
     law[6] = k >= 0.0 ? 0.5 * k : 2.0 * k;
     law[7] = k >= 0.0 ? 2.0 * k : 0.5 * k;
+    set_kink(bank, i, x, k, 0.0);
+}
+
+/* law.py's kink: beyond `kink` on the side opposite `side`, the tangent `beyond` from the
+   law's load there (side 0: none) */
+static void set_kink(Bank *bank, int i, double kink, double beyond, double side) {
+    double *law = bank->laws + (size_t)i * LAW_COLUMNS;
+    law[8] = kink;
+    law[9] = law[1] + secant(law, kink) * (kink - law[0]);
+    law[10] = beyond;
+    law[11] = side;
+}
+
+static double sign_of(double value) { return value > 0.0 ? 1.0 : value < 0.0 ? -1.0 : 0.0; }
+
+/* fmu.py's reversible_law: about the last accepted step with the tangent of its direction,
+   or where the step may reverse (the last rate changed by as much as it extrapolates to)
+   the mean of the tangents for motion either way; the other way's is the stiffness output
+   at the mirrored rate */
+static int reversible_law(Bank *bank, int i) {
+    Instance *c = &bank->instances[i];
+    const double *accepted = bank->accepted + 3 * i;
+    const double *out = bank->outputs + (size_t)i * MAX_OUTPUTS;
+    c->reverse_stiffness = out[c->stiffness];
+    c->reversible = 1;
+    if (accepted[2] != 0.0) {
+        double inputs[2] = {accepted[1], -accepted[2]};
+        int status = set_inputs(c, inputs);
+        if (status > STATUS_OK) return fail(bank, i, FAILED_SET, status, accepted[0], 0.0);
+        status = get_stiffness(c, &c->reverse_stiffness);
+        if (status > STATUS_OK) return fail(bank, i, FAILED_GET, status, accepted[0], 0.0);
+    }
+    double tangent = out[c->stiffness];
+    if (!(fabs(2.0 * accepted[2] - c->previous_rate) > fabs(accepted[2] - c->previous_rate)))
+        tangent = 0.5 * (tangent + c->reverse_stiffness);
+    set_law(bank, i, accepted[1], out[c->load], tangent, 0.0);
+    return 0;
+}
+
+/* fmu.py's _reversal: the kink of a law about a trial that ended at x */
+static void reversal(Bank *bank, int i, double x) {
+    const Instance *c = &bank->instances[i];
+    if (!c->reversible) return;
+    const double *accepted = bank->accepted + 3 * i;
+    double side = sign_of(x - accepted[1]);
+    double beyond = side == sign_of(accepted[2])
+                        ? c->reverse_stiffness
+                        : bank->outputs[(size_t)i * MAX_OUTPUTS + c->stiffness];
+    set_kink(bank, i, accepted[1], beyond, side);
 }
 
 /* fmu.py's lagged_law: about the last accepted step */
@@ -225,8 +283,12 @@ static void lagged_law(Bank *bank, int i) {
             (c->flags & STEP_TANGENT) ? out[c->stiffness] : 0.0, 0.0);
 }
 
+/* At the start: the laws about the host's initial state, whose rates are the last ones. */
 EXPORT void bank_lagged_laws(Bank *bank) {
-    for (int i = 0; i < bank->n; i++) lagged_law(bank, i);
+    for (int i = 0; i < bank->n; i++) {
+        bank->instances[i].previous_rate = bank->accepted[3 * i + 2];
+        lagged_law(bank, i);
+    }
 }
 
 /* --- the step protocol (master.py) ----------------------------------------------------- */
@@ -262,13 +324,16 @@ static int begin(Bank *bank, double time) {
             c->saved = 1;
         }
         c->tried = 0;
+        c->reversible = 0;
         lagged_law(bank, i);
         if (bank->scheme != EXPLICIT && (c->flags & LINEARISED)) {
             if (c->model == NULL)
                 bank->flagged[bank->n_flagged++] = i;
             else if ((result = predicted_law(bank, i, time)) != 0)
                 break;
-        }
+        } else if (bank->scheme != EXPLICIT && (c->flags & REVERSIBLE)
+                   && (result = reversible_law(bank, i)) != 0)
+            break;
     }
     return result == 0 ? bank->n_flagged : result;
 }
@@ -336,6 +401,7 @@ static int corrected_law(Bank *bank, int i, double time) {
         if (status > STATUS_OK) return fail(bank, i, FAILED_DIRECTIONAL, status, time, 0.0);
     }
     set_law(bank, i, x, out[c->load], stiffness, curvature);
+    reversal(bank, i, x);
     const double *accepted = bank->accepted + 3 * i;
     int linearised = c->flags & LINEARISED;
     if (!linearised
@@ -356,6 +422,7 @@ static int corrected_law(Bank *bank, int i, double time) {
                 stiffness != 0.0 ? curvature * (ratio * ratio) : 0.0);
     } else {
         set_law(bank, i, x, law[1], law[2], result[2]);
+        reversal(bank, i, x);
     }
     return 0;
 }
@@ -439,6 +506,7 @@ EXPORT int bank_accept(Bank *bank) {
         Instance *c = &bank->instances[i];
         if (!c->tried) return fail(bank, i, FAILED_NO_STEP, 0, time, 0.0);
         double *accepted = bank->accepted + 3 * i;
+        c->previous_rate = accepted[2];
         accepted[0] = time;
         accepted[1] = c->trial_deflection;
         accepted[2] = c->trial_secant;

@@ -20,8 +20,9 @@
 #define BANK_VERSION 1
 #define MAX_OUTPUTS 8
 /* x*, F*, K, Q, K_touch (law.py's LoadLaw), then what a host's expression of the law
-   needs no more than once per pass: Q/2 and the secant's bounds K/2 and 2K, low first */
-#define LAW_COLUMNS 8
+   needs no more than once per pass: Q/2 and the secant's bounds K/2 and 2K, low first;
+   then the reversal's kink: where, the law's load there, the tangent beyond, the side */
+#define LAW_COLUMNS 12
 #define CURVED 0.01   /* fmu.py's CURVED */
 #define STATUS_OK 1   /* fmi2Warning and below */
 
@@ -63,7 +64,8 @@ enum { FAILED_NONE, FAILED_SET, FAILED_GET, FAILED_DO_STEP, FAILED_GET_STATE,
        FAILED_SET_STATE, FAILED_DIRECTIONAL, FAILED_NOT_FINITE, FAILED_NO_STEP,
        FAILED_LINEARISED };
 /* flags of an instance */
-enum { UNILATERAL = 1, STEP_TANGENT = 2, CURVATURE = 4, LINEARISABLE = 8, LINEARISED = 16 };
+enum { UNILATERAL = 1, STEP_TANGENT = 2, CURVATURE = 4, LINEARISABLE = 8, LINEARISED = 16,
+       REVERSIBLE = 32 };
 /* schemes (schemes.py) */
 enum { EXPLICIT, CORRECTED, CONVERGED };
 /* end_pass's verdicts; ACCEPT and REPEAT with NOTICE added where the pass cut a step or
@@ -81,6 +83,11 @@ typedef struct {
     int flags;
     int stepped, saved, tried;
     double trial_deflection, trial_secant;
+    /* the tangent for motion the other way from the accepted point, where it was asked
+       (fmu.py's reverse_stiffness; reversible 0: not asked) */
+    double reverse_stiffness;
+    int reversible;
+    double previous_rate; /* the secant rate of the step before the last accepted one */
     /* its Model Exchange side instance (linearised.py), where the bank linearises */
     void *model;
     void *model_functions[ME_FUNCTIONS];

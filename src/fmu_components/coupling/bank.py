@@ -34,13 +34,16 @@ import numpy as np
 
 from .bank_build import library_path
 from .errors import CouplingError, StepDiscarded
+from .law import LoadLaw
 from .master import Verdict, count_unconverged
 from .schemes import scheme_named
 
 MAX_OUTPUTS = 8
-LAW_COLUMNS = 8  # x*, F*, K, Q, K_touch; then Q/2, and the secant's bounds (law.py)
+# x*, F*, K, Q, K_touch; then Q/2, and the secant's bounds; then the reversal's kink: where,
+# the law's load there, the tangent beyond it, the side (law.py)
+LAW_COLUMNS = 12
 SCHEME_CODES = {"explicit": 0, "corrected": 1, "converged": 2}
-UNILATERAL, STEP_TANGENT, CURVATURE, LINEARISABLE, LINEARISED = 1, 2, 4, 8, 16
+UNILATERAL, STEP_TANGENT, CURVATURE, LINEARISABLE, LINEARISED, REVERSIBLE = 1, 2, 4, 8, 16, 32
 ACCEPT, REPEAT, RETRY, FAILED, BUSY, NOTICE = 0, 1, 2, -1, -2, 4
 FUNCTIONS = {2: ("fmi2SetReal", "fmi2GetReal", "fmi2DoStep", "fmi2GetFMUstate",
                  "fmi2SetFMUstate", "fmi2GetDirectionalDerivative"),
@@ -122,7 +125,8 @@ class Bank:
     """FmuComponents (fmu.py: instantiated, in initialization mode, not started) coupled
     to one host by one scheme, their per-step work done in C. The arrays a host reads:
     `laws` (rows x*, F*, K, Q, K_touch: the law of law.py, with each component's
-    `unilateral`; then Q/2, K/2 and 2K, the lower bound first), `outputs` and `trial_outputs` (columns as each component's
+    `unilateral`; then Q/2, K/2 and 2K, the lower bound first; then the reversal's kink:
+    where, the law's load there, the tangent beyond, the side), `outputs` and `trial_outputs` (columns as each component's
     output_names), `accepted` (time, deflection, secant rate of the last accepted step)."""
 
     def __init__(self, components, scheme="corrected", host_can_retry=True, record=None,
@@ -160,6 +164,9 @@ class Bank:
         lib.bank_set_scheme(self._handle, SCHEME_CODES[self.scheme.name], self.scheme.passes,
                             self.scheme.tolerance)
         self.unilateral = np.array([c.unilateral for c in self.components], dtype=bool)
+        # instances whose laws may have a reversal's kink (fmu.py's reversible_law)
+        self.reversible = np.array([self.scheme.name != "explicit" and c._reversible()
+                                    for c in self.components], dtype=bool)
         self.load_index = np.zeros(n, dtype=int)
         self._python_laws = 0  # instances whose first law Python makes (_predicted_law)
         for i, component in enumerate(self.components):
@@ -201,7 +208,8 @@ class Bank:
                  | (STEP_TANGENT if component.stiffness_is_step_tangent else 0)
                  | (CURVATURE if component._curvature else 0)
                  | (LINEARISABLE if component._linearisable else 0)
-                 | (LINEARISED if component.step_model == "linearised" else 0))
+                 | (LINEARISED if component.step_model == "linearised" else 0)
+                 | (REVERSIBLE if component._reversible() else 0))
         if self._lib.bank_set_instance(self._handle, i, version, instance.component, functions, vrs,
                                        len(component.output_names), load,
                                        component.output_names.index("stiffness"), flags):
@@ -379,12 +387,16 @@ class Bank:
         predicted, tangent, _ = self._linearised(i, deflection, rate, step)
         self._set_law(i, deflection + rate * step, predicted, tangent, 0.0)
 
-    def _set_law(self, i, deflection, load, stiffness, curvature):
-        """A row of `laws` (bank.c's set_law)."""
+    def _set_law(self, i, deflection, load, stiffness, curvature, kink=None):
+        """A row of `laws` (bank.c's set_law; `kink`: (where, the tangent beyond, the
+        side), bank.c's set_kink after it)."""
         low, high = ((0.5 * stiffness, 2.0 * stiffness) if stiffness >= 0.0
                      else (2.0 * stiffness, 0.5 * stiffness))
+        where, beyond, side = kink or (deflection, stiffness, 0.0)
+        law = LoadLaw(deflection, load, stiffness, curvature, kink=where, beyond=beyond,
+                      side=side)
         self.laws[i] = (deflection, load, stiffness, curvature, self._seen[i, 1],
-                        0.5 * curvature, low, high)
+                        0.5 * curvature, low, high, where, law.kink_load, beyond, side)
 
     def _corrected_law(self, i, time):
         """fmu.py's corrected_law where it linearises (the bank wrote the rest)."""
@@ -397,9 +409,11 @@ class Bank:
         if component.step_model == "linearised":
             _, tangent, _ = self._linearised(i, deflection, secant, time - accepted_time)
             curvature = curvature * (tangent / stiffness) ** 2 if stiffness else 0.0
-        else:
-            curvature = self._linearised(i, deflection, secant, time - accepted_time)[2]
-        self._set_law(i, deflection, load, tangent, curvature)
+            self._set_law(i, deflection, load, tangent, curvature)
+            return
+        curvature = self._linearised(i, deflection, secant, time - accepted_time)[2]
+        # the reversal's kink as bank.c wrote it
+        self._set_law(i, deflection, load, tangent, curvature, tuple(self.laws[i, [8, 10, 11]]))
 
     # --- values ------------------------------------------------------------------------------
 

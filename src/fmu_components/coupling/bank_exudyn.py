@@ -58,9 +58,14 @@ class SymbolicLaws:
         # Q = 0 it is K
         secant = smaller(larger(k + half_q * dx, low), high)
         about = load + secant * dx
+        zero = self.esym.Real(0.0)
+        if self.bank.reversible[i]:
+            # beyond the reversal's kink (law.py), the tangent for motion the other way
+            kink, kink_load, beyond, side = (m[i, j] for j in (8, 9, 10, 11))
+            about = self.esym.IfThenElse(side * (deflection - kink) < zero,
+                                         kink_load + beyond * (deflection - kink), about)
         if not self.bank.unilateral[i]:
             return about
-        zero = self.esym.Real(0.0)
         touching = larger(zero, touch * (deflection - larger(x_star, zero)))
         return self.esym.IfThenElse(deflection <= zero, zero,
                                     self.esym.IfThenElse(load <= zero, touching,

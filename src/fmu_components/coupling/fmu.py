@@ -83,6 +83,7 @@ class FmuComponent:
         self._inputs = instance.reals(self.input_names)
         self._outputs = instance.reals(self.output_names)
         self._stiffness_by_deflection = instance.jacobian(["stiffness"], self.input_names[:1])
+        self._stiffness_output = instance.reals(["stiffness"])
         instance.setup(parameters, tolerance, start_time=0.0)
         self._fmu_file, self._parameters = fmu, instance.parameters  # an .ssv file's, read
         self._linearisation = None  # made when first needed
@@ -92,12 +93,15 @@ class FmuComponent:
         self.time = None  # last accepted point
         self.deflection = 0.0
         self.rate = 0.0  # the secant rate of the last accepted step
+        self.previous_rate = 0.0  # the one before it
         self.outputs = {}  # after the last accepted step
         self.trial_outputs = None  # after the last trial, until accept or reject
         self._trial_point = None
         self._stepped = False  # stepped since the state was saved
         self._saved = False
         self.law = None
+        # the tangent for motion the other way from the accepted point (reversible_law)
+        self.reverse_stiffness = None
         self.do_steps = self.saves = self.restores = 0
 
     # --- FMI calls (instance.py makes them, and raises for their refusals) ----------------
@@ -149,9 +153,11 @@ class FmuComponent:
 
     # --- load laws (law.py) ------------------------------------------------------------
 
-    def _law(self, deflection, load, stiffness, curvature=0.0):
+    def _law(self, deflection, load, stiffness, curvature=0.0, kink=None, beyond=None,
+             side=0.0):
         return LoadLaw(deflection, load, stiffness, curvature, unilateral=self.unilateral,
-                       touch_stiffness=self.touch_stiffness)
+                       touch_stiffness=self.touch_stiffness, kink=kink, beyond=beyond,
+                       side=side)
 
     def lagged_law(self):
         """The load law about the last accepted step, for a host that cannot repeat one:
@@ -167,11 +173,50 @@ class FmuComponent:
         it whatever the step model, where the FMU offers Model Exchange)."""
         if linearised is None:
             linearised = self.step_model == "linearised"
+        if not linearised and self._reversible():
+            return self.reversible_law()
         if not (linearised and self._linearisable):
             return self.lagged_law()
         step = time - self.time
         predicted, tangent, _ = self._linearised_step(self.deflection, self.rate, step)
         return self._law(self.deflection + self.rate * step, predicted, tangent)
+
+    def _reversible(self):
+        """True where the `stiffness` output is the step's tangent in the direction of
+        motion, so that the tangent for a reversal is the output at the mirrored rate."""
+        return self.step_model == "tangent" and self.stiffness_is_step_tangent
+
+    def reversible_law(self):
+        """The law for the first solve of a step of a component whose tangent depends on
+        the direction of motion (the rubber's: law.py, A reversal): about the last
+        accepted point with the `stiffness` output, the tangent of the last step's
+        direction; where the step may reverse, the mean of the tangents for motion either
+        way (a reversal meets up to four times the loading tangent). It may where the
+        last rate, extrapolated by its last change, is no larger than that change: the
+        direction is not known (the track bushes ringing from step to step; a wheel's
+        tyre moving smoothly keeps its direction's tangent). The tangent for motion the
+        other way is the `stiffness` output at the mirrored rate (the FMU's states are
+        not changed, and the next trial sets its inputs again); the law about the step's
+        answer keeps it for the kink (_reversal)."""
+        self.reverse_stiffness = self.stiffness
+        if self.rate:
+            self.instance.time = self.time
+            self.instance.set(self._inputs, [self.deflection, -self.rate])
+            self.reverse_stiffness = self.instance.get(self._stiffness_output)[0]
+        tangent = self.stiffness
+        if not abs(2.0 * self.rate - self.previous_rate) > abs(self.rate - self.previous_rate):
+            tangent = 0.5 * (tangent + self.reverse_stiffness)
+        return self._law(self.deflection, self.load, tangent)
+
+    def _reversal(self, deflection):
+        """The kink of a law about a trial that ended at `deflection`: at the accepted
+        point, beyond it the tangent for motion the other way from the trial's, at the
+        accepted point (reversible_law's tangents); {} where there is none."""
+        if self.reverse_stiffness is None:
+            return {}
+        side = _sign(deflection - self.deflection)
+        beyond = self.reverse_stiffness if side == _sign(self.rate) else self.stiffness
+        return {"kink": self.deflection, "beyond": beyond, "side": side}
 
     def corrected_law(self):
         """The load law about the FMU's answer to the last trial: its load, the step's
@@ -194,7 +239,8 @@ class FmuComponent:
             # states' change included, is what the second solve needs (the frozen one
             # leaves twice the error at 4 ms).
             _, _, curvature = self._linearised_step(deflection, secant, time - self.time)
-        return self._law(deflection, outputs[self.load_name], tangent, curvature)
+        return self._law(deflection, outputs[self.load_name], tangent, curvature,
+                         **self._reversal(deflection))
 
     def linearisation(self):
         """The Model Exchange side instance that linearises the step, made when first
@@ -234,6 +280,7 @@ class FmuComponent:
         self.instance.exit_initialization()
         self.started = True
         self.time, self.deflection, self.rate = time, deflection, rate
+        self.previous_rate = rate
         self.outputs = self._read(time)
         self._seen(self.outputs)
         self.law = self.lagged_law()
@@ -248,6 +295,7 @@ class FmuComponent:
         self.saves += 1
         self._saved = True
         self.trial_outputs = self._trial_point = None
+        self.reverse_stiffness = None
 
     def _restore(self):
         self.instance.time = self.time
@@ -292,6 +340,7 @@ class FmuComponent:
         """The host accepted its step: the last trial becomes the accepted point."""
         if self._trial_point is None:
             raise RuntimeError(f"{self.name}: accept() without a trial")
+        self.previous_rate = self.rate
         self.time, self.deflection, self.rate = self._trial_point
         self.outputs = self.trial_outputs
         self.trial_outputs = self._trial_point = None
@@ -319,3 +368,7 @@ class FmuComponent:
             self.instance.free_state(self._state)
         finally:
             self.instance.close()  # terminated only once initialized, as FMI 2.0 asks
+
+
+def _sign(value):
+    return 1.0 if value > 0.0 else -1.0 if value < 0.0 else 0.0
