@@ -183,6 +183,9 @@ static double secant(const double *law, double x) {
     return high < clamped ? high : clamped;
 }
 
+/* law.py's LoadLaw._about: the law about x* along its secant, without the kink or the contact */
+static double about(const double *law, double x) { return law[1] + secant(law, x) * (x - law[0]); }
+
 static double law_load(const double *law, int unilateral, double x) {
     if (unilateral) {
         if (x <= 0.0) return 0.0;
@@ -192,7 +195,7 @@ static double law_load(const double *law, int unilateral, double x) {
         }
     }
     double load = law[11] * (x - law[8]) < 0.0 ? law[9] + law[10] * (x - law[8])
-                                                : law[1] + secant(law, x) * (x - law[0]);
+                                                : about(law, x);
     return unilateral ? (load > 0.0 ? load : 0.0) : load;
 }
 
@@ -232,7 +235,7 @@ void set_law(Bank *bank, int i, double x, double load, double k, double q) {
 static void set_kink(Bank *bank, int i, double kink, double beyond, double side) {
     double *law = bank->laws + (size_t)i * LAW_COLUMNS;
     law[8] = kink;
-    law[9] = law[1] + secant(law, kink) * (kink - law[0]);
+    law[9] = about(law, kink);
     law[10] = beyond;
     law[11] = side;
 }

@@ -46,7 +46,7 @@ class LoadLaw:
             self.kink = self.deflection
         if self.beyond is None:
             self.beyond = self.stiffness
-        self.kink_load = self.load + self.secant(self.kink) * (self.kink - self.deflection)
+        self.kink_load = self._about(self.kink)
 
     def secant(self, deflection):
         """Slope of the law from x* to `deflection`."""
@@ -68,5 +68,9 @@ class LoadLaw:
         if self.side * (deflection - self.kink) < 0.0:
             load = self.kink_load + self.beyond * (deflection - self.kink)
         else:
-            load = self.load + self.secant(deflection) * (deflection - self.deflection)
+            load = self._about(deflection)
         return max(load, 0.0) if self.unilateral else load
+
+    def _about(self, deflection):
+        """The law about x* (its secant from there), without the kink or the contact."""
+        return self.load + self.secant(deflection) * (deflection - self.deflection)
