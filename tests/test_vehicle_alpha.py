@@ -19,27 +19,30 @@ alpha = pytest.importorskip("vehicle.alpha_solver")
 
 # --- the bordered band LU --------------------------------------------------------------------
 
-def bordered_matrix(rng, n, n_band, w, saddle):
+def bordered_matrix(rng, n, n_band, w, saddle, isolated=False):
     """A random matrix of the structure, in a random order of its unknowns: a diagonally
     dominant band, a dense border whose last `saddle` rows and columns have a zero
-    corner (the multipliers); (order, matrix)."""
+    corner (the multipliers), `isolated`: those touch only the border; (order, matrix)."""
     order = rng.permutation(n)
     position = np.empty(n, dtype=int)
     position[order] = np.arange(n)
     pi, pj = np.meshgrid(position, position, indexing="ij")
     band = (pi < n_band) & (pj < n_band)
     keep = np.where(band, np.abs(pi - pj) <= w, ~((pi >= n - saddle) & (pj >= n - saddle)))
+    if isolated:
+        keep &= ~(((pi >= n - saddle) & (pj < n_band)) | ((pj >= n - saddle) & (pi < n_band)))
     matrix = np.where(keep, rng.normal(size=(n, n)), 0.0)
     rows = np.flatnonzero(position < n_band)
     matrix[rows, rows] = 1.0 + np.abs(matrix[rows]).sum(axis=1)
     return order, matrix
 
 
-@pytest.mark.parametrize("n, n_band, w, saddle", [(30, 22, 3, 3), (278, 237, 5, 14),
-                                                  (12, 12, 2, 0), (9, 0, 0, 4)])
-def test_the_bordered_band_lu_solves_as_numpy(n, n_band, w, saddle):
+@pytest.mark.parametrize("n, n_band, w, saddle, isolated",
+                         [(30, 22, 3, 3, False), (278, 237, 5, 14, False),
+                          (278, 237, 5, 14, True), (12, 12, 2, 0, False), (9, 0, 0, 4, False)])
+def test_the_bordered_band_lu_solves_as_numpy(n, n_band, w, saddle, isolated):
     rng = np.random.default_rng(n + w)
-    order, matrix = bordered_matrix(rng, n, n_band, w, saddle)
+    order, matrix = bordered_matrix(rng, n, n_band, w, saddle, isolated)
     lu = alpha.BorderedBand(n, order, n_band, w)
     rows, cols = np.nonzero(matrix)
     # each entry given in two parts: repeated entries add

@@ -116,7 +116,8 @@ class BorderedBand:
     def __init__(self, n, order, n_band, half_bandwidth):
         self.lib = library()
         self.n = n
-        self.handle = self.lib.bb_create(n, _ints(order).ctypes.data, n_band, half_bandwidth)
+        order = _ints(order)  # alive through the call
+        self.handle = self.lib.bb_create(n, order.ctypes.data, n_band, half_bandwidth)
         if not self.handle:
             raise ValueError("bordered band: order is not a permutation of the unknowns, "
                              "or the sizes are wrong")
@@ -209,8 +210,9 @@ class AlphaSolver:
         self.system = system  # its callbacks live as long as the solver
         self.nq, self.nm = len(masses), n_multipliers
         self.settings = settings or Settings()
+        masses, order = _reals(masses), _ints(order)  # alive through the call
         self.handle = self.lib.alpha_create(
-            self.nq, self.nm, _reals(masses).ctypes.data, _ints(order).ctypes.data, n_band,
+            self.nq, self.nm, masses.ctypes.data, order.ctypes.data, n_band,
             half_bandwidth, capacity, ctypes.byref(self.settings), system.evaluate,
             system.jacobian, system.context)
         if not self.handle:
@@ -224,8 +226,8 @@ class AlphaSolver:
             self.handle = None
 
     def initialize(self, t, q, v, compute_initial_accelerations=True):
-        status = self.lib.alpha_initialize(self.handle, t, _reals(q).ctypes.data,
-                                           _reals(v).ctypes.data,
+        q, v = _reals(q), _reals(v)  # alive through the call
+        status = self.lib.alpha_initialize(self.handle, t, q.ctypes.data, v.ctypes.data,
                                            int(compute_initial_accelerations))
         self.time = t
         return status

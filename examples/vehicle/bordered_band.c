@@ -97,27 +97,27 @@ EXPORT int bb_add_many(bb_matrix *m, int count, const int *row, const int *col,
     return BB_OK;
 }
 
-/* y <- A^-1 y for `columns` right-hand sides stored row-major (nb x columns). */
-static void band_solve(const bb_matrix *m, double *y, int columns)
+/* y <- A^-1 y for `columns` right-hand sides, row i's at y + i * stride. */
+static void band_solve(const bb_matrix *m, double *y, int columns, int stride)
 {
     int nb = m->nb, w = m->w;
     for (int i = 0; i < nb; i++) {
-        double *yi = y + (size_t)i * columns;
+        double *yi = y + (size_t)i * stride;
         int k0 = i - w > 0 ? i - w : 0;
         for (int k = k0; k < i; k++) {
             double l = BAND(m, i, k);
             if (l == 0.0) continue;
-            const double *yk = y + (size_t)k * columns;
+            const double *yk = y + (size_t)k * stride;
             for (int c = 0; c < columns; c++) yi[c] -= l * yk[c];
         }
     }
     for (int i = nb - 1; i >= 0; i--) {
-        double *yi = y + (size_t)i * columns;
+        double *yi = y + (size_t)i * stride;
         int j1 = i + w < nb - 1 ? i + w : nb - 1;
         for (int j = i + 1; j <= j1; j++) {
             double u = BAND(m, i, j);
             if (u == 0.0) continue;
-            const double *yj = y + (size_t)j * columns;
+            const double *yj = y + (size_t)j * stride;
             for (int c = 0; c < columns; c++) yi[c] -= u * yj[c];
         }
         double d = BAND(m, i, i);
@@ -153,15 +153,22 @@ EXPORT int bb_factorize(bb_matrix *m)
         }
     }
     if (nd == 0) return BB_OK;
-    /* Y = A^-1 B; S = E - C Y, skipping C's zeros (a border row touches few band rows) */
-    band_solve(m, m->upper, nd);
+    /* Y = A^-1 B for the border's columns up to the last that touches the band (the
+       multipliers, last in the order, touch only the border: their columns of Y are
+       zero); S = E - C Y, skipping C's zeros (a border row touches few band rows) */
+    int coupled = 0;
+    for (int i = 0; i < nb; i++)
+        for (int k = nd - 1; k >= coupled; k--)
+            if (m->upper[(size_t)i * nd + k] != 0.0) { coupled = k + 1; break; }
+    m->coupled = coupled;
+    band_solve(m, m->upper, coupled, nd);
     for (int r = 0; r < nd; r++) {
         double *s = m->corner + (size_t)r * nd;
         const double *c = m->lower + (size_t)r * nb;
         for (int j = 0; j < nb; j++) {
             if (c[j] == 0.0) continue;
             const double *y = m->upper + (size_t)j * nd;
-            for (int k = 0; k < nd; k++) s[k] -= c[j] * y[k];
+            for (int k = 0; k < coupled; k++) s[k] -= c[j] * y[k];
         }
     }
     /* S = P L U, partial pivoting */
@@ -202,7 +209,7 @@ EXPORT void bb_solve(bb_matrix *m, const double *rhs, double *x)
     int nb = m->nb, nd = m->nd;
     double *y = m->work, *z = m->work + nb;
     for (int p = 0; p < m->n; p++) y[p] = rhs[m->order[p]];
-    band_solve(m, y, 1);
+    band_solve(m, y, 1, 1);
     if (nd > 0) {
         for (int r = 0; r < nd; r++) {
             const double *c = m->lower + (size_t)r * nb;
@@ -223,7 +230,7 @@ EXPORT void bb_solve(bb_matrix *m, const double *rhs, double *x)
         for (int i = 0; i < nb; i++) {
             const double *u = m->upper + (size_t)i * nd;
             double s = y[i];
-            for (int k = 0; k < nd; k++) s -= u[k] * z[k];
+            for (int k = 0; k < m->coupled; k++) s -= u[k] * z[k];
             y[i] = s;
         }
     }

@@ -31,6 +31,7 @@ typedef struct {
     int *pivot;           /* nd: the Schur complement's row swaps */
     double *scale;        /* nb: each band row's largest magnitude (the pivot test) */
     double *work;         /* n */
+    int coupled;          /* the border's columns up to the last touching the band */
     double pivot_tolerance;
     int bad_row, bad_col; /* unknowns (not positions) named by the last error */
 } bb_matrix;
