@@ -193,14 +193,19 @@ class Chain:
         return (rows, cols, K[rows, cols]), (rows, cols, D[rows, cols])
 
     def initial(self):
-        """(q, v): displaced and moving, the pinned link at rest (so that the initial
-        accelerations need no curvature term)."""
+        """(q, v): displaced and moving, the pinned link turning about its pin (so that the
+        initial accelerations need the constraint's curvature)."""
         q = np.zeros(self.nq)
         v = np.zeros(self.nq)
         q[3::3][:self.links - 1] = 0.01
         q[4::3][:self.links - 1] = -0.02 * np.arange(1, self.links)
         v[3:3 * self.links] = 0.3
         v[-2] = -0.5
+        body, local = self.pin
+        spin = 2.0
+        v[3 * body + 2] = spin
+        v[3 * body:3 * body + 2] = -spin * self._arm(self.reference + q.reshape(-1, 3), body,
+                                                     local)
         return q, v
 
     def order(self):
