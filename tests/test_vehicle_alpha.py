@@ -408,3 +408,23 @@ def test_a_mass_that_is_not_positive_is_a_band_pivot_named():
     q, v = chain.initial()
     assert alpha.STATUS[solver.initialize(0.0, q, v)] == "band pivot not positive"
     assert solver.report()["bad_row"] == 4
+
+
+def test_a_failing_callback_returns_its_status_and_keeps_the_start():
+    chain = Chain()
+    evaluate = chain.evaluate
+
+    def failing(t, q, v):
+        if t > 0.003:
+            raise ArithmeticError("the model cannot evaluate here")
+        return evaluate(t, q, v)
+
+    chain.evaluate = failing
+    solver, _ = chain_solver(chain)
+    q, v = chain.initial()
+    solver.initialize(0.0, q, v)
+    assert solver.step(2e-3, 2e-3) == 0
+    start = solver.state()
+    assert alpha.STATUS[solver.step(2e-3, 4e-3)] == "callback failed"
+    for before, after in zip(start, solver.state()):
+        np.testing.assert_array_equal(after, before)
