@@ -14,7 +14,9 @@
  *   q -= dq, v -= gamma' dq, a -= beta' dq, lambda -= dlambda / (beta h^2);
  *   after convergence a_alg += (1 - alpha_f) / (1 - alpha_m) a.
  * Convergence, modified Newton, its restarts and the switch to full Newton as exudyn's
- * Newton. The Newton matrix is a bordered band (bordered_band.c).
+ * Newton; modified Newton keeps its Jacobian from step to step as exudyn's does, except
+ * that a step of another h (or after a failed step) starts with a new one. The Newton
+ * matrix is a bordered band (bordered_band.c).
  */
 #include <math.h>
 #include <stdlib.h>
