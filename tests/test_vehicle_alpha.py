@@ -214,12 +214,19 @@ class Chain:
         return np.arange(self.nq + self.nm), 3 * self.links, 5
 
 
-def own_history(chain, step, end_time, spectral_radius, **settings):
-    """The solver core's coordinates at every step, (steps + 1, nq), and its iterations."""
+def chain_solver(chain, half_bandwidth=None, masses=None, **settings):
+    """The solver core over the chain (its order; another half bandwidth or masses where
+    given)."""
     system = alpha.PythonSystem(chain.nq, chain.nm, chain.evaluate, chain.jacobian)
     order, n_band, w = chain.order()
-    solver = alpha.AlphaSolver(system, chain.masses, chain.nm, order, n_band, w,
-                               alpha.Settings(spectral_radius=spectral_radius, **settings))
+    return alpha.AlphaSolver(system, chain.masses if masses is None else masses, chain.nm,
+                             order, n_band, w if half_bandwidth is None else half_bandwidth,
+                             alpha.Settings(**settings))
+
+
+def own_history(chain, step, end_time, spectral_radius, **settings):
+    """The solver core's coordinates at every step, (steps + 1, nq), and its iterations."""
+    solver = chain_solver(chain, spectral_radius=spectral_radius, **settings)
     q, v = chain.initial()
     assert solver.initialize(0.0, q, v) == 0
     steps = round(end_time / step)
@@ -347,17 +354,9 @@ def test_the_step_converges_at_second_order_to_the_reference():
 
 # --- what the step refuses ---------------------------------------------------------------------
 
-def chain_solver(chain, half_bandwidth=None, masses=None, **settings):
-    system = alpha.PythonSystem(chain.nq, chain.nm, chain.evaluate, chain.jacobian)
-    order, n_band, w = chain.order()
-    return alpha.AlphaSolver(system, chain.masses if masses is None else masses, chain.nm,
-                             order, n_band, w if half_bandwidth is None else half_bandwidth,
-                             alpha.Settings(**settings)), system
-
-
 def test_a_step_that_does_not_converge_returns_its_status_and_keeps_its_start():
     chain = Chain()
-    solver, _ = chain_solver(chain, max_iterations=1, relative_tolerance=1e-14)
+    solver = chain_solver(chain, max_iterations=1, relative_tolerance=1e-14)
     q, v = chain.initial()
     assert solver.initialize(0.0, q, v) == 0
     start = solver.state()
@@ -366,7 +365,7 @@ def test_a_step_that_does_not_converge_returns_its_status_and_keeps_its_start():
     for before, after in zip(start, solver.state()):
         np.testing.assert_array_equal(after, before)
     # the same step with Newton's iterations converges
-    solver, _ = chain_solver(chain)
+    solver = chain_solver(chain)
     solver.initialize(0.0, q, v)
     assert solver.step(2e-3, 2e-3) == 0
 
@@ -380,7 +379,7 @@ def test_a_step_into_non_numbers_returns_its_status_never_a_nan_state():
         return f * (np.nan if t > 0.003 else 1.0), g, G
 
     chain.evaluate = spoiled
-    solver, _ = chain_solver(chain)
+    solver = chain_solver(chain)
     q, v = chain.initial()
     solver.initialize(0.0, q, v)
     assert solver.step(2e-3, 2e-3) == 0
@@ -391,7 +390,7 @@ def test_a_step_into_non_numbers_returns_its_status_never_a_nan_state():
 def test_a_jacobian_entry_outside_the_pattern_is_named():
     """With half bandwidth 4, neighbouring links' angles (5 apart) do not fit."""
     chain = Chain()
-    solver, _ = chain_solver(chain, half_bandwidth=4)
+    solver = chain_solver(chain, half_bandwidth=4)
     q, v = chain.initial()
     assert solver.initialize(0.0, q, v) == 0  # M and G alone fit
     assert alpha.STATUS[solver.step(2e-3, 2e-3)] == "entry outside the band and the border"
@@ -404,7 +403,7 @@ def test_a_mass_that_is_not_positive_is_a_band_pivot_named():
     chain = Chain()
     masses = chain.masses.copy()
     masses[4] = -masses[4]
-    solver, _ = chain_solver(chain, masses=masses)
+    solver = chain_solver(chain, masses=masses)
     q, v = chain.initial()
     assert alpha.STATUS[solver.initialize(0.0, q, v)] == "band pivot not positive"
     assert solver.report()["bad_row"] == 4
@@ -420,7 +419,7 @@ def test_a_failing_callback_returns_its_status_and_keeps_the_start():
         return evaluate(t, q, v)
 
     chain.evaluate = failing
-    solver, _ = chain_solver(chain)
+    solver = chain_solver(chain)
     q, v = chain.initial()
     solver.initialize(0.0, q, v)
     assert solver.step(2e-3, 2e-3) == 0
