@@ -245,8 +245,9 @@ def exudyn_history(chain, step, end_time, spectral_radius, modified_newton=False
     joint): the coordinates at every step."""
     exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
     from exudyn.itemInterface import (LoadMassProportional, MarkerBodyMass,
-                                      MarkerBodyPosition, NodeRigidBody2D, ObjectConnectorSpringDamper,
-                                      ObjectGround, ObjectRigidBody2D, RevoluteJoint2D)
+                                      MarkerBodyPosition, NodeRigidBody2D,
+                                      ObjectConnectorSpringDamper, ObjectGround,
+                                      ObjectRigidBody2D, RevoluteJoint2D)
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
     q0, v0 = chain.initial()

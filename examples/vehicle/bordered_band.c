@@ -47,7 +47,10 @@ EXPORT bb_matrix *bb_create(int n, const int *order, int nb, int w)
     for (int i = 0; i < n; i++) m->position[i] = -1;
     for (int p = 0; p < n; p++) {
         int u = order[p];
-        if (u < 0 || u >= n || m->position[u] >= 0) { bb_free(m); return NULL; } /* not a permutation */
+        if (u < 0 || u >= n || m->position[u] >= 0) {  /* not a permutation */
+            bb_free(m);
+            return NULL;
+        }
         m->order[p] = u;
         m->position[u] = p;
     }
