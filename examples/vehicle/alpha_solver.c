@@ -1,0 +1,357 @@
+/*
+ * exudyn's generalized-alpha step (exudyn's CSolverImplicitSecondOrderTimeInt and
+ * CSolverBase::Newton; Arnold and Bruls 2007, Algorithm 1) for
+ *     M a = f(t, q, v) - G(q)^T lambda,   g(q) = 0   (index 3), M constant diagonal:
+ *   alpha_m = (2 rho - 1) / (rho + 1), alpha_f = rho / (rho + 1),
+ *   gamma = 1/2 + alpha_f - alpha_m, beta = (gamma + 1/2)^2 / 4;
+ *   predictor: q += h v + h^2 (1/2 - beta) a_alg; v += h (1 - gamma) a_alg;
+ *              a_alg = (alpha_f a - alpha_m a_alg) / (1 - alpha_m);
+ *              q += h^2 beta a_alg; v += h gamma a_alg; a = 0; lambda = 0;
+ *   Newton on the residual r = [M a - f + G^T lambda; g], its norm taken unscaled, its
+ *   coordinate rows then scaled by beta h^2 (the Newton matrix
+ *   [beta h^2 (beta' M + K + gamma' D), G^T; G, 0], beta' = (1 - alpha_m) /
+ *   (h^2 beta (1 - alpha_f)), gamma' = gamma / (h beta)); the update
+ *   q -= dq, v -= gamma' dq, a -= beta' dq, lambda -= dlambda / (beta h^2);
+ *   after convergence a_alg += (1 - alpha_f) / (1 - alpha_m) a.
+ * Convergence, modified Newton, its restarts and the switch to full Newton as exudyn's
+ * Newton; modified Newton keeps its Jacobian from step to step as exudyn's does, except
+ * that a step of another h (or after a failed step) starts with a new one. The Newton
+ * matrix is a bordered band (bordered_band.c).
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "alpha_solver.h"
+
+static int triplets_init(alpha_triplets *t, int capacity)
+{
+    t->capacity = capacity;
+    t->count = 0;
+    t->row = malloc(sizeof(int) * (capacity + 1));
+    t->col = malloc(sizeof(int) * (capacity + 1));
+    t->value = malloc(sizeof(double) * (capacity + 1));
+    return t->row && t->col && t->value;
+}
+
+static void triplets_free(alpha_triplets *t)
+{
+    free(t->row); free(t->col); free(t->value);
+}
+
+EXPORT void alpha_free(alpha_solver *s)
+{
+    if (!s) return;
+    bb_free(s->matrix);
+    triplets_free(&s->K); triplets_free(&s->D); triplets_free(&s->G);
+    double *arrays[] = {s->mass, s->q, s->v, s->a, s->a_alg, s->lambda, s->q0, s->v0, s->a0,
+                        s->a_alg0, s->lambda0, s->f, s->g, s->residual, s->delta};
+    for (size_t i = 0; i < sizeof arrays / sizeof *arrays; i++) free(arrays[i]);
+    free(s);
+}
+
+EXPORT alpha_solver *alpha_create(int nq, int nm, const double *mass, const int *order, int nb,
+                                  int w, int capacity, const alpha_settings *settings,
+                                  alpha_evaluate_fn evaluate, alpha_jacobian_fn jacobian,
+                                  void *context)
+{
+    alpha_solver *s = calloc(1, sizeof *s);
+    if (!s) return NULL;
+    s->nq = nq; s->nm = nm; s->n = nq + nm;
+    s->set = *settings;
+    s->evaluate = evaluate; s->jacobian = jacobian; s->context = context;
+    double rho = settings->spectral_radius;
+    s->alpha_m = (2 * rho - 1) / (rho + 1);
+    s->alpha_f = rho / (rho + 1);
+    s->gamma = 0.5 + s->alpha_f - s->alpha_m;
+    s->beta = 0.25 * (s->gamma + 0.5) * (s->gamma + 0.5);
+    s->matrix = bb_create(s->n, order, nb, w);
+    int ok = s->matrix != NULL && triplets_init(&s->K, capacity)
+             && triplets_init(&s->D, capacity) && triplets_init(&s->G, capacity);
+    double **coordinates[] = {&s->mass, &s->q, &s->v, &s->a, &s->a_alg, &s->q0, &s->v0,
+                              &s->a0, &s->a_alg0, &s->f};
+    for (size_t i = 0; ok && i < sizeof coordinates / sizeof *coordinates; i++)
+        ok = (*coordinates[i] = calloc(nq + 1, sizeof(double))) != NULL;
+    double **multipliers[] = {&s->lambda, &s->lambda0, &s->g};
+    for (size_t i = 0; ok && i < sizeof multipliers / sizeof *multipliers; i++)
+        ok = (*multipliers[i] = calloc(nm + 1, sizeof(double))) != NULL;
+    ok = ok && (s->residual = calloc(s->n, sizeof(double))) != NULL
+         && (s->delta = calloc(s->n, sizeof(double))) != NULL;
+    if (!ok) { alpha_free(s); return NULL; }
+    memcpy(s->mass, mass, sizeof(double) * nq);
+    s->matrix->pivot_tolerance = settings->pivot_tolerance;
+    s->jacobian_update_requested = 1;
+    return s;
+}
+
+static int from_matrix(alpha_solver *s, int status)
+{
+    s->bad_row = s->matrix->bad_row;
+    s->bad_col = s->matrix->bad_col;
+    return status == BB_OUTSIDE ? ALPHA_OUTSIDE
+           : status == BB_PIVOT ? ALPHA_PIVOT : ALPHA_SINGULAR;
+}
+
+static int evaluate(alpha_solver *s, double t, const double *q, const double *v)
+{
+    s->G.count = 0;
+    if (s->evaluate(s->context, t, q, v, s->f, s->g, &s->G) != 0 || s->G.count > s->G.capacity)
+        return ALPHA_CALLBACK;
+    return ALPHA_CONVERGED;
+}
+
+/* exudyn's ComputeNewtonResidual: r = [M a - f + G^T lambda; g]; its L2 norm, before the
+   coordinate rows are scaled by `scale` */
+static int residual(alpha_solver *s, double t, double scale, double *norm)
+{
+    int status = evaluate(s, t, s->q, s->v);
+    if (status) return status;
+    double *r = s->residual;
+    for (int i = 0; i < s->nq; i++) r[i] = s->mass[i] * s->a[i] - s->f[i];
+    const alpha_triplets *G = &s->G;
+    for (int k = 0; k < G->count; k++) r[G->col[k]] += G->value[k] * s->lambda[G->row[k]];
+    for (int j = 0; j < s->nm; j++) r[s->nq + j] = s->g[j];
+    double sum = 0.0;
+    for (int i = 0; i < s->n; i++) sum += r[i] * r[i];
+    *norm = sqrt(sum);
+    for (int i = 0; i < s->nq; i++) r[i] *= scale;
+    return ALPHA_CONVERGED;
+}
+
+/* G and G^T into the matrix at the multipliers' rows and columns */
+static int add_constraints(alpha_solver *s)
+{
+    const alpha_triplets *G = &s->G;
+    for (int k = 0; k < G->count; k++) {
+        int status = bb_add(s->matrix, s->nq + G->row[k], G->col[k], G->value[k]);
+        if (!status) status = bb_add(s->matrix, G->col[k], s->nq + G->row[k], G->value[k]);
+        if (status) return from_matrix(s, status);
+    }
+    return ALPHA_CONVERGED;
+}
+
+/* exudyn's ComputeNewtonJacobian, factorized */
+static int newton_matrix(alpha_solver *s, double t, double h)
+{
+    double scale = s->beta * h * h;
+    double beta_prime = (1 - s->alpha_m) / (h * h * s->beta * (1 - s->alpha_f));
+    double gamma_prime = s->gamma / (h * s->beta);
+    s->K.count = s->D.count = 0;
+    if (s->jacobian(s->context, t, s->q, s->v, &s->K, &s->D) != 0
+        || s->K.count > s->K.capacity || s->D.count > s->D.capacity)
+        return ALPHA_CALLBACK;
+    bb_matrix *m = s->matrix;
+    bb_zero(m);
+    int status = BB_OK;
+    for (int i = 0; i < s->nq && !status; i++)
+        status = bb_add(m, i, i, s->mass[i] * (beta_prime * scale));
+    if (!status)
+        status = bb_add_many(m, s->K.count, s->K.row, s->K.col, s->K.value, scale);
+    if (!status)
+        status = bb_add_many(m, s->D.count, s->D.row, s->D.col, s->D.value, gamma_prime * scale);
+    if (status) return from_matrix(s, status);
+    if ((status = add_constraints(s))) return status;
+    if ((status = bb_factorize(m))) return from_matrix(s, status);
+    s->jacobians++;
+    s->total_jacobians++;
+    s->factorized_h = h;
+    return ALPHA_CONVERGED;
+}
+
+/* exudyn's ComputeNewtonUpdate(initial=true): the predictor from the step's start */
+static void predict(alpha_solver *s, double h)
+{
+    int nq = s->nq;
+    memcpy(s->q, s->q0, sizeof(double) * nq);
+    memcpy(s->v, s->v0, sizeof(double) * nq);
+    memcpy(s->a, s->a0, sizeof(double) * nq);
+    memcpy(s->a_alg, s->a_alg0, sizeof(double) * nq);
+    memset(s->lambda, 0, sizeof(double) * s->nm);
+    double am = s->alpha_m, af = s->alpha_f;
+    for (int i = 0; i < nq; i++) {
+        s->q[i] += h * s->v[i];
+        s->q[i] += h * h * (0.5 - s->beta) * s->a_alg[i];
+        s->v[i] += h * (1. - s->gamma) * s->a_alg[i];
+        s->a_alg[i] *= -am / (1 - am);
+        s->a_alg[i] += af / (1 - am) * s->a[i];
+        s->q[i] += h * h * s->beta * s->a_alg[i];
+        s->v[i] += h * s->gamma * s->a_alg[i];
+        s->a[i] = 0.0;
+    }
+}
+
+static void restore(alpha_solver *s)
+{
+    int nq = s->nq;
+    memcpy(s->q, s->q0, sizeof(double) * nq);
+    memcpy(s->v, s->v0, sizeof(double) * nq);
+    memcpy(s->a, s->a0, sizeof(double) * nq);
+    memcpy(s->a_alg, s->a_alg0, sizeof(double) * nq);
+    memcpy(s->lambda, s->lambda0, sizeof(double) * s->nm);
+}
+
+/* One step from the current state to t_new = t + h (the caller's time, as exudyn's
+   step index times h); on any status but ALPHA_CONVERGED the state is the step's start. */
+EXPORT int alpha_step(alpha_solver *s, double h, double t_new)
+{
+    int nq = s->nq, status;
+    memcpy(s->q0, s->q, sizeof(double) * nq);
+    memcpy(s->v0, s->v, sizeof(double) * nq);
+    memcpy(s->a0, s->a, sizeof(double) * nq);
+    memcpy(s->a_alg0, s->a_alg, sizeof(double) * nq);
+    memcpy(s->lambda0, s->lambda, sizeof(double) * s->nm);
+    s->iterations = s->jacobians = 0;
+    s->bad_row = s->bad_col = -1;
+    if (h != s->factorized_h) s->jacobian_update_requested = 1;
+
+    const alpha_settings *set = &s->set;
+    double scale = s->beta * h * h;
+    double beta_prime = (1 - s->alpha_m) / (h * h * s->beta * (1 - s->alpha_f));
+    double gamma_prime = s->gamma / (h * s->beta);
+    double initial, current, last, contractivity;
+
+    predict(s, h);
+    if ((status = residual(s, t_new, scale, &initial))) goto failed;
+    if (initial <= set->absolute_tolerance) initial = 2. * set->absolute_tolerance;
+    current = last = initial;
+    int converged = 0, stop = 0, restarted = 0, add_restart_step = 0;
+    int full = !set->use_modified_newton;
+
+    while (!converged && !stop && s->iterations < set->max_iterations) {
+        s->iterations++;
+        if (s->jacobian_update_requested || full) {
+            if ((status = newton_matrix(s, t_new, h))) goto failed;
+            s->jacobian_update_requested = 0;
+        }
+        bb_solve(s->matrix, s->residual, s->delta);
+        const double *dq = s->delta, *dl = s->delta + nq;
+        for (int i = 0; i < nq; i++) {
+            s->q[i] -= dq[i];
+            s->v[i] -= gamma_prime * dq[i];
+            s->a[i] -= beta_prime * dq[i];
+        }
+        for (int j = 0; j < s->nm; j++) s->lambda[j] -= dl[j] / scale;
+        if ((status = residual(s, t_new, scale, &current))) goto failed;
+
+        if (set->adapt_initial_residual && current > initial && s->iterations <= 1)
+            initial = last = current;
+        if (current / initial <= set->relative_tolerance || current <= set->absolute_tolerance)
+            converged = 1;
+
+        if (add_restart_step && converged) {
+            add_restart_step = 0;
+            converged = 0;
+        } else if (!converged) {
+            add_restart_step = 0;
+            double nu = 0.0, nv = 0.0, nl = 0.0;
+            for (int i = 0; i < nq; i++) { nu += s->q[i] * s->q[i]; nv += s->v[i] * s->v[i]; }
+            for (int j = 0; j < s->nm; j++) nl += s->lambda[j] * s->lambda[j];
+            int diverged = 0;
+            if (nu >= set->maximum_solution_norm || nv >= set->maximum_solution_norm
+                || isnan(nu) || isnan(nv) || isnan(nl)) {
+                if (full) stop = 1;
+                else diverged = 1;
+            }
+            if (!full && s->iterations > set->max_modified_newton_iterations)
+                s->jacobian_update_requested = 1;
+            int switch_to_full = 0;
+            if (!full && s->iterations > set->max_modified_newton_iterations
+                                         + set->max_modified_newton_restart_iterations) {
+                full = 1;
+                switch_to_full = 1;
+            }
+            contractivity = current / last;
+            last = current;
+            if (!full && set->use_modified_newton
+                && (diverged || switch_to_full
+                    || (contractivity > set->modified_newton_contractivity && s->iterations > 2))) {
+                s->jacobian_update_requested = 1;
+                if (restarted && !full) full = 1;
+                if (!stop && (diverged || contractivity > 2 || full)) {
+                    restarted = 1;
+                    current = last = initial;
+                    predict(s, h);
+                    double ignored;
+                    if ((status = residual(s, t_new, scale, &ignored))) goto failed;
+                    add_restart_step = 1;
+                }
+            }
+        }
+    }
+    s->residual_norm = current;
+    s->initial_residual = initial;
+    if (!converged || stop) { status = ALPHA_NOT_CONVERGED; goto failed; }
+    double factor = (1. - s->alpha_f) / (1. - s->alpha_m);
+    for (int i = 0; i < nq; i++) s->a_alg[i] += factor * s->a[i];
+    s->t = t_new;
+    return ALPHA_CONVERGED;
+
+failed:
+    restore(s);
+    s->jacobian_update_requested = 1;
+    return status;
+}
+
+/* The state at t, and exudyn's computeInitialAccelerations: [M G^T; G 0] [a; lambda] =
+   [f; -(G v)_q v], (G v)_q v by a forward difference along v (exudyn differentiates
+   coordinate by coordinate); without it a = 0. */
+EXPORT int alpha_initialize(alpha_solver *s, double t, const double *q, const double *v,
+                            int compute_initial_accelerations)
+{
+    int nq = s->nq, nm = s->nm, status;
+    s->t = t;
+    memcpy(s->q, q, sizeof(double) * nq);
+    memcpy(s->v, v, sizeof(double) * nq);
+    memset(s->a, 0, sizeof(double) * nq);
+    memset(s->lambda, 0, sizeof(double) * nm);
+    s->jacobian_update_requested = 1;
+    s->bad_row = s->bad_col = -1;
+    if (compute_initial_accelerations) {
+        double *r = s->residual, speed = 0.0, size = 0.01, e = 0.0;
+        for (int i = 0; i < nq; i++) {
+            speed = fmax(speed, fabs(v[i]));
+            size = fmax(size, fabs(q[i]));
+        }
+        memset(r, 0, sizeof(double) * s->n);
+        if (speed > 1e-10) {
+            /* -(G(q + e v) v - G(q) v) / e into the multipliers' rows */
+            e = 1e-7 * size / speed;
+            for (int i = 0; i < nq; i++) s->q0[i] = q[i] + e * v[i];
+            if ((status = evaluate(s, t, s->q0, v))) return status;
+            for (int k = 0; k < s->G.count; k++)
+                r[nq + s->G.row[k]] -= s->G.value[k] * v[s->G.col[k]] / e;
+        }
+        if ((status = evaluate(s, t, q, v))) return status;
+        if (e > 0.0)
+            for (int k = 0; k < s->G.count; k++)
+                r[nq + s->G.row[k]] += s->G.value[k] * v[s->G.col[k]] / e;
+        bb_zero(s->matrix);
+        for (int i = 0; i < nq; i++)
+            if ((status = bb_add(s->matrix, i, i, s->mass[i]))) return from_matrix(s, status);
+        if ((status = add_constraints(s))) return status;
+        if ((status = bb_factorize(s->matrix))) return from_matrix(s, status);
+        memcpy(r, s->f, sizeof(double) * nq);
+        bb_solve(s->matrix, r, s->delta);
+        memcpy(s->a, s->delta, sizeof(double) * nq);
+        memcpy(s->lambda, s->delta + nq, sizeof(double) * nm);
+    }
+    memcpy(s->a_alg, s->a, sizeof(double) * nq);
+    return ALPHA_CONVERGED;
+}
+
+EXPORT void alpha_state(const alpha_solver *s, double *q, double *v, double *a, double *lambda)
+{
+    memcpy(q, s->q, sizeof(double) * s->nq);
+    memcpy(v, s->v, sizeof(double) * s->nq);
+    memcpy(a, s->a, sizeof(double) * s->nq);
+    memcpy(lambda, s->lambda, sizeof(double) * s->nm);
+}
+
+/* the last step's iterations, Jacobians, all Jacobians, bad row and column; its residual
+   norm and initial residual */
+EXPORT void alpha_report(const alpha_solver *s, int *ints, double *reals)
+{
+    ints[0] = s->iterations; ints[1] = s->jacobians; ints[2] = s->total_jacobians;
+    ints[3] = s->bad_row; ints[4] = s->bad_col;
+    reals[0] = s->residual_norm; reals[1] = s->initial_residual;
+}

@@ -1,0 +1,248 @@
+/*
+ * The bordered band LU (bordered_band.h). In the caller's order the matrix is
+ *     [A B]   A: nb x nb, band of half bandwidth w (no pivoting: mass plus stiffness)
+ *     [C E]   B, C, E dense (the border: multipliers, bodies coupled to many)
+ * factorized as A = L U (in place in the band), Y = A^-1 B (in place of B), and the
+ * Schur complement S = E - C Y by LU with partial pivoting (in place of E). A solve:
+ * y = A^-1 r1; x2 = S^-1 (r2 - C y); x1 = y - Y x2.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bordered_band.h"
+
+#define BAND(m, i, j) ((m)->band[(size_t)(i) * (2 * (m)->w + 1) + (j) - (i) + (m)->w])
+
+EXPORT void bb_free(bb_matrix *m)
+{
+    if (!m) return;
+    free(m->order); free(m->position); free(m->band); free(m->upper); free(m->lower);
+    free(m->corner); free(m->pivot); free(m->scale); free(m->work);
+    free(m);
+}
+
+EXPORT bb_matrix *bb_create(int n, const int *order, int nb, int w)
+{
+    if (n < 1 || nb < 0 || nb > n || w < 0) return NULL;
+    bb_matrix *m = calloc(1, sizeof *m);
+    if (!m) return NULL;
+    int nd = n - nb;
+    m->n = n; m->nb = nb; m->nd = nd; m->w = w;
+    m->pivot_tolerance = 1e-12;
+    m->order = malloc(sizeof(int) * n);
+    m->position = malloc(sizeof(int) * n);
+    m->band = malloc(sizeof(double) * ((size_t)nb * (2 * w + 1) + 1));
+    m->upper = malloc(sizeof(double) * ((size_t)nb * nd + 1));
+    m->lower = malloc(sizeof(double) * ((size_t)nb * nd + 1));
+    m->corner = malloc(sizeof(double) * ((size_t)nd * nd + 1));
+    m->pivot = malloc(sizeof(int) * (nd + 1));
+    m->scale = malloc(sizeof(double) * (nb + 1));
+    m->work = malloc(sizeof(double) * n);
+    if (!m->order || !m->position || !m->band || !m->upper || !m->lower || !m->corner
+        || !m->pivot || !m->scale || !m->work) {
+        bb_free(m);
+        return NULL;
+    }
+    for (int i = 0; i < n; i++) m->position[i] = -1;
+    for (int p = 0; p < n; p++) {
+        int u = order[p];
+        if (u < 0 || u >= n || m->position[u] >= 0) {  /* not a permutation */
+            bb_free(m);
+            return NULL;
+        }
+        m->order[p] = u;
+        m->position[u] = p;
+    }
+    bb_zero(m);
+    return m;
+}
+
+EXPORT void bb_zero(bb_matrix *m)
+{
+    memset(m->band, 0, sizeof(double) * (size_t)m->nb * (2 * m->w + 1));
+    memset(m->upper, 0, sizeof(double) * (size_t)m->nb * m->nd);
+    memset(m->lower, 0, sizeof(double) * (size_t)m->nb * m->nd);
+    memset(m->corner, 0, sizeof(double) * (size_t)m->nd * m->nd);
+}
+
+/* Add `value` at (row, col), both unknowns; BB_OUTSIDE where the pattern has no place. */
+EXPORT int bb_add(bb_matrix *m, int row, int col, double value)
+{
+    if (row < 0 || row >= m->n || col < 0 || col >= m->n) {
+        m->bad_row = row; m->bad_col = col;
+        return BB_OUTSIDE;
+    }
+    int i = m->position[row], j = m->position[col], nb = m->nb, nd = m->nd;
+    if (i < nb && j < nb) {
+        if (abs(i - j) > m->w) {
+            m->bad_row = row; m->bad_col = col;
+            return BB_OUTSIDE;
+        }
+        BAND(m, i, j) += value;
+    } else if (i < nb) {
+        m->upper[(size_t)i * nd + (j - nb)] += value;
+    } else if (j < nb) {
+        m->lower[(size_t)(i - nb) * nb + j] += value;
+    } else {
+        m->corner[(size_t)(i - nb) * nd + (j - nb)] += value;
+    }
+    return BB_OK;
+}
+
+EXPORT int bb_add_many(bb_matrix *m, int count, const int *row, const int *col,
+                       const double *value, double factor)
+{
+    for (int k = 0; k < count; k++) {
+        int status = bb_add(m, row[k], col[k], factor * value[k]);
+        if (status != BB_OK) return status;
+    }
+    return BB_OK;
+}
+
+/* y <- A^-1 y for `columns` right-hand sides, row i's at y + i * stride. */
+static void band_solve(const bb_matrix *m, double *y, int columns, int stride)
+{
+    int nb = m->nb, w = m->w;
+    for (int i = 0; i < nb; i++) {
+        double *yi = y + (size_t)i * stride;
+        int k0 = i - w > 0 ? i - w : 0;
+        for (int k = k0; k < i; k++) {
+            double l = BAND(m, i, k);
+            if (l == 0.0) continue;
+            const double *yk = y + (size_t)k * stride;
+            for (int c = 0; c < columns; c++) yi[c] -= l * yk[c];
+        }
+    }
+    for (int i = nb - 1; i >= 0; i--) {
+        double *yi = y + (size_t)i * stride;
+        int j1 = i + w < nb - 1 ? i + w : nb - 1;
+        for (int j = i + 1; j <= j1; j++) {
+            double u = BAND(m, i, j);
+            if (u == 0.0) continue;
+            const double *yj = y + (size_t)j * stride;
+            for (int c = 0; c < columns; c++) yi[c] -= u * yj[c];
+        }
+        double d = BAND(m, i, i);
+        for (int c = 0; c < columns; c++) yi[c] /= d;
+    }
+}
+
+EXPORT int bb_factorize(bb_matrix *m)
+{
+    int nb = m->nb, nd = m->nd, w = m->w;
+    /* the band: each row's scale first, then Doolittle without pivoting */
+    for (int i = 0; i < nb; i++) {
+        double s = 0.0;
+        for (int j = (i - w > 0 ? i - w : 0); j <= (i + w < nb - 1 ? i + w : nb - 1); j++) {
+            double a = fabs(BAND(m, i, j));
+            if (a > s) s = a;
+        }
+        m->scale[i] = s;
+    }
+    for (int k = 0; k < nb; k++) {
+        double p = BAND(m, k, k);
+        if (!(p > m->pivot_tolerance * m->scale[k])) {   /* also catches NaN */
+            m->bad_row = m->bad_col = m->order[k];
+            return BB_PIVOT;
+        }
+        int i1 = k + w < nb - 1 ? k + w : nb - 1;
+        for (int i = k + 1; i <= i1; i++) {
+            double l = BAND(m, i, k);
+            if (l == 0.0) continue;
+            l /= p;
+            BAND(m, i, k) = l;
+            for (int j = k + 1; j <= i1; j++) BAND(m, i, j) -= l * BAND(m, k, j);
+        }
+    }
+    if (nd == 0) return BB_OK;
+    /* Y = A^-1 B for the border's columns up to the last that touches the band (the
+       multipliers, last in the order, touch only the border: their columns of Y are
+       zero); S = E - C Y, skipping C's zeros (a border row touches few band rows) */
+    int coupled = 0;
+    for (int i = 0; i < nb; i++)
+        for (int k = nd - 1; k >= coupled; k--)
+            if (m->upper[(size_t)i * nd + k] != 0.0) { coupled = k + 1; break; }
+    m->coupled = coupled;
+    band_solve(m, m->upper, coupled, nd);
+    for (int r = 0; r < nd; r++) {
+        double *s = m->corner + (size_t)r * nd;
+        const double *c = m->lower + (size_t)r * nb;
+        for (int j = 0; j < nb; j++) {
+            if (c[j] == 0.0) continue;
+            const double *y = m->upper + (size_t)j * nd;
+            for (int k = 0; k < coupled; k++) s[k] -= c[j] * y[k];
+        }
+    }
+    /* S = P L U, partial pivoting */
+    double *S = m->corner;
+    for (int k = 0; k < nd; k++) {
+        int p = k;
+        double big = fabs(S[(size_t)k * nd + k]);
+        for (int i = k + 1; i < nd; i++) {
+            double a = fabs(S[(size_t)i * nd + k]);
+            if (a > big) { big = a; p = i; }
+        }
+        m->pivot[k] = p;
+        if (!(big > 0.0) || !isfinite(big)) {
+            m->bad_row = m->bad_col = m->order[nb + k];
+            return BB_SINGULAR;
+        }
+        if (p != k) {
+            for (int j = 0; j < nd; j++) {
+                double t = S[(size_t)k * nd + j];
+                S[(size_t)k * nd + j] = S[(size_t)p * nd + j];
+                S[(size_t)p * nd + j] = t;
+            }
+        }
+        double d = S[(size_t)k * nd + k];
+        for (int i = k + 1; i < nd; i++) {
+            double l = S[(size_t)i * nd + k] / d;
+            S[(size_t)i * nd + k] = l;
+            if (l == 0.0) continue;
+            for (int j = k + 1; j < nd; j++) S[(size_t)i * nd + j] -= l * S[(size_t)k * nd + j];
+        }
+    }
+    return BB_OK;
+}
+
+/* x = M^-1 rhs, both indexed by unknowns (x may be rhs). */
+EXPORT void bb_solve(bb_matrix *m, const double *rhs, double *x)
+{
+    int nb = m->nb, nd = m->nd;
+    double *y = m->work, *z = m->work + nb;
+    for (int p = 0; p < m->n; p++) y[p] = rhs[m->order[p]];
+    band_solve(m, y, 1, 1);
+    if (nd > 0) {
+        for (int r = 0; r < nd; r++) {
+            const double *c = m->lower + (size_t)r * nb;
+            double s = z[r];
+            for (int j = 0; j < nb; j++) s -= c[j] * y[j];
+            z[r] = s;
+        }
+        const double *S = m->corner;
+        for (int k = 0; k < nd; k++)  /* the row swaps first: L's rows carry all of them */
+            if (m->pivot[k] != k) { double t = z[k]; z[k] = z[m->pivot[k]]; z[m->pivot[k]] = t; }
+        for (int k = 0; k < nd; k++)
+            for (int i = k + 1; i < nd; i++) z[i] -= S[(size_t)i * nd + k] * z[k];
+        for (int i = nd - 1; i >= 0; i--) {
+            double s = z[i];
+            for (int j = i + 1; j < nd; j++) s -= S[(size_t)i * nd + j] * z[j];
+            z[i] = s / S[(size_t)i * nd + i];
+        }
+        for (int i = 0; i < nb; i++) {
+            const double *u = m->upper + (size_t)i * nd;
+            double s = y[i];
+            for (int k = 0; k < m->coupled; k++) s -= u[k] * z[k];
+            y[i] = s;
+        }
+    }
+    for (int p = 0; p < m->n; p++) x[m->order[p]] = y[p];
+}
+
+/* the unknowns (row, col) the last error named */
+EXPORT void bb_bad(const bb_matrix *m, int *rows)
+{
+    rows[0] = m->bad_row;
+    rows[1] = m->bad_col;
+}
