@@ -79,9 +79,10 @@ def main(argv=None):
         rounds["exudyn forces"].append(_timed(exudyn_forces, max(args.repeat // 20, 10)))
         rounds["C Jacobian"].append(_timed(jacobian, args.repeat // 4))
         rounds["exudyn Jacobian"].append(_timed(exudyn_jacobian, max(args.repeat // 40, 10)))
+    count = len(system.jacobian(state.t, q, v, 1.0, 1e-3))
     print(f"load average {os.getloadavg()[0]:.2f}; {system.n} coordinates, {system.m} "
-          f"constraint equations, {lib.vsystem_jacobian(handle, t, at[0], at[1], one, step, at[4], capacity, at[5])} "
-          f"triplets; CPU microseconds per call, median (min to max) of {args.rounds} rounds:")
+          f"constraint equations, {count} triplets; CPU microseconds per call, median (min "
+          f"to max) of {args.rounds} rounds:")
     for name, values in rounds.items():
         print(f"  {name:16s} {np.median(values):9.1f} ({min(values):.1f} to {max(values):.1f})")
 
