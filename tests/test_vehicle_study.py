@@ -72,3 +72,50 @@ def test_the_study_lets_newton_iterate_longer_than_exudyns_default(study):
     settings = study.newton_limit(100)()
     assert settings.timeIntegration.newton.maxIterations == 100
     assert study.model.run_settings().timeIntegration.newton.maxIterations == 25
+
+
+class Check:
+    """A stand-in for the vehicle's step check: refuses what `jumps` names."""
+
+    def __init__(self, jumps=()):
+        self.jumps = jumps
+
+    def __call__(self, mbs, t):
+        return "jumped" if round(t * 1e6) in self.jumps else None
+
+
+def test_same_steps_refuses_a_solution_at_a_time_the_followed_run_did_not_reach(study):
+    # the followed run halved the step from 30 ms: 30.5 ms then on by 1 ms
+    followed = np.array([0.0, 0.029, 0.030, 0.0305, 0.0315])
+    check = study.same_steps(followed, Check)()
+    assert check(None, 0.029) is None
+    assert check(None, 0.0305) is None
+    assert "31.0000 ms" in check(None, 0.031)
+    # the step check's own refusal stands where the followed run went on
+    assert study.same_steps(followed, Check)(jumps={29000})(None, 0.029) == "jumped"
+
+
+def test_the_same_steps_flag_reaches_the_converged_run_only(study, monkeypatch):
+    """--same-steps: the converged run is solved with the check that follows the default
+    run's times, the default run with the vehicle's own; the check is put back after."""
+    own = study.step_check.StepCheck
+    monkeypatch.setattr(study.model, "run_settings", study.model.run_settings)
+    monkeypatch.setattr(study.model, "static_points", lambda: None)
+    checks = {}
+    times = np.arange(0, 0.0505, 1e-3)
+
+    def run(args, step, scheme, statics):
+        checks[scheme] = study.step_check.StepCheck
+        checks["course"] = args.course
+        made = history(times, oscillation)
+        made.update({key: made["tyre_force"] for key in study.LOADS.values()})
+        return {**made, "cpu": 1.0, "unconverged": 0, "steps": 50,
+                "newton_per_pass": 3.0, "passes_per_step": 2.0}
+
+    monkeypatch.setattr(study, "run", run)
+    study.main(["--same-steps", "--course", "sine"])
+    assert checks["corrected"] is own and checks["course"] == "sine"
+    assert checks["converged"] is not own and issubclass(checks["converged"], own)
+    assert study.step_check.StepCheck is own
+    study.main(["--course", "random"])
+    assert checks["converged"] is own and checks["course"] == "random"
