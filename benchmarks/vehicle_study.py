@@ -23,8 +23,8 @@ the range, as much as the coupling's own error. So the study lets exudyn's Newto
 up to --newton-iterations iterations (exudyn's default is 25), and says where two runs'
 steps part if they still do. Where the default run's Newton cycles and exudyn halves a
 step no iteration limit avoids, --same-steps has `converged` take the default run's
-steps (it refuses a solution at a time that run did not reach, and exudyn solves the step
-again at half its length), so that the comparison goes on like for like past it. All
+steps (it refuses a solution whose step passes over a time that run reached, and exudyn
+solves the step again at half its length), so that the comparison goes on like for like past it. All
 runs start from the same stored static point (one settling first, excluded from the
 costs). CPU figures are this machine's, in one run, under whatever load it carries:
 compare them within a table only.
@@ -70,18 +70,29 @@ def nanoseconds(times):
     return np.round(np.asarray(times) * 1e9).astype(np.int64)
 
 
+def step_start(mbs):
+    """The time of the start of the step exudyn solves."""
+    import exudyn as exu
+    return mbs.systemData.GetTime(exu.ConfigurationType.StartOfStep)
+
+
 def same_steps(times, check=None):
     """The vehicle's step check (step_check.StepCheck, or `check`) that also refuses a
-    solution at a time the run of `times` did not reach: exudyn solves that step again at
-    half its length, as it did where its Newton failed in that run, so that the run
-    takes the other's steps (a refused step is solved again from its start)."""
-    reached = set(nanoseconds(times).tolist())
+    solution whose step passes over a time the run of `times` reached: exudyn solves
+    that step again at half its length, as it did where its Newton failed in that run,
+    so that the run takes the other's steps (a refused step is solved again from its
+    start)."""
+    reached = np.unique(nanoseconds(times))
 
     class SameSteps(check or step_check.StepCheck):
         def __call__(self, mbs, t):
             jumped = super().__call__(mbs, t)
-            if jumped is None and int(nanoseconds(t)) not in reached:
-                return f"t = {t * 1e3:.4f} ms, a time the run it follows did not reach"
+            start, end = int(nanoseconds(step_start(mbs))), int(nanoseconds(t))
+            passed = reached[np.searchsorted(reached, start, "right"):
+                             np.searchsorted(reached, end, "left")]
+            if jumped is None and len(passed):
+                return (f"the step to {t * 1e3:.4f} ms passes over {passed[0] * 1e-6:.4f} ms, "
+                        f"a time the run it follows reached")
             return jumped
     return SameSteps
 
@@ -178,8 +189,9 @@ def main(argv=None):
                              f"{NEWTON_ITERATIONS}: no step halved; exudyn's own, 25, halves "
                              f"some)")
     parser.add_argument("--same-steps", action="store_true",
-                        help="converged takes the default run's steps (a solution at a time "
-                             "that run did not reach is refused and its step halved)")
+                        help="converged takes the default run's steps (a solution whose step "
+                             "passes over a time that run reached is refused, the step "
+                             "halved)")
     bank_path.add_argument(parser)
     args = parser.parse_args(argv)
     if args.newton_iterations < 1:

@@ -84,15 +84,30 @@ class Check:
         return "jumped" if round(t * 1e6) in self.jumps else None
 
 
-def test_same_steps_refuses_a_solution_at_a_time_the_followed_run_did_not_reach(study):
-    # the followed run halved the step from 30 ms: 30.5 ms then on by 1 ms
-    followed = np.array([0.0, 0.029, 0.030, 0.0305, 0.0315])
+class Host:
+    """A stand-in for exudyn's system: the step being solved starts at `start`."""
+
+    def __init__(self, start):
+        self.systemData = self
+        self.start = start
+
+    def GetTime(self, configuration):
+        return self.start
+
+
+def test_same_steps_refuses_a_step_over_a_time_the_followed_run_reached(study):
+    # the followed run halved its steps from 30 to 32 ms
+    followed = np.array([0.0, 0.029, 0.030, 0.0305, 0.031, 0.0315, 0.032, 0.033])
     check = study.same_steps(followed, Check)()
-    assert check(None, 0.029) is None
-    assert check(None, 0.0305) is None
-    assert "31.0000 ms" in check(None, 0.031)
+    assert check(Host(0.028), 0.029) is None
+    assert check(Host(0.030), 0.0305) is None
+    assert check(Host(0.032), 0.033) is None
+    assert "passes over 30.5000 ms" in check(Host(0.030), 0.031)
+    assert "passes over 31.0000 ms" in check(Host(0.0305), 0.032)
+    # a shorter step than the followed run's goes (the steps part; the study says where)
+    assert check(Host(0.032), 0.0325) is None
     # the step check's own refusal stands where the followed run went on
-    assert study.same_steps(followed, Check)(jumps={29000})(None, 0.029) == "jumped"
+    assert study.same_steps(followed, Check)(jumps={29000})(Host(0.028), 0.029) == "jumped"
 
 
 def test_the_same_steps_flag_reaches_the_converged_run_only(study, monkeypatch):
