@@ -21,10 +21,11 @@ difference: two `converged` runs differing only in their tolerance (1e-9 and 1e-
 at 5 m/s, 1 ms) halved different steps from 31.75 ms on and then differed by 1.9 % of
 the range, as much as the coupling's own error. So the study lets exudyn's Newton take
 up to --newton-iterations iterations (exudyn's default is 25), and says where two runs'
-steps part if they still do. Where the default run's Newton cycles and exudyn halves a
-step no iteration limit avoids, --same-steps has `converged` take the default run's
-steps (it refuses a solution whose step passes over a time that run reached, and exudyn
-solves the step again at half its length), so that the comparison goes on like for like past it. All
+steps part if they still do. Where the default run's Newton fails even so and exudyn
+halves steps `converged` does not (5 m/s, from 284 ms: docs/vehicle.md, Past 0.2 s and
+on the courses), --same-steps has `converged` take the default run's steps (it refuses
+a solution whose step passes over a time that run reached, and exudyn solves the step
+again at half its length), so that the comparison goes on like for like past them. All
 runs start from the same stored static point (one settling first, excluded from the
 costs). CPU figures are this machine's, in one run, under whatever load it carries:
 compare them within a table only.
