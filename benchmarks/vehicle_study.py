@@ -26,9 +26,14 @@ difference: two `converged` runs differing only in their tolerance (1e-9 and 1e-
 at 5 m/s, 1 ms) halved different steps from 31.75 ms on and then differed by 1.9 % of
 the range, as much as the coupling's own error. So the study lets exudyn's Newton take
 up to --newton-iterations iterations (exudyn's default is 25), and says where two runs'
-steps part if they still do. All runs start from the same stored static point (one
-settling first, excluded from the costs). CPU figures are this machine's, in one run,
-under whatever load it carries: compare them within a table only.
+steps part if they still do. Where the default run's Newton fails even so and exudyn
+halves steps `converged` does not (5 m/s, from 284 ms: docs/vehicle.md, Past 0.2 s and
+on the courses), --same-steps has `converged` take the default run's steps (it refuses
+a solution whose step passes over a time that run reached, and exudyn solves the step
+again at half its length), so that the comparison goes on like for like past them. All
+runs start from the same stored static point (one settling first, excluded from the
+costs). CPU figures are this machine's, in one run, under whatever load it carries:
+compare them within a table only.
 """
 
 import argparse
@@ -48,13 +53,14 @@ from fmu_components.coupling.schemes import Converged  # noqa: E402
 import bank_path  # noqa: E402
 from tracked_vehicle import (add_solver_arguments, check_solver_arguments,  # noqa: E402
                              simulate)
-from vehicle import model  # noqa: E402
+from vehicle import model, step_check  # noqa: E402
 
 KEY = "hull_vertical_acceleration"
 # each kind's loads, compared instance by instance (docs/vehicle.md, Outputs)
 LOADS = {"tyre force": "tyre_force", "damper torque": "damper_torque",
          "radial bush force": "bush_radial_force", "torsion bush torque": "bush_torque"}
 NEWTON_ITERATIONS = 100
+SAME_STEPS = "; converged on the default run's steps"
 
 
 def newton_limit(iterations):
@@ -67,6 +73,37 @@ def newton_limit(iterations):
         chosen.timeIntegration.newton.maxIterations = iterations
         return chosen
     return run_settings
+
+
+def nanoseconds(times):
+    return np.round(np.asarray(times) * 1e9).astype(np.int64)
+
+
+def step_start(mbs):
+    """The time of the start of the step exudyn solves."""
+    import exudyn as exu
+    return mbs.systemData.GetTime(exu.ConfigurationType.StartOfStep)
+
+
+def same_steps(times, check=None):
+    """The vehicle's step check (step_check.StepCheck, or `check`) that also refuses a
+    solution whose step passes over a time the run of `times` reached: exudyn solves
+    that step again at half its length, as it did where its Newton failed in that run,
+    so that the run takes the other's steps (a refused step is solved again from its
+    start)."""
+    reached = np.unique(nanoseconds(times))
+
+    class SameSteps(check or step_check.StepCheck):
+        def __call__(self, mbs, t):
+            jumped = super().__call__(mbs, t)
+            start, end = int(nanoseconds(step_start(mbs))), int(nanoseconds(t))
+            passed = reached[np.searchsorted(reached, start, "right"):
+                             np.searchsorted(reached, end, "left")]
+            if jumped is None and len(passed):
+                return (f"the step to {t * 1e3:.4f} ms passes over {passed[0] * 1e-6:.4f} ms, "
+                        f"a time the run it follows reached")
+            return jumped
+    return SameSteps
 
 
 @contextlib.contextmanager
@@ -98,18 +135,30 @@ def run(args, step, scheme, statics, tolerance=None):
         print(f"  {what} at {step * 1e3:g} ms stopped: {error}", flush=True)
         return None
     solver = vehicle.solver_statistics()
+    refused = f", {solver['refused']} solves refused" if solver["refused"] else ""
     print(f"  {what} at {step * 1e3:g} ms: {run_cpu:.1f} s CPU "
           f"({time.process_time() - cpu:.1f} with the set-up), {solver['steps']} steps "
-          f"for {solver['host_steps']}", flush=True)
+          f"for {solver['host_steps']}{refused}", flush=True)
     return {"time": result["time"], **{key: result[key] for key in (KEY, *LOADS.values())},
             "cpu": run_cpu / (result["time"][-1] - result["time"][0]),
             "unconverged": vehicle.coupling.unconverged_steps, **solver}
 
 
+def converged_run(args, step, statics, default):
+    """`converged` at the step; with --same-steps on the default run's steps."""
+    if not args.same_steps or default is None:
+        return run(args, step, "converged", statics)
+    check = step_check.StepCheck
+    step_check.StepCheck = same_steps(default["time"])
+    try:
+        return run(args, step, "converged", statics)
+    finally:
+        step_check.StepCheck = check
+
+
 def common_times(run, reference):
     """Indices into run and reference of the times both reached (to the nanosecond)."""
-    mine, theirs = (np.round(np.asarray(r["time"]) * 1e9).astype(np.int64)
-                    for r in (run, reference))
+    mine, theirs = (nanoseconds(r["time"]) for r in (run, reference))
     _, i, j = np.intersect1d(mine, theirs, return_indices=True)
     return i, j
 
@@ -130,8 +179,7 @@ def difference(run, reference, key=KEY):
 
 def parting(run, reference):
     """The first time one run reached that the other did not (None: the same steps)."""
-    mine, theirs = (set(np.round(np.asarray(r["time"]) * 1e9).astype(np.int64))
-                    for r in (run, reference))
+    mine, theirs = (set(nanoseconds(r["time"]).tolist()) for r in (run, reference))
     apart = sorted(mine ^ theirs)
     return apart[0] * 1e-9 if apart else None
 
@@ -172,6 +220,10 @@ def parse(argv=None):
                              f"(its own: {Converged.tolerance:g}), e.g. 1e-6: how far so small "
                              f"a change moves the run")
     add_solver_arguments(parser)
+    parser.add_argument("--same-steps", action="store_true",
+                        help="converged takes the default run's steps (a solution whose step "
+                             "passes over a time that run reached is refused, the step "
+                             "halved)")
     bank_path.add_argument(parser)
     args = parser.parse_args(argv)
     check_solver_arguments(parser, args)
@@ -200,13 +252,15 @@ def main(argv=None):
     runs = {}
     for step in sorted(args.steps, reverse=True):
         h = step * 1e-3
-        runs[step] = (run(args, h, args.scheme, statics), run(args, h, "converged", statics))
+        default = run(args, h, args.scheme, statics)
+        runs[step] = (default, converged_run(args, h, statics, default))
         if args.spread is not None:
             runs[step] += (run(args, h, "converged", statics, args.spread),)
     finest = runs[min(runs)][1] or {"time": [], KEY: []}
     print(f"\n{args.course} at {args.speed:g} m/s, {args.end_time:g} s, the coupling's "
           f"{args.path} path, exudyn's Newton up to {args.newton_iterations} iterations to "
-          f"{args.newton_tolerance:g}, spectral radius {args.spectral_radius:g}; errors in % "
+          f"{args.newton_tolerance:g}, spectral radius {args.spectral_radius:g}"
+          f"{SAME_STEPS if args.same_steps else ''}; errors in % "
           f"of range at the times both runs reached\n")
     print(f"| step (ms) | {args.scheme} against converged: hull vertical acceleration | "
           + " | ".join(LOADS) + f" | steps part at | converged's unconverged steps | "

@@ -116,3 +116,65 @@ def test_the_spread_column_compares_the_third_run_with_converged(study):
     assert study.spread((None, reference, moved), study.KEY) == "0.3"
     assert study.spread((None, reference), study.KEY) == "-"
     assert study.spread((None, None, moved), study.KEY) == "-"
+
+
+class Check:
+    """A stand-in for the vehicle's step check: refuses what `jumps` names."""
+
+    def __init__(self, jumps=()):
+        self.jumps = jumps
+
+    def __call__(self, mbs, t):
+        return "jumped" if round(t * 1e6) in self.jumps else None
+
+
+class Host:
+    """A stand-in for exudyn's system: the step being solved starts at `start`."""
+
+    def __init__(self, start):
+        self.systemData = self
+        self.start = start
+
+    def GetTime(self, configuration):
+        return self.start
+
+
+def test_same_steps_refuses_a_step_over_a_time_the_followed_run_reached(study):
+    # the followed run halved its steps from 30 to 32 ms
+    followed = np.array([0.0, 0.029, 0.030, 0.0305, 0.031, 0.0315, 0.032, 0.033])
+    check = study.same_steps(followed, Check)()
+    assert check(Host(0.028), 0.029) is None
+    assert check(Host(0.030), 0.0305) is None
+    assert check(Host(0.032), 0.033) is None
+    assert "passes over 30.5000 ms" in check(Host(0.030), 0.031)
+    assert "passes over 31.0000 ms" in check(Host(0.0305), 0.032)
+    # a shorter step than the followed run's goes (the steps part; the study says where)
+    assert check(Host(0.032), 0.0325) is None
+    # the step check's own refusal stands where the followed run went on
+    assert study.same_steps(followed, Check)(jumps={29000})(Host(0.028), 0.029) == "jumped"
+
+
+def test_the_same_steps_flag_reaches_the_converged_run_only(study, monkeypatch):
+    """--same-steps: the converged run is solved with the check that follows the default
+    run's times, the default run with the vehicle's own; the check is put back after."""
+    own = study.step_check.StepCheck
+    monkeypatch.setattr(study.model, "run_settings", study.model.run_settings)
+    monkeypatch.setattr(study.model, "static_points", lambda: None)
+    checks = {}
+    times = np.arange(0, 0.0505, 1e-3)
+
+    def run(args, step, scheme, statics):
+        checks[scheme] = study.step_check.StepCheck
+        checks["course"] = args.course
+        made = history(times, oscillation)
+        made.update({key: made["tyre_force"] for key in study.LOADS.values()})
+        return {**made, "cpu": 1.0, "unconverged": 0, "steps": 50,
+                "newton_per_pass": 3.0, "passes_per_step": 2.0}
+
+    monkeypatch.setattr(study, "run", run)
+    study.main(["--same-steps", "--course", "sine"])
+    assert checks["corrected"] is own and checks["course"] == "sine"
+    assert checks["converged"] is not own and issubclass(checks["converged"], own)
+    assert study.step_check.StepCheck is own
+    study.main(["--course", "random"])
+    assert checks["converged"] is own and checks["course"] == "random"
