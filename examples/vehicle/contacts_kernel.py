@@ -69,30 +69,36 @@ def library():
     cannot be built."""
     lib = LIBRARY.load("the vehicle's contacts use their numpy kernel")
     if lib is not None and lib.contacts_new.argtypes is None:
-        pointer, handle = ctypes.POINTER(ctypes.c_double), ctypes.c_void_p
-        lib.contacts_new.restype = handle
-        lib.contacts_new.argtypes = [ctypes.c_int, ctypes.c_int, pointer, pointer]
-        lib.contacts_free.argtypes = [handle]
-        lib.contacts_array.restype = pointer
-        lib.contacts_array.argtypes = [handle, ctypes.c_int, ctypes.POINTER(ctypes.c_int)]
-        lib.contacts_kinematics.argtypes = [handle]
-        lib.contacts_forces.argtypes = [handle, ctypes.c_int]
-        lib.contacts_jacobian.restype = ctypes.c_long
-        lib.contacts_jacobian.argtypes = [handle, ctypes.c_double, ctypes.c_double,
-                                          pointer, ctypes.c_long]
-        lib.contacts_set_course.argtypes = [handle, ctypes.c_int, pointer, ctypes.c_int,
-                                            pointer, pointer, pointer]
-        lib.contacts_course_heights.argtypes = [handle]
-        lib.contacts_set_tyre_laws.argtypes = [handle, handle, handle, ctypes.c_int,
-                                               ctypes.POINTER(ctypes.c_int)]
-        lib.contacts_evaluate.argtypes = [handle, ctypes.c_int]
-        counts = (ctypes.c_int(), ctypes.c_int())
-        lib.contacts_layout(*map(ctypes.byref, counts))
-        if (counts[0].value, counts[1].value) != (len(PARAMETERS), len(ARRAYS)):
-            raise RuntimeError("contacts.h and contacts_kernel.py disagree on the "
-                               "kernel's parameters or arrays: rebuild both from one "
-                               "revision")
+        declare(lib)
     return lib
+
+
+def declare(lib):
+    """The kernel's functions' argument types on `lib` (its own library, or another that
+    compiles the kernel in: system.py's); checks that contacts.h and this module agree."""
+    pointer, handle = ctypes.POINTER(ctypes.c_double), ctypes.c_void_p
+    lib.contacts_new.restype = handle
+    lib.contacts_new.argtypes = [ctypes.c_int, ctypes.c_int, pointer, pointer]
+    lib.contacts_free.argtypes = [handle]
+    lib.contacts_array.restype = pointer
+    lib.contacts_array.argtypes = [handle, ctypes.c_int, ctypes.POINTER(ctypes.c_int)]
+    lib.contacts_kinematics.argtypes = [handle]
+    lib.contacts_forces.argtypes = [handle, ctypes.c_int]
+    lib.contacts_jacobian.restype = ctypes.c_long
+    lib.contacts_jacobian.argtypes = [handle, ctypes.c_double, ctypes.c_double,
+                                      pointer, ctypes.c_long]
+    lib.contacts_set_course.argtypes = [handle, ctypes.c_int, pointer, ctypes.c_int,
+                                        pointer, pointer, pointer]
+    lib.contacts_course_heights.argtypes = [handle]
+    lib.contacts_set_tyre_laws.argtypes = [handle, handle, handle, ctypes.c_int,
+                                           ctypes.POINTER(ctypes.c_int)]
+    lib.contacts_evaluate.argtypes = [handle, ctypes.c_int]
+    counts = (ctypes.c_int(), ctypes.c_int())
+    lib.contacts_layout(*map(ctypes.byref, counts))
+    if (counts[0].value, counts[1].value) != (len(PARAMETERS), len(ARRAYS)):
+        raise RuntimeError("contacts.h and contacts_kernel.py disagree on the "
+                           "kernel's parameters or arrays: rebuild both from one "
+                           "revision")
 
 
 def as_vector(values):

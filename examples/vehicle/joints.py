@@ -142,17 +142,23 @@ def library():
     warning saying why and what to use: bank_build.Library.load)."""
     lib = LIBRARY.load()
     if lib is not None and lib.joints_forces.argtypes is None:
-        pointer, integer, real = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
-        lib.joints_kinematics.argtypes = [integer, real] + [pointer] * 6
-        lib.joints_forces.argtypes = [integer, real, real] + [pointer] * 5
-        lib.joints_jacobian.argtypes = [integer, real] + [pointer] * 5 + [real, real, pointer]
-        lib.joints_bind.argtypes = [integer, real, real, pointer, pointer, integer, pointer,
-                                    pointer, pointer]
-        lib.joints_bind.restype = pointer
-        lib.joints_unbind.argtypes = [pointer]
-        lib.joints_evaluate.argtypes = [pointer]
-        lib.joints_evaluate_jacobian.argtypes = [pointer, real, real, pointer]
+        declare(lib)
     return lib
+
+
+def declare(lib):
+    """joints.c's functions' argument types on `lib` (its own library, or another that
+    compiles joints.c in: system.py's)."""
+    pointer, integer, real = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
+    lib.joints_kinematics.argtypes = [integer, real] + [pointer] * 6
+    lib.joints_forces.argtypes = [integer, real, real] + [pointer] * 5
+    lib.joints_jacobian.argtypes = [integer, real] + [pointer] * 5 + [real, real, pointer]
+    lib.joints_bind.argtypes = [integer, real, real, pointer, pointer, integer, pointer,
+                                pointer, pointer]
+    lib.joints_bind.restype = pointer
+    lib.joints_unbind.argtypes = [pointer]
+    lib.joints_evaluate.argtypes = [pointer]
+    lib.joints_evaluate_jacobian.argtypes = [pointer, real, real, pointer]
 
 
 class CompiledJoints:

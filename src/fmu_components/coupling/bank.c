@@ -199,20 +199,32 @@ static double law_load(const double *law, int unilateral, double x) {
     return unilateral ? (load > 0.0 ? load : 0.0) : load;
 }
 
+/* A law's load at x and (where `slope` is not NULL) its slope: a central difference of the
+   load over 1e-9 of max(|x|, 1e-6) either side (the law's kinks and clamps included) */
+static void law_at(const double *law, int unilateral, double x, double *load, double *slope) {
+    *load = law_load(law, unilateral, x);
+    if (slope != NULL) {
+        double dx = 1e-9 * (fabs(x) > 1e-6 ? fabs(x) : 1e-6);
+        *slope = (law_load(law, unilateral, x + dx) - law_load(law, unilateral, x - dx))
+                 / (2.0 * dx);
+    }
+}
+
 /* The loads of the current laws at the host's deflections, and their slopes. */
 EXPORT void bank_law_loads(const Bank *bank, const double *deflection, double *loads,
                            double *slopes) {
-    for (int i = 0; i < bank->n; i++) {
-        const double *law = bank->laws + (size_t)i * LAW_COLUMNS;
-        int unilateral = bank->instances[i].flags & UNILATERAL;
-        double x = deflection[i];
-        loads[i] = law_load(law, unilateral, x);
-        if (slopes != NULL) {
-            double dx = 1e-9 * (fabs(x) > 1e-6 ? fabs(x) : 1e-6);
-            slopes[i] = (law_load(law, unilateral, x + dx) - law_load(law, unilateral, x - dx))
-                        / (2.0 * dx);
-        }
-    }
+    for (int i = 0; i < bank->n; i++)
+        law_at(bank->laws + (size_t)i * LAW_COLUMNS, bank->instances[i].flags & UNILATERAL,
+               deflection[i], loads + i, slopes != NULL ? slopes + i : NULL);
+}
+
+/* bank_law_loads over laws kept apart from their bank (bank.h's LawTable), the same
+   operations: a bank's laws of one moment evaluated after the bank is gone. */
+EXPORT void law_table_loads(const LawTable *table, const double *deflection, double *loads,
+                            double *slopes) {
+    for (int i = 0; i < table->n; i++)
+        law_at(table->laws + (size_t)i * LAW_COLUMNS, table->unilateral[i], deflection[i],
+               loads + i, slopes != NULL ? slopes + i : NULL);
 }
 
 static void set_kink(Bank *bank, int i, double kink, double beyond, double side);

@@ -131,6 +131,14 @@ typedef struct {
     int busy;
 } Bank;
 
+/* Laws (n rows of LAW_COLUMNS) and whether each is unilateral, apart from a bank: the laws
+   of one moment, evaluated as the bank evaluates its own (law_table_loads) */
+typedef struct {
+    int n;
+    const double *laws;
+    const int *unilateral;
+} LawTable;
+
 int fail(Bank *bank, int i, int call, int status, double time, double step);
 void set_law(Bank *bank, int i, double x, double load, double k, double q);
 int linearised_step(Bank *bank, int i, double deflection, double rate, double step,

@@ -84,6 +84,7 @@ def library():
         lib.bank_failure.argtypes = [pointer] * 7
         lib.bank_lagged_laws.argtypes = [pointer]
         lib.bank_law_loads.argtypes = [pointer] * 4
+        lib.law_table_loads.argtypes = [pointer] * 4
         lib.bank_bind_call.argtypes = [pointer, pointer]
         # the calls of every host step take the bank alone, as a c_void_p (no argtypes:
         # ctypes passes it as it is; converting arguments cost more than the calls' work)
@@ -119,6 +120,16 @@ def _verdict(mismatch, repeat=False):
 
 def _address(array):
     return array.ctypes.data_as(ctypes.c_void_p)
+
+
+def _law_loads(function, handle, n, deflection, slopes):
+    """(loads, slopes where asked) of n laws at `deflection` by bank.c's `function`."""
+    deflection = np.ascontiguousarray(deflection, dtype=float)
+    loads = np.empty(n)
+    slope = np.empty(n) if slopes else None
+    function(handle, _address(deflection), _address(loads),
+             _address(slope) if slopes else None)
+    return (loads, slope) if slopes else loads
 
 
 class Bank:
@@ -361,12 +372,7 @@ class Bank:
 
     def law_loads(self, deflection, slopes=False):
         """The current laws' loads at the host's deflections (and their slopes)."""
-        deflection = np.ascontiguousarray(deflection, dtype=float)
-        loads = np.empty(self.n)
-        slope = np.empty(self.n) if slopes else None
-        self._lib.bank_law_loads(self._handle, _address(deflection), _address(loads),
-                                 _address(slope) if slopes else None)
-        return (loads, slope) if slopes else loads
+        return _law_loads(self._lib.bank_law_loads, self._handle, self.n, deflection, slopes)
 
     def law_loads_entry(self):
         """(the address of bank.c's bank_law_loads, the bank's handle), for C code that
@@ -374,6 +380,11 @@ class Bank:
         loads, slopes), arrays of n (slopes may be NULL), as law_loads; valid while the
         bank lives."""
         return ctypes.cast(self._lib.bank_law_loads, ctypes.c_void_p).value, self._handle
+
+    def law_table(self):
+        """The present laws as a LawTable (copies): evaluated as now after the bank
+        has moved on or is gone."""
+        return LawTable(self.laws, self.unilateral)
 
     def _linearised(self, i, deflection, rate, step):
         component = self.components[i]
@@ -487,3 +498,31 @@ class Bank:
         if getattr(self, "_handle", None):
             self._lib.bank_free(self._handle)
             self._handle = None
+
+
+class _LawTable(ctypes.Structure):
+    """bank.h's LawTable."""
+    _fields_ = [("n", ctypes.c_int), ("laws", ctypes.c_void_p), ("unilateral", ctypes.c_void_p)]
+
+
+class LawTable:
+    """A bank's laws of one moment apart from the bank (`laws`: rows as Bank.laws;
+    `unilateral`: each law's), evaluated by bank.c as the bank evaluates its own
+    (law_table_loads: bank_law_loads's operations). law_loads and law_loads_entry as
+    Bank's, for C code that calls the laws (the vehicle's kernels)."""
+
+    def __init__(self, laws, unilateral):
+        self.laws = np.array(laws, dtype=float, order="C")
+        self.n = len(self.laws)
+        self.unilateral = np.array(unilateral, dtype=ctypes.c_int, order="C")
+        self._lib = library()
+        self._struct = _LawTable(self.n, self.laws.ctypes.data, self.unilateral.ctypes.data)
+        self._handle = ctypes.addressof(self._struct)
+
+    def law_loads(self, deflection, slopes=False):
+        """The laws' loads at `deflection` (and their slopes), as Bank.law_loads."""
+        return _law_loads(self._lib.law_table_loads, self._handle, self.n, deflection, slopes)
+
+    def law_loads_entry(self):
+        """(the address of bank.c's law_table_loads, the table's), valid while it lives."""
+        return ctypes.cast(self._lib.law_table_loads, ctypes.c_void_p).value, self._handle
