@@ -77,16 +77,18 @@ class CompiledPath:
         states = np.array([read() for _, read in self.v.coupling.entries], dtype=float)
         return states[:, 0], states[:, 1]
 
-    def deflections(self):
-        """Every instance's deflection from the system's coordinates, in one pass (the
-        Python path's readers, vectorised): a tyre's compression (contacts.py), a radial
-        bush's distance between its pin seats, a torsion bush's and a damper's relative
+    def deflections(self, q=None, qd=None, t=None):
+        """Every instance's deflection from the system's coordinates, or from (q, qd) at t
+        where they are given (a host of its own: own_host.py), in one pass (the Python
+        path's readers, vectorised): a tyre's compression (contacts.py), a radial bush's
+        distance between its pin seats, a torsion bush's and a damper's relative
         rotation."""
         v = self.v
-        data = v.mbs.systemData
-        q = np.asarray(data.GetODE2Coordinates())
+        if q is None:
+            data = v.mbs.systemData
+            q, t = np.asarray(data.GetODE2Coordinates()), data.GetTime()
         deflection = np.empty(self.bank.n)
-        v.contacts.evaluate(data.GetTime())
+        v.contacts.evaluate(t, q, qd)
         compression = np.where(v.contacts.in_contact, v.contacts.compression, -HORN_HEIGHT)
         deflection[self.tyre_rows] = compression[:, None]
         deflection[self.damper_rows] = q[self.hull_rotation] - q[self.arm_rotation]

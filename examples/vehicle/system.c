@@ -154,8 +154,12 @@ typedef struct {
     long count, capacity;
 } Triplets;
 
+/* An entry, where it is not zero: the kernels' blocks hold zeros beyond where their
+ * elements reach (a tyre's blend over the neighbours of the links beneath it), which a band
+ * need not hold (system.py's REACH) */
 static void put(Triplets *t, int row, int column, double value)
 {
+    if (value == 0.0) return;
     if (t->count < t->capacity) {
         double *entry = t->out + 3 * t->count;
         entry[0] = row;
@@ -166,8 +170,8 @@ static void put(Triplets *t, int row, int column, double value)
 }
 
 /* factor K + factor_t D (K = -df/dq, D = -df/dv) at (t, q, v) as (row, column, value)
- * rows into out while they fit `capacity` (repeated entries add); returns how many there
- * are. `scratch`: room for the joints' 108 links and the contacts' triplets (the same
+ * rows into out while they fit `capacity` (repeated entries add, zeros left out); returns
+ * how many there are. `scratch`: room for the joints' 108 links and the contacts' triplets (the same
  * capacity). */
 SYSTEM_EXPORT long vsystem_jacobian(VehicleSystem *s, double t, const double *q,
                                     const double *v, double factor, double factor_t,
@@ -204,9 +208,9 @@ SYSTEM_EXPORT long vsystem_jacobian(VehicleSystem *s, double t, const double *q,
     return result.count;
 }
 
-/* G = dg/dq (rows of g, columns of q) as 6 triplets a node per equation pair...: 12 per
- * joint into `out`; and where `lambda` is not NULL the multipliers' force's derivative
- * d(G^T lambda)/dq, one (angle, angle) entry per node, 2 per joint, into `hessian`. */
+/* G = dg/dq (rows of g, columns of q) as triplets, 12 per joint (6 a node) into `out`;
+ * where `lambda` is not NULL, the multipliers' force's derivative d(G^T lambda)/dq, one
+ * (angle, angle) entry per node, 2 per joint, into `hessian`. */
 SYSTEM_EXPORT void vsystem_constraint_jacobian(const VehicleSystem *s, const double *q,
                                                const double *lambda, double *out,
                                                double *hessian)

@@ -211,7 +211,8 @@ class VehicleSystem:
 
     def jacobian(self, t, q, v, factor=1.0, factor_t=0.0):
         """factor K + factor_t D (K = -df/dq, D = -df/dv) at (t, q, v) as (row, column,
-        value) rows, repeated entries adding (a view, overwritten by the next call)."""
+        value) rows, repeated entries adding, zeros left out (a view, overwritten by the
+        next call)."""
         q, v = np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(v, dtype=float)
         while True:
             out = self.triplets_out
@@ -236,6 +237,41 @@ class VehicleSystem:
         mass = np.zeros(self.n)
         self.lib.vsystem_mass(self.handle, _at(mass))
         return mass
+
+
+# The loop's reach: an element's nonzero entries couple a link with its neighbours in the
+# loop at most (a joint joins two; a tyre's blend weighs the two links of the joint nearest
+# the wheel, its windows fading over contacts.HANDOVER about each joint, less than half a
+# pitch, so a link's window depends on one neighbour's direction at a time; a pin's
+# contacts load its joint's two links). The contacts' kernel writes a pair's block over
+# the link's both neighbours, zero beyond that reach; system.c leaves zeros out.
+REACH = 1
+
+
+def ordering(system, border_link=0):
+    """The unknowns' order for a bordered-band LU: (order, half_bandwidth, border).
+    `order[p]` is the unknown at position p (0 to n - 1 the coordinates, n to n + m - 1 the
+    multipliers): first the band, the links in loop order from the one after `border_link`
+    round to the one before it, 3 coordinates each; then the border, its last `border`
+    positions: the hull, the arms, the crank, `border_link` (which breaks the loop) and
+    the multipliers. Within the band an entry (i, j) has |p_i - p_j| <= half_bandwidth."""
+    links = system.link_index.reshape(-1, 3)
+    count = len(links)
+    band = np.concatenate([links[(border_link + 1 + k) % count] for k in range(count - 1)])
+    rest = np.setdiff1d(np.arange(system.n), system.link_index)
+    order = np.concatenate([band, rest, links[border_link],
+                            system.n + np.arange(system.m)]).astype(int)
+    return order, 3 * REACH + 2, len(order) - len(band)
+
+
+def outside_band(order, half_bandwidth, border, rows, columns):
+    """The entries (rows[k], columns[k]) that fall neither in the band nor in the border
+    of `ordering`'s order: their indices (none where the order holds)."""
+    position = np.empty(len(order), dtype=int)
+    position[order] = np.arange(len(order))
+    p, q = position[np.asarray(rows, dtype=int)], position[np.asarray(columns, dtype=int)]
+    in_border = (p >= len(order) - border) | (q >= len(order) - border)
+    return np.flatnonzero(~in_border & (np.abs(p - q) > half_bandwidth))
 
 
 def dense(triplets, rows, columns=None):
