@@ -9,6 +9,8 @@ Installed after the settling to the static point, which runs on the relaxed comp
 Python functions (model.RelaxedTable).
 """
 
+from contextlib import contextmanager
+
 import numpy as np
 
 import bank_path
@@ -100,15 +102,23 @@ class CompiledPath:
         return deflection
 
 
-def solve_compiled(vehicle, end_time, step, settings, step_check=None):
-    """The run on the compiled path; returns exudyn_host.solve's host. The bank stands in
-    for the Python coupling afterwards (its counts: Vehicle.solver_statistics)."""
+@contextmanager
+def bank_in_use(vehicle):
+    """The compiled path's bank the vehicle's for a run (its laws the contacts', its loads
+    the records'), standing in for the Python coupling afterwards (its counts:
+    Vehicle.solver_statistics); yields the CompiledPath."""
     path = vehicle.compiled_path
     vehicle.bank = path.bank
     try:
-        return bank_path.solve(vehicle.mbs, path.bank, path.laws, path.deflections, end_time,
-                               step, settings=settings, initial=path.initial_state,
-                               step_check=step_check)
+        yield path
     finally:
         vehicle.bank = None
         vehicle.coupling = path.bank
+
+
+def solve_compiled(vehicle, end_time, step, settings, step_check=None):
+    """The run on the compiled path; returns exudyn_host.solve's host."""
+    with bank_in_use(vehicle) as path:
+        return bank_path.solve(vehicle.mbs, path.bank, path.laws, path.deflections, end_time,
+                               step, settings=settings, initial=path.initial_state,
+                               step_check=step_check)

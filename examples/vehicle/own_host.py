@@ -31,6 +31,7 @@ from fmu_components.coupling.exudyn_host import SHORTEST_STEP
 
 from . import alpha_solver as alpha
 from .alpha_solver import HERE
+from .compiled import bank_in_use
 from .model import VehicleError
 from .system import VehicleSystem, ordering
 
@@ -221,6 +222,10 @@ class OwnHost:
         self.shortest = SHORTEST_STEP * step
         steps = int(np.ceil((end_time - start_time) / step - 1e-9))
         end = start_time + steps * step
+        with bank_in_use(self.v):
+            return self._run(start_time, end, step, check)
+
+    def _run(self, start_time, end, step, check):
         data = self.v.mbs.systemData
         current = exu.ConfigurationType.Current
         q0 = np.array(data.GetODE2Coordinates(current))
@@ -230,7 +235,8 @@ class OwnHost:
             status = self.solver.initialize(start_time, q0, v0)
             if status:
                 raise VehicleError(f"the own solver's initial accelerations failed: "
-                               f"{alpha.STATUS[status]}")
+                                   f"{alpha.STATUS[status]}")
+            self._accept(start_time, None)  # the initial state's record, as exudyn's
             began = time.process_time()
             t, h, good = start_time, step, 0
             while end - t > 1e-9 * step:
