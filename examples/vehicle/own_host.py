@@ -100,15 +100,15 @@ class OwnSystem:
 def solver_for(vehicle, laws, relative_tolerance=1e-8):
     """(OwnSystem, AlphaSolver) for `vehicle` with the laws of `laws` (a bank or a
     LawTable), with the run's settings: the vehicle's spectral radius and Newton absolute
-    tolerance, full Newton. exudyn tests its absolute tolerance on the residual's norm per
-    unknown (sqrt(r r) / number of unknowns: its newton.absoluteTolerance), the core on the
-    norm itself: the tolerance times the unknowns."""
+    tolerance, full Newton. (exudyn's documentation of newton.absoluteTolerance divides the
+    residual's norm by the number of coordinates; its runs of the vehicle take the
+    core's iterations with the norm itself, to round-off: tests/test_vehicle_own.py.)"""
     system = VehicleSystem(vehicle, laws)
     own = OwnSystem(system)
     order, half_bandwidth, border = ordering(system)
     settings = alpha.Settings(spectral_radius=vehicle.spectral_radius,
                               relative_tolerance=relative_tolerance,
-                              absolute_tolerance=vehicle.newton_tolerance * len(order),
+                              absolute_tolerance=vehicle.newton_tolerance,
                               use_modified_newton=0)
     solver = alpha.AlphaSolver(own, system.mass_diagonal(), system.m, order,
                                len(order) - border, half_bandwidth, settings, CAPACITY)
