@@ -7,8 +7,11 @@ Jacobian, the rest the solver core's LU and updates; the bank's calls; the defle
 the records; the step check; the rest Python per step).
 
     python benchmarks/vehicle_own.py [--speeds 3 5] [--end-time 0.2] [--rounds 2]
+    python benchmarks/vehicle_own.py --agreement 0.1 0.001 [--speeds 3] [--end-time 0.02]
 
-Prints each run and the load (os.getloadavg) before and after.
+Prints each run and the load (os.getloadavg) before and after. --agreement: instead, at
+each Newton absolute tolerance given, the two runs' largest difference of the histories
+(outputs.largest_difference, in % of range) and their Newton iterations per solve.
 """
 
 import argparse
@@ -21,8 +24,24 @@ sys.path[:0] = [str(ROOT / "examples"), str(ROOT / "src")]
 
 from tracked_vehicle import DEFAULT_STEP, simulate  # noqa: E402
 from vehicle.model import static_points  # noqa: E402
+from vehicle.outputs import largest_difference  # noqa: E402
 
-PARTS = ("evaluate_s", "jacobian_s", "solve", "bank", "deflections", "record", "check")
+KEYS = ("hull_vertical_acceleration", "hull_pitch_acceleration",
+        "seat_vertical_acceleration", "hull_y", "tyre_force", "damper_torque",
+        "bush_radial_force", "bush_torque")
+
+
+def agreement(speeds, end_time, tolerances, statics):
+    for speed in speeds:
+        for tolerance in tolerances:
+            runs = {solver: simulate("bump", speed, end_time, DEFAULT_STEP, statics=statics,
+                                     newton_tolerance=tolerance, solver=solver)
+                    for solver in ("exudyn", "own")}
+            difference, key = largest_difference(runs["exudyn"][1], runs["own"][1], KEYS)
+            iterations = [runs[s][0].solver_statistics()["newton_per_pass"] for s in runs]
+            print(f"{speed:g} m/s, tolerance {tolerance:g}: largest difference "
+                  f"{difference:.3g} % of range ({key}); Newton iterations per solve "
+                  f"exudyn {iterations[0]:.3f}, own {iterations[1]:.3f}", flush=True)
 
 
 def split(statistics, cpu):
@@ -43,9 +62,14 @@ def main(argv=None):
     parser.add_argument("--speeds", type=float, nargs="+", default=[3.0, 5.0])
     parser.add_argument("--end-time", type=float, default=0.2)
     parser.add_argument("--rounds", type=int, default=2)
+    parser.add_argument("--agreement", type=float, nargs="+", metavar="TOLERANCE")
     args = parser.parse_args(argv)
     print(f"load before: {os.getloadavg()}")
     statics = static_points()
+    if args.agreement:
+        agreement(args.speeds, args.end_time, args.agreement, statics)
+        print(f"load after: {os.getloadavg()}")
+        return
     for speed in args.speeds:
         for round_ in range(args.rounds):
             for solver in ("exudyn", "own"):

@@ -38,19 +38,6 @@ def runs(native_fmus):
     return result
 
 
-def largest_difference(exudyn, own, keys=KEYS):
-    """The largest difference of `keys`' histories, each in % of its range in exudyn's run
-    (over its columns: all tyres, all bushes)."""
-    assert np.array_equal(exudyn["time"], own["time"])
-    worst = 0.0
-    for key in keys:
-        a, b = np.asarray(exudyn[key], dtype=float), np.asarray(own[key], dtype=float)
-        span = np.ptp(a)
-        assert span > 0  # something to compare
-        worst = max(worst, float(np.max(np.abs(a - b))) / span * 100)
-    return worst
-
-
 def test_the_own_solver_takes_exudyns_steps_and_iterations(runs):
     (_, exudyn), (histories, own) = runs["exudyn"], runs["own"]
     assert len(histories["time"]) == round(END / STEP) + 1
@@ -62,7 +49,9 @@ def test_the_own_solver_takes_exudyns_steps_and_iterations(runs):
 
 
 def test_the_own_solver_agrees_with_exudyn_below_newtons_tolerance(runs):
-    """Every history compared to 1e-5 % of its range (measured 1.2e-7 %: the hull's
-    accelerations; the own solver's Newton stopped at an absolute tolerance as many
-    times larger as there are unknowns differs by 0.017 %)."""
-    assert largest_difference(runs["exudyn"][0], runs["own"][0]) <= 1e-5
+    """Every history compared to 1e-5 % of its range (measured 1.2e-7 %, the hull's
+    accelerations: the same iterates, apart by the two LUs' round-off)."""
+    from vehicle.outputs import largest_difference
+
+    difference, _ = largest_difference(runs["exudyn"][0], runs["own"][0], KEYS)
+    assert 0.0 < difference <= 1e-5  # not the same run twice
