@@ -130,6 +130,7 @@ class OwnHost:
         self.refused = 0  # solutions the step check refused
         self.halved = 0  # steps whose Newton failed
         self.solves = self.newton = 0
+        self._written = None  # the time of the solution in exudyn's data, where it is there
         self.seconds = dict(solve=0.0, bank=0.0, deflections=0.0, record=0.0, check=0.0)
 
     # --- the state in exudyn's data (the outputs' and the step check's) -------------------
@@ -147,6 +148,7 @@ class OwnHost:
 
     def _solve(self, h, t_new, first, warm):
         began = time.process_time()
+        self._written = None
         self.own.set_step(h)
         status = (self.solver.step(h, t_new) if first
                   else self.solver.repeat(h, t_new, warm))
@@ -160,6 +162,7 @@ class OwnHost:
         if check is not None:
             began = time.process_time()
             self._put(exu.ConfigurationType.Current, t_new)
+            self._written = t_new
             jumped = check(self.v.mbs, t_new)
             self.seconds["check"] += time.process_time() - began
             if jumped is not None:
@@ -212,7 +215,8 @@ class OwnHost:
 
     def _accept(self, t, next_time):
         began = time.process_time()
-        self._put(exu.ConfigurationType.Current, t)
+        if self._written != t:  # else the step check's pass wrote it
+            self._put(exu.ConfigurationType.Current, t)
         self.bank.accept(t, next_time)  # records the step (Vehicle._record)
         self.seconds["record"] += time.process_time() - began
 
