@@ -13,7 +13,12 @@ instances of a kind, each in % of its own range), the error against the finest s
 converged run (the step study), CPU seconds per simulated second, exudyn's Newton
 iterations per solve and solves per host step, and the steps where `converged` stopped at
 its pass limit before its loads agreed (its own error there); then the hull error by
-time window (--window), where in the run it grows.
+time window (--window), where in the run it grows. With --spread TOL, a third run,
+`converged` stopping where its loads agree to TOL instead of 1e-9: how far the run moves
+for that small a change of the loads (the solution's own sensitivity, the scale below
+which the coupling's own error says little). exudyn's spectral radius and Newton
+tolerance are the vehicle's unless given (--spectral-radius, --newton-tolerance), the
+same in every run.
 
 Like for like: runs are compared at the times both reached, never interpolated. exudyn
 halves a step where its Newton fails, and where it does depends on the smallest
@@ -27,6 +32,7 @@ under whatever load it carries: compare them within a table only.
 """
 
 import argparse
+import contextlib
 import sys
 import time
 from pathlib import Path
@@ -37,9 +43,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "examples"), str(ROOT / "src")]
 
 from fmu_components.coupling import DEFAULT_SCHEME  # noqa: E402
+from fmu_components.coupling.schemes import Converged  # noqa: E402
 
 import bank_path  # noqa: E402
-from tracked_vehicle import simulate  # noqa: E402
+from tracked_vehicle import (add_solver_arguments, check_solver_arguments,  # noqa: E402
+                             simulate)
 from vehicle import model  # noqa: E402
 
 KEY = "hull_vertical_acceleration"
@@ -61,18 +69,36 @@ def newton_limit(iterations):
     return run_settings
 
 
-def run(args, step, scheme, statics):
-    """The run's histories and costs; None where the run stopped (its message printed)."""
-    cpu = time.process_time()
+@contextlib.contextmanager
+def converged_tolerance(tolerance):
+    """Runs within stop `converged` where its loads agree to `tolerance` (None: its own).
+    The compiled path makes its scheme from the name (bank.py), so the scheme's default
+    is set, and put back after."""
+    kept = Converged.tolerance
+    if tolerance is not None:
+        Converged.tolerance = tolerance
     try:
-        vehicle, result, _, run_cpu = simulate(args.course, args.speed, args.end_time, step,
-                                               scheme, None, statics, args.settle_time,
-                                               path=args.path)
+        yield
+    finally:
+        Converged.tolerance = kept
+
+
+def run(args, step, scheme, statics, tolerance=None):
+    """The run's histories and costs (`converged` to `tolerance` where given); None where
+    the run stopped (its message printed)."""
+    cpu = time.process_time()
+    what = scheme if tolerance is None else f"{scheme} to {tolerance:g}"
+    try:
+        with converged_tolerance(tolerance):
+            vehicle, result, _, run_cpu = simulate(
+                args.course, args.speed, args.end_time, step, scheme, None, statics,
+                args.settle_time, path=args.path, spectral_radius=args.spectral_radius,
+                newton_tolerance=args.newton_tolerance)
     except model.VehicleError as error:
-        print(f"  {scheme} at {step * 1e3:g} ms stopped: {error}", flush=True)
+        print(f"  {what} at {step * 1e3:g} ms stopped: {error}", flush=True)
         return None
     solver = vehicle.solver_statistics()
-    print(f"  {scheme} at {step * 1e3:g} ms: {run_cpu:.1f} s CPU "
+    print(f"  {what} at {step * 1e3:g} ms: {run_cpu:.1f} s CPU "
           f"({time.process_time() - cpu:.1f} with the set-up), {solver['steps']} steps "
           f"for {solver['host_steps']}", flush=True)
     return {"time": result["time"], **{key: result[key] for key in (KEY, *LOADS.values())},
@@ -127,7 +153,7 @@ def before(run, time):
     return {key: np.asarray(run[key])[kept] for key in ("time", KEY)}
 
 
-def main(argv=None):
+def parse(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=float, nargs="+", default=[1.0], help="ms")
     parser.add_argument("--end-time", type=float, default=0.05)
@@ -141,30 +167,56 @@ def main(argv=None):
                         help=f"exudyn's Newton iterations per solve at most (default "
                              f"{NEWTON_ITERATIONS}: no step halved; exudyn's own, 25, halves "
                              f"some)")
+    parser.add_argument("--spread", type=float,
+                        help=f"also run `converged` stopping where its loads agree to this "
+                             f"(its own: {Converged.tolerance:g}), e.g. 1e-6: how far so small "
+                             f"a change moves the run")
+    add_solver_arguments(parser)
     bank_path.add_argument(parser)
     args = parser.parse_args(argv)
+    check_solver_arguments(parser, args)
     if args.newton_iterations < 1:
         parser.error(f"--newton-iterations {args.newton_iterations}: give 1 or more")
     if not args.window > 0:
         parser.error(f"--window {args.window}: give a length in s, more than 0")
+    if args.spread is not None and not args.spread > 0:
+        parser.error(f"--spread {args.spread:g}: give a tolerance above 0")
+    return args
+
+
+def spread(runs, key):
+    """A step's (default, converged, converged to --spread) runs: the last against
+    `converged`, in % of range ('-': no such run)."""
+    converged, other = runs[1], runs[2] if len(runs) > 2 else None
+    if other is None or converged is None:
+        return "-"
+    return f"{difference(other, converged, key)[0]:.3g}"
+
+
+def main(argv=None):
+    args = parse(argv)
     model.run_settings = newton_limit(args.newton_iterations)
     statics = model.static_points()
     runs = {}
     for step in sorted(args.steps, reverse=True):
         h = step * 1e-3
         runs[step] = (run(args, h, args.scheme, statics), run(args, h, "converged", statics))
+        if args.spread is not None:
+            runs[step] += (run(args, h, "converged", statics, args.spread),)
     finest = runs[min(runs)][1] or {"time": [], KEY: []}
     print(f"\n{args.course} at {args.speed:g} m/s, {args.end_time:g} s, the coupling's "
-          f"{args.path} path, exudyn's Newton up to {args.newton_iterations} iterations; "
-          f"errors in % of range at the times both runs reached\n")
+          f"{args.path} path, exudyn's Newton up to {args.newton_iterations} iterations to "
+          f"{args.newton_tolerance:g}, spectral radius {args.spectral_radius:g}; errors in % "
+          f"of range at the times both runs reached\n")
     print(f"| step (ms) | {args.scheme} against converged: hull vertical acceleration | "
           + " | ".join(LOADS) + f" | steps part at | converged's unconverged steps | "
           f"against converged at {min(runs):g} ms | CPU s / s | Newton per solve | "
-          f"solves per step |")
-    print("|---" * (8 + len(LOADS)) + "|")
-    for step, (default, converged) in sorted(runs.items(), reverse=True):
+          f"solves per step | converged to {args.spread or '-'} against converged: hull, "
+          f"radial bush |")
+    print("|---" * (9 + len(LOADS)) + "|")
+    for step, (default, converged, *_) in sorted(runs.items(), reverse=True):
         if default is None or converged is None:
-            print(f"| {step:g} | stopped (above) |" + " |" * (6 + len(LOADS)))
+            print(f"| {step:g} | stopped (above) |" + " |" * (7 + len(LOADS)))
             continue
         error, at = difference(default, converged)
         loads = " | ".join(f"{difference(default, converged, key)[0]:.3g}"
@@ -179,8 +231,10 @@ def main(argv=None):
               f"{'-' if part is None else f'{part * 1e3:.3f} ms'} | "
               f"{converged['unconverged']} of {converged['steps']} | "
               f"{difference(default, finest)[0]:.3g} | {default['cpu']:.0f} | "
-              f"{default['newton_per_pass']:.1f} | {default['passes_per_step']:.2f} |")
-    for step, (default, converged) in sorted(runs.items(), reverse=True):
+              f"{default['newton_per_pass']:.1f} | {default['passes_per_step']:.2f} | "
+              f"{spread(runs[step], KEY)}, "
+              f"{spread(runs[step], LOADS['radial bush force'])} |")
+    for step, (default, converged, *_) in sorted(runs.items(), reverse=True):
         if default is not None and converged is not None:
             print(f"\n{step:g} ms, hull error by {args.window * 1e3:g} ms from: " + ", ".join(
                 f"{start * 1e3:g} ms {error:.2g} %"

@@ -63,6 +63,31 @@ def simulate(course_name, speed, end_time, step, coupling=DEFAULT_SCHEME, linear
     return vehicle, result, time.perf_counter() - wall, time.process_time() - cpu
 
 
+def add_solver_arguments(parser):
+    """exudyn's settings a run takes: generalized-alpha's spectral radius, Newton's
+    absolute tolerance (check them with check_solver_arguments)."""
+    parser.add_argument("--spectral-radius", type=float, default=SPECTRAL_RADIUS,
+                        help="generalized-alpha's spectral radius at infinite frequency, "
+                             f"0 to 1 (default {SPECTRAL_RADIUS:g}: damps the links' "
+                             "in-phase turning the 1 ms step does not resolve; exudyn's own "
+                             "default is 0.9)")
+    parser.add_argument("--newton-tolerance", type=float, default=NEWTON_TOLERANCE,
+                        help="exudyn's Newton stops where its residual per coordinate is "
+                             f"below this (default {NEWTON_TOLERANCE:g}; 1 takes about 10 %% "
+                             "fewer iterations and moves the hull's accelerations by "
+                             "0.004 %% of their range: docs/vehicle.md, What remains 2)")
+
+
+def check_solver_arguments(parser, args):
+    """Refuse the settings add_solver_arguments parsed where they make no run."""
+    if not 0.0 <= args.spectral_radius <= 1.0:
+        parser.error(f"--spectral-radius {args.spectral_radius:g}: give a value from 0 "
+                     "(most damping) to 1 (none)")
+    if not args.newton_tolerance > 0.0:
+        parser.error(f"--newton-tolerance {args.newton_tolerance:g}: give a value above 0 "
+                     f"(default {NEWTON_TOLERANCE:g})")
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     # 3 m/s: the default run finishes (at 5 m/s runs stop within 2 s; docs/vehicle.md)
@@ -82,16 +107,7 @@ def main(argv=None):
                         help="the track's joints: one object with their analytic Jacobian "
                              f"(kernel) or two exudyn connectors each (default "
                              f"{DEFAULT_JOINTS})")
-    parser.add_argument("--spectral-radius", type=float, default=SPECTRAL_RADIUS,
-                        help="generalized-alpha's spectral radius at infinite frequency, "
-                             f"0 to 1 (default {SPECTRAL_RADIUS:g}: damps the links' "
-                             "in-phase turning the 1 ms step does not resolve; exudyn's own "
-                             "default is 0.9)")
-    parser.add_argument("--newton-tolerance", type=float, default=NEWTON_TOLERANCE,
-                        help="exudyn's Newton stops where its residual per coordinate is "
-                             f"below this (default {NEWTON_TOLERANCE:g}; 1 takes about 10 %% "
-                             "fewer iterations and moves the hull's accelerations by "
-                             "0.004 %% of their range: docs/vehicle.md, What remains 2)")
+    add_solver_arguments(parser)
     parser.add_argument("--solver", choices=("exudyn", "own"), default="exudyn",
                         help="the time integration: exudyn's generalized-alpha (default), or "
                              "the same scheme on the vehicle's own solver in C, no exudyn in "
@@ -101,12 +117,9 @@ def main(argv=None):
     args = parser.parse_args(argv)
     if args.speed < 0 or args.end_time <= 0 or args.step <= 0:
         parser.error("--speed must be >= 0, --end-time and --step > 0")
-    if not 0.0 <= args.spectral_radius <= 1.0:
-        parser.error(f"--spectral-radius {args.spectral_radius:g}: give a value from 0 "
-                     "(most damping) to 1 (none)")
-    if not args.newton_tolerance > 0.0:
-        parser.error(f"--newton-tolerance {args.newton_tolerance:g}: give a value above 0 "
-                     f"(default {NEWTON_TOLERANCE:g})")
+    check_solver_arguments(parser, args)
+    if args.solver == "own" and not bank_path.compiled(args.path, args.coupling):
+        parser.error("--solver own runs the coupling's compiled path (--path compiled)")
     args.out.mkdir(parents=True, exist_ok=True)
     warnings.simplefilter("once")
     statics = static_points(args.fmu_dir)

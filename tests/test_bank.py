@@ -250,7 +250,7 @@ def test_a_step_begun_again_saves_no_state_again(native_fmus):
 def test_the_law_loads_entry_called_from_c_gives_law_loads(native_fmus):
     """law_loads_entry's function (bank.c's bank_law_loads, as the vehicle's contacts
     kernel calls it) at the bank's handle gives law_loads' loads and slopes to the bit,
-    at a step's laws."""
+    at a step's laws, and so do the laws kept as a LawTable."""
     import ctypes
 
     bank = Bank(mix(native_fmus), "corrected")
@@ -268,6 +268,15 @@ def test_the_law_loads_entry_called_from_c_gives_law_loads(native_fmus):
             assert np.any(expected_loads != 0.0)
             assert np.array_equal(loads, expected_loads)
             assert np.array_equal(slopes, expected_slopes)
+            # the laws kept apart (a LawTable: law_table_loads) give the same bits, from C too
+            table = bank.law_table()
+            kept, table_handle = table.law_loads_entry()
+            function = ctypes.CFUNCTYPE(None, ctypes.c_void_p, double, double, double)(kept)
+            function(table_handle, *(a.ctypes.data_as(double)
+                                     for a in (deflection, loads, slopes)))
+            for got in ((loads, slopes), table.law_loads(deflection, slopes=True)):
+                assert np.array_equal(got[0], expected_loads)
+                assert np.array_equal(got[1], expected_slopes)
     finally:
         bank.free()
 

@@ -72,3 +72,47 @@ def test_the_study_lets_newton_iterate_longer_than_exudyns_default(study):
     settings = study.newton_limit(100)()
     assert settings.timeIntegration.newton.maxIterations == 100
     assert study.model.run_settings().timeIntegration.newton.maxIterations == 25
+
+
+def test_the_study_runs_with_the_solver_settings_it_is_given(study, monkeypatch):
+    """--spectral-radius and --newton-tolerance reach every run; --spread runs `converged`
+    to its tolerance, and leaves the scheme's own tolerance as it was after."""
+    asked = []
+
+    def simulate(*args, **settings):
+        asked.append((args[4], study.Converged().tolerance, settings))
+        raise study.model.VehicleError("stopped here")
+
+    monkeypatch.setattr(study, "simulate", simulate)
+    own = study.Converged.tolerance
+    args = study.parse(["--spectral-radius", "0.3", "--newton-tolerance", "0.01",
+                        "--spread", "1e-6"])
+    assert study.run(args, 5e-4, "corrected", None) is None
+    assert study.run(args, 5e-4, "converged", None, args.spread) is None
+    for scheme, tolerance, settings in asked:
+        assert settings["spectral_radius"] == 0.3
+        assert settings["newton_tolerance"] == 0.01
+    assert [(scheme, tolerance) for scheme, tolerance, _ in asked] == [
+        ("corrected", own), ("converged", 1e-6)]
+    assert study.Converged.tolerance == own
+    defaults = study.parse([])
+    assert defaults.spectral_radius == study.model.SPECTRAL_RADIUS
+    assert defaults.newton_tolerance == study.model.NEWTON_TOLERANCE
+    assert defaults.spread is None
+
+
+@pytest.mark.parametrize("argv", [["--spread", "0"], ["--newton-tolerance", "0"],
+                                  ["--spectral-radius", "1.5"]])
+def test_the_study_refuses_settings_that_make_no_run(study, argv):
+    with pytest.raises(SystemExit):
+        study.parse(argv)
+
+
+def test_the_spread_column_compares_the_third_run_with_converged(study):
+    reference = history(np.arange(0, 0.0505, 1e-3), oscillation)
+    moved = {key: np.array(value, dtype=float) for key, value in reference.items()}
+    moved["hull_vertical_acceleration"][10] += 0.003 * np.ptp(
+        reference["hull_vertical_acceleration"])
+    assert study.spread((None, reference, moved), study.KEY) == "0.3"
+    assert study.spread((None, reference), study.KEY) == "-"
+    assert study.spread((None, None, moved), study.KEY) == "-"

@@ -95,6 +95,14 @@ typedef struct {
     double *law_deflection, *law_load, *law_slope;
 } Contacts;
 
+/* (row, column, value) rows written into `out` while they fit `capacity`; `count` counts
+ * them all (contacts_jacobian.c's triplets_put adds one) */
+typedef struct {
+    double *out;
+    long count, capacity;
+} Triplets;
+
+void triplets_put(Triplets *t, int row, int column, double value);
 double numpy_sum(const double *a, int n);
 double numpy_remainder(double a, double b);
 void smoothstep_derivatives(double x, double *value, double *slope, double *curvature);

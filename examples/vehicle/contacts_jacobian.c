@@ -5,12 +5,7 @@
 #define P(name) (c->parameter[P_##name])
 #define ARRAY(name) (c->array[A_##name])
 
-typedef struct {
-    double *out;
-    long count, capacity;
-} Triplets;
-
-static void put(Triplets *t, int row, int column, double value)
+void triplets_put(Triplets *t, int row, int column, double value)
 {
     if (t->count < t->capacity) {
         double *entry = t->out + 3 * t->count;
@@ -40,7 +35,7 @@ static void spring_triplets(const Contacts *c, double factor, double factor_t, T
                                 value += spring->weight[a] * spring->force_g[a][j][i]
                                          * block[j][k]
                                          * (spring->weight[b] * spring->motion_g[b][k][l]);
-                        put(t, 3 * spring->body[a] + i, 3 * spring->body[b] + l, value);
+                        triplets_put(t, 3 * spring->body[a] + i, 3 * spring->body[b] + l, value);
                     }
     }
 }
@@ -61,7 +56,7 @@ static void tyre_triplets(Contacts *c, double factor, double factor_t, Triplets 
         double scale = factor * force[w] / blend * c->pair_weight[i];
         for (int a = 0; a < 12; a++)
             for (int b = 0; b < 12; b++)
-                put(t, coordinate[a], coordinate[b], scale * gradient[a] * gradient[b]);
+                triplets_put(t, coordinate[a], coordinate[b], scale * gradient[a] * gradient[b]);
     }
     /* (factor (F' - F/b) + factor_t F_rate) (p.D)^T (p.D): p.D's entries, the arm's summed
      * over the wheel's links, in the numpy kernel's order (every wheel's arm entries, then
@@ -93,7 +88,7 @@ static void tyre_triplets(Contacts *c, double factor, double factor_t, Triplets 
         for (int b = 0; b < entries; b++) {
             int w = c->entry_wheel[a];
             if (c->entry_wheel[b] != w) continue;
-            put(t, c->entry_coordinate[a], c->entry_coordinate[b],
+            triplets_put(t, c->entry_coordinate[a], c->entry_coordinate[b],
                 (factor * (slope[w] - force[w] / blend) + factor_t * rate_slope[w])
                 * c->entry_value[a] * c->entry_value[b]);
         }

@@ -21,7 +21,10 @@
 
 #define SYSTEM_EXPORT CONTACTS_EXPORT
 
-/* joints.c's, called here */
+/* contacts.c's and contacts_jacobian.c's, and joints.c's, called here */
+int contacts_evaluate(Contacts *c, int settling);
+long contacts_jacobian(Contacts *c, double factor, double factor_t, double *out,
+                       long capacity);
 void joints_evaluate(void *bound);
 void joints_jacobian(int n, double half, const double *link, const double *joint,
                      const double *qd, const double *law, const double *effort, double factor,
@@ -149,30 +152,18 @@ SYSTEM_EXPORT void vsystem_residual(VehicleSystem *s, double t, const double *q,
     if (g != NULL) vsystem_constraints(s, q, g);
 }
 
-typedef struct {
-    double *out;
-    long count, capacity;
-} Triplets;
-
 /* An entry, where it is not zero: the kernels' blocks hold zeros beyond where their
  * elements reach (a tyre's blend over the neighbours of the links beneath it), which a band
  * need not hold (system.py's REACH) */
 static void put(Triplets *t, int row, int column, double value)
 {
-    if (value == 0.0) return;
-    if (t->count < t->capacity) {
-        double *entry = t->out + 3 * t->count;
-        entry[0] = row;
-        entry[1] = column;
-        entry[2] = value;
-    }
-    t->count++;
+    if (value != 0.0) triplets_put(t, row, column, value);
 }
 
 /* factor K + factor_t D (K = -df/dq, D = -df/dv) at (t, q, v) as (row, column, value)
  * rows into out while they fit `capacity` (repeated entries add, zeros left out); returns
- * how many there are. `scratch`: room for the joints' 108 links and the contacts' triplets (the same
- * capacity). */
+ * how many there are. `scratch`: room for the joints' triplets (36 a joint) and the
+ * contacts' (the same capacity as out). */
 SYSTEM_EXPORT long vsystem_jacobian(VehicleSystem *s, double t, const double *q,
                                     const double *v, double factor, double factor_t,
                                     double *out, long capacity, double *scratch)

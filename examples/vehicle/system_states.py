@@ -55,14 +55,16 @@ def run_states(vehicle, end_time, step, picks, settle_time=3.0):
 
 class ExudynEvaluation:
     """exudyn's own evaluation of the vehicle (after its run) at a State: its solver's
-    functions, on a dense system (n ODE2 coordinates, then the algebraic equations)."""
+    functions, on a dense system (n ODE2 coordinates, then the algebraic equations), or
+    with `dense` False on the run's sparse one (its matrices not read: for timing)."""
 
-    def __init__(self, vehicle):
+    def __init__(self, vehicle, dense=True):
         from .model import run_settings
 
         self.v = vehicle
         self.settings = run_settings()
-        self.settings.linearSolver.solverType = exu.LinearSolverType.EXUdense
+        if dense:
+            self.settings.linearSolver.solverType = exu.LinearSolverType.EXUdense
         self.solver = exu.MainSolverImplicitSecondOrder()
         self.solver.InitializeSolver(vehicle.mbs, self.settings)
         self.n = self.solver.GetODE2size()
