@@ -11,6 +11,7 @@ present state.
     python examples/tracked_vehicle.py --course random --csv --animate
     python examples/tracked_vehicle.py --course sine --linear   # and the Kelvin vehicle
     python examples/tracked_vehicle.py --path python            # the Python path
+    python examples/tracked_vehicle.py --solver own             # no exudyn in the time loop
 
 Plots, CSV and the animation go to reports/tracked_vehicle/ (or --out).
 """
