@@ -204,13 +204,15 @@ class OwnHost:
                     break
                 if not verdict.repeat:
                     return h, t_new
+            else:  # the passes spent: accepted (exudyn's discontinuous.ignoreMaxIterations)
+                return h, t_new
             self.solver.restart()  # the step's start (the bank's: begin_step)
             if retry == "Newton":
                 self.halved += 1
             if 0.5 * h < self.shortest * (1.0 - 1e-9):
                 raise VehicleError(f"the own solver gave up at t = {t:.4f} s: the step to "
-                               f"{t_new:.4f} s failed ({retry}) on steps down to "
-                               f"{h * 1e6:.3g} us")
+                                   f"{t_new:.4f} s failed ({retry}) on steps down to "
+                                   f"{h * 1e6:.3g} us")
             h = 0.5 * h
 
     def _accept(self, t, next_time):
