@@ -3,7 +3,7 @@ The vehicle on its own solver) against the same vehicle in exudyn: the same sche
 (corrected), step (1 ms), spectral radius, Newton tolerances and full Newton, from the
 stored static point over 0.02 s at 3 m/s on the bump. The two take the same Newton
 iterations, and their histories agree far below Newton's tolerance (the same iterates, to
-round-off)."""
+round-off). The host's halving of a step whose Newton fails, on stand-ins."""
 
 import sys
 
@@ -55,3 +55,72 @@ def test_the_own_solver_agrees_with_exudyn_below_newtons_tolerance(runs):
 
     difference, _ = largest_difference(runs["exudyn"][0], runs["own"][0], KEYS)
     assert 0.0 < difference <= 1e-5  # not the same run twice
+
+
+class _Solver:
+    """A solver core whose Newton converges only on steps up to `longest`."""
+
+    def __init__(self, longest):
+        self.longest, self.restarts = longest, 0
+
+    def step(self, h, t_new):
+        return 0 if h <= self.longest * (1 + 1e-12) else 1
+
+    def restart(self):
+        self.restarts += 1
+
+    def report(self):
+        return {"iterations": 1}
+
+    def state(self):
+        return (np.zeros(3),) * 4
+
+
+class _Bank:
+    """A bank of one pass that accepts every solution."""
+
+    class scheme:
+        passes = 1
+
+    def __init__(self):
+        self.begun = []
+
+    def begin_step(self, time):
+        self.begun.append(time)
+
+    def end_pass(self, time, deflections):
+        from fmu_components.coupling.master import Verdict
+        return Verdict()
+
+
+def _host(longest):
+    """An OwnHost over the stand-ins above (no vehicle): its step's halving alone."""
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle.own_host import OwnHost
+
+    host = OwnHost.__new__(OwnHost)
+    host.solver, host.bank = _Solver(longest), _Bank()
+    host.own = type("Own", (), {"set_step": lambda self, h: None})()
+    host.path = type("Path", (), {"deflections": lambda self, q, v, t: q})()
+    host.refused = host.halved = host.solves = host.newton = 0
+    host._written = None
+    host.seconds = dict(solve=0.0, bank=0.0, deflections=0.0, record=0.0, check=0.0)
+    host.shortest = STEP / 64
+    return host
+
+
+def test_a_step_whose_newton_fails_is_halved_and_begun_again():
+    host = _host(longest=STEP / 4)
+    taken, end = host._step(0.01, STEP, None)
+    assert taken == STEP / 4 and end == 0.01 + STEP / 4
+    assert host.bank.begun == [0.01 + STEP, 0.01 + STEP / 2, 0.01 + STEP / 4]
+    assert host.halved == 2 and host.solver.restarts == 2
+
+
+def test_a_step_that_fails_down_to_the_floor_stops_naming_the_time():
+    from vehicle.model import VehicleError
+
+    host = _host(longest=STEP / 1000)
+    with pytest.raises(VehicleError, match=r"gave up at t = 0\.0100 s.*Newton"):
+        host._step(0.01, STEP, None)
+    assert host.halved == 7  # the steps of 1 ms down to 1/64 of it, each failed
