@@ -11,6 +11,7 @@ present state.
     python examples/tracked_vehicle.py --course random --csv --animate
     python examples/tracked_vehicle.py --course sine --linear   # and the Kelvin vehicle
     python examples/tracked_vehicle.py --path python            # the Python path
+    python examples/tracked_vehicle.py --solver own             # no exudyn in the time loop
 
 Plots, CSV and the animation go to reports/tracked_vehicle/ (or --out).
 """
@@ -37,7 +38,7 @@ DEFAULT_STEP = 1e-3  # s
 def simulate(course_name, speed, end_time, step, coupling=DEFAULT_SCHEME, linear=None,
              statics=None, settle_time=3.0, fmu_dir=None, path=bank_path.DEFAULT_PATH,
              contacts=None, joints=DEFAULT_JOINTS, spectral_radius=SPECTRAL_RADIUS,
-             newton_tolerance=NEWTON_TOLERANCE):
+             newton_tolerance=NEWTON_TOLERANCE, solver="exudyn"):
     """One run; returns (vehicle, histories, wall seconds, CPU seconds) of the run proper
     (the settling to the static point, stored after the first run, and the set-up,
     Vehicle.prepare, excluded). contacts: the contacts' kernel, "compiled" or "numpy"
@@ -45,11 +46,13 @@ def simulate(course_name, speed, end_time, step, coupling=DEFAULT_SCHEME, linear
     joints as one object with their Jacobian ("kernel", vehicle/joints.py) or as two
     exudyn connectors each ("connectors"). spectral_radius: generalized-alpha's, at
     infinite frequency (model.SPECTRAL_RADIUS). newton_tolerance: exudyn's Newton's
-    absolute tolerance (model.NEWTON_TOLERANCE)."""
+    absolute tolerance (model.NEWTON_TOLERANCE). solver: "exudyn", or "own" (the compiled
+    path on the vehicle's own solver, no exudyn in the time loop: vehicle/own_host.py)."""
     statics = statics or static_points(fmu_dir)
     vehicle = Vehicle(None, speed, fmu_dir, linear, coupling, statics, path, joints)
     vehicle.spectral_radius = spectral_radius
     vehicle.newton_tolerance = newton_tolerance
+    vehicle.solver = solver
     if contacts:
         vehicle.contacts.use(contacts)
     vehicle.course = COURSES[course_name](vehicle.layout.sprocket[0] + 0.3)
@@ -106,11 +109,18 @@ def main(argv=None):
                              f"(kernel) or two exudyn connectors each (default "
                              f"{DEFAULT_JOINTS})")
     add_solver_arguments(parser)
+    parser.add_argument("--solver", choices=("exudyn", "own"), default="exudyn",
+                        help="the time integration: exudyn's generalized-alpha (default), or "
+                             "the same scheme on the vehicle's own solver in C, no exudyn in "
+                             "the time loop (the compiled path only; docs/vehicle.md, The "
+                             "vehicle on its own solver)")
     parser.add_argument("--out", type=Path, default=Path("reports") / "tracked_vehicle")
     args = parser.parse_args(argv)
     if args.speed < 0 or args.end_time <= 0 or args.step <= 0:
         parser.error("--speed must be >= 0, --end-time and --step > 0")
     check_solver_arguments(parser, args)
+    if args.solver == "own" and not bank_path.compiled(args.path, args.coupling):
+        parser.error("--solver own runs the coupling's compiled path (--path compiled)")
     args.out.mkdir(parents=True, exist_ok=True)
     warnings.simplefilter("once")
     statics = static_points(args.fmu_dir)
@@ -121,7 +131,7 @@ def main(argv=None):
                                               args.settle_time, args.fmu_dir, args.path,
                                               args.contacts, args.joints,
                                               args.spectral_radius,
-                                              args.newton_tolerance)
+                                              args.newton_tolerance, args.solver)
         runs["FMUs"] = result
         if args.linear:
             linear = Linear(statics, args.fmu_dir)
@@ -147,7 +157,7 @@ def main(argv=None):
           f"{wall / simulated:.1f} s wall and {cpu / simulated:.1f} s CPU per simulated "
           f"second")
     solver = vehicle.solver_statistics()
-    print(f"exudyn: {solver['newton_per_pass']:.1f} Newton iterations per solve, "
+    print(f"{vehicle.solver}: {solver['newton_per_pass']:.1f} Newton iterations per solve, "
           f"{solver['passes_per_step']:.2f} solves per host step, "
           f"{solver['steps']} steps for the {solver['host_steps']} asked (more where "
           f"shortened), {solver['refused']} solutions refused (they jumped)")

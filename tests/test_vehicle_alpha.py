@@ -353,6 +353,31 @@ def test_the_step_converges_at_second_order_to_the_reference():
     assert np.all((orders > 1.8) & (orders < 2.3)), (errors, orders)
 
 
+def test_a_step_solved_again_from_its_start_is_the_same_step():
+    """restart: the state at the step's start again (a host's retry); repeat: the step
+    solved again from its start, cold (the predictor: the same solution to the bit) or
+    warm (Newton from the present solution: converged at once, within the tolerance)."""
+    chain = Chain()
+    solver = chain_solver(chain, relative_tolerance=1e-10)
+    q, v = chain.initial()
+    assert solver.initialize(0.0, q, v) == 0
+    start = solver.state()
+    assert solver.step(2e-3, 2e-3) == 0
+    solved, iterations = solver.state(), solver.report()["iterations"]
+    assert not np.array_equal(solved[0], start[0])
+    solver.restart()
+    for before, after in zip(start, solver.state()):
+        np.testing.assert_array_equal(after, before)
+    assert solver.step(2e-3, 2e-3) == 0
+    assert solver.repeat(2e-3, 2e-3) == 0
+    for first, again in zip(solved, solver.state()):
+        np.testing.assert_array_equal(again, first)
+    assert solver.repeat(2e-3, 2e-3, warm=True) == 0
+    assert solver.report()["iterations"] < iterations
+    for first, again in zip(solved, solver.state()):
+        np.testing.assert_allclose(again, first, rtol=1e-7, atol=1e-9 * np.abs(first).max())
+
+
 # --- what the step refuses ---------------------------------------------------------------------
 
 def test_a_step_that_does_not_converge_returns_its_status_and_keeps_its_start():

@@ -45,7 +45,8 @@ EXPORT void alpha_free(alpha_solver *s)
     bb_free(s->matrix);
     triplets_free(&s->K); triplets_free(&s->D); triplets_free(&s->G);
     double *arrays[] = {s->mass, s->q, s->v, s->a, s->a_alg, s->lambda, s->q0, s->v0, s->a0,
-                        s->a_alg0, s->lambda0, s->f, s->g, s->residual, s->delta};
+                        s->a_alg0, s->lambda0, s->f, s->g, s->residual, s->delta, s->q1, s->v1,
+                        s->a1, s->lambda1};
     for (size_t i = 0; i < sizeof arrays / sizeof *arrays; i++) free(arrays[i]);
     free(s);
 }
@@ -69,10 +70,10 @@ EXPORT alpha_solver *alpha_create(int nq, int nm, const double *mass, const int 
     int ok = s->matrix != NULL && triplets_init(&s->K, capacity)
              && triplets_init(&s->D, capacity) && triplets_init(&s->G, capacity);
     double **coordinates[] = {&s->mass, &s->q, &s->v, &s->a, &s->a_alg, &s->q0, &s->v0,
-                              &s->a0, &s->a_alg0, &s->f};
+                              &s->a0, &s->a_alg0, &s->f, &s->q1, &s->v1, &s->a1};
     for (size_t i = 0; ok && i < sizeof coordinates / sizeof *coordinates; i++)
         ok = (*coordinates[i] = calloc(nq + 1, sizeof(double))) != NULL;
-    double **multipliers[] = {&s->lambda, &s->lambda0, &s->g};
+    double **multipliers[] = {&s->lambda, &s->lambda0, &s->g, &s->lambda1};
     for (size_t i = 0; ok && i < sizeof multipliers / sizeof *multipliers; i++)
         ok = (*multipliers[i] = calloc(nm + 1, sizeof(double))) != NULL;
     ok = ok && (s->residual = calloc(s->n, sizeof(double))) != NULL
@@ -192,14 +193,51 @@ static void restore(alpha_solver *s)
 
 /* One step from the current state to t_new = t + h (the caller's time, as exudyn's
    step index times h); on any status but ALPHA_CONVERGED the state is the step's start. */
+static int solve(alpha_solver *s, double h, double t_new, int warm);
+
 EXPORT int alpha_step(alpha_solver *s, double h, double t_new)
 {
-    int nq = s->nq, status;
+    int nq = s->nq;
     memcpy(s->q0, s->q, sizeof(double) * nq);
     memcpy(s->v0, s->v, sizeof(double) * nq);
     memcpy(s->a0, s->a, sizeof(double) * nq);
     memcpy(s->a_alg0, s->a_alg, sizeof(double) * nq);
     memcpy(s->lambda0, s->lambda, sizeof(double) * s->nm);
+    return solve(s, h, t_new, 0);
+}
+
+/* The state back at the last step's start (its time too): a host's retry of a solved step
+   at another h */
+EXPORT void alpha_restart(alpha_solver *s)
+{
+    restore(s);
+    s->t = s->t0;
+    s->jacobian_update_requested = 1;
+}
+
+/* The last step solved again from its start to t_new = t + h (a coupled host's next pass,
+   its loads changed); warm: Newton starts from the present solution (q, v, a, lambda)
+   instead of the predictor's, the algorithmic accelerations the predictor's (exudyn's
+   pre-Newton-residual user function setting the last pass's solution). Its status as
+   alpha_step's (on failure the state is the step's start). */
+EXPORT int alpha_repeat(alpha_solver *s, double h, double t_new, int warm)
+{
+    int nq = s->nq;
+    if (warm) {
+        memcpy(s->q1, s->q, sizeof(double) * nq);
+        memcpy(s->v1, s->v, sizeof(double) * nq);
+        memcpy(s->a1, s->a, sizeof(double) * nq);
+        memcpy(s->lambda1, s->lambda, sizeof(double) * s->nm);
+    }
+    s->t = s->t0;
+    return solve(s, h, t_new, warm);
+}
+
+/* A step's Newton from the start kept in q0 .. lambda0 */
+static int solve(alpha_solver *s, double h, double t_new, int warm)
+{
+    int nq = s->nq, status;
+    s->t0 = s->t;
     s->iterations = s->jacobians = 0;
     s->bad_row = s->bad_col = -1;
     if (h != s->factorized_h) s->jacobian_update_requested = 1;
@@ -211,6 +249,12 @@ EXPORT int alpha_step(alpha_solver *s, double h, double t_new)
     double initial, current, last, contractivity;
 
     predict(s, h);
+    if (warm) {
+        memcpy(s->q, s->q1, sizeof(double) * nq);
+        memcpy(s->v, s->v1, sizeof(double) * nq);
+        memcpy(s->a, s->a1, sizeof(double) * nq);
+        memcpy(s->lambda, s->lambda1, sizeof(double) * s->nm);
+    }
     if ((status = residual(s, t_new, scale, &initial))) goto failed;
     if (initial <= set->absolute_tolerance) initial = 2. * set->absolute_tolerance;
     current = last = initial;

@@ -54,7 +54,8 @@ typedef struct {
     bb_matrix *matrix;
     alpha_triplets K, D, G;
     double t, *q, *v, *a, *a_alg, *lambda;   /* the state (a_alg: algorithmic accelerations) */
-    double *q0, *v0, *a0, *a_alg0, *lambda0; /* the step's start */
+    double t0, *q0, *v0, *a0, *a_alg0, *lambda0; /* the step's start */
+    double *q1, *v1, *a1, *lambda1;          /* a pass's solution, a warm repeat's start */
     double *f, *g, *residual, *delta;
     int jacobian_update_requested;
     double factorized_h;
@@ -71,6 +72,8 @@ EXPORT void alpha_free(alpha_solver *s);
 EXPORT int alpha_initialize(alpha_solver *s, double t, const double *q, const double *v,
                             int compute_initial_accelerations);
 EXPORT int alpha_step(alpha_solver *s, double h, double t_new);
+EXPORT void alpha_restart(alpha_solver *s);
+EXPORT int alpha_repeat(alpha_solver *s, double h, double t_new, int warm);
 EXPORT void alpha_report(const alpha_solver *s, int *ints, double *reals);
 EXPORT void alpha_state(const alpha_solver *s, double *q, double *v, double *a,
                         double *lambda);

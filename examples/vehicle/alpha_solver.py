@@ -96,6 +96,8 @@ def library():
         lib.alpha_free.argtypes = [_pointer]
         lib.alpha_initialize.argtypes = [_pointer, _real, _pointer, _pointer, _int]
         lib.alpha_step.argtypes = [_pointer, _real, _real]
+        lib.alpha_restart.argtypes = [_pointer]
+        lib.alpha_repeat.argtypes = [_pointer, _real, _real, _int]
         lib.alpha_state.argtypes = [_pointer] + [_pointer] * 4
         lib.alpha_report.argtypes = [_pointer, _pointer, _pointer]
     return lib
@@ -236,6 +238,18 @@ class AlphaSolver:
         """One step to t_new (= t + h, the caller's sum); its status (0: converged; on any
         other the state is the step's start)."""
         status = self.lib.alpha_step(self.handle, h, t_new)
+        if status == 0:
+            self.time = t_new
+        return status
+
+    def restart(self):
+        """The state back at the last step's start (a retry of the step at another h)."""
+        self.lib.alpha_restart(self.handle)
+
+    def repeat(self, h, t_new, warm=False):
+        """The last step solved again from its start (a coupled host's next pass); warm:
+        its Newton from the present solution instead of the predictor. Status as step's."""
+        status = self.lib.alpha_repeat(self.handle, h, t_new, int(warm))
         if status == 0:
             self.time = t_new
         return status

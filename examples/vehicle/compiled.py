@@ -9,6 +9,8 @@ Installed after the settling to the static point, which runs on the relaxed comp
 Python functions (model.RelaxedTable).
 """
 
+from contextlib import contextmanager
+
 import numpy as np
 
 import bank_path
@@ -77,16 +79,18 @@ class CompiledPath:
         states = np.array([read() for _, read in self.v.coupling.entries], dtype=float)
         return states[:, 0], states[:, 1]
 
-    def deflections(self):
-        """Every instance's deflection from the system's coordinates, in one pass (the
-        Python path's readers, vectorised): a tyre's compression (contacts.py), a radial
-        bush's distance between its pin seats, a torsion bush's and a damper's relative
+    def deflections(self, q=None, qd=None, t=None):
+        """Every instance's deflection from the system's coordinates, or from (q, qd) at t
+        where they are given (a host of its own: own_host.py), in one pass (the Python
+        path's readers, vectorised): a tyre's compression (contacts.py), a radial bush's
+        distance between its pin seats, a torsion bush's and a damper's relative
         rotation."""
         v = self.v
-        data = v.mbs.systemData
-        q = np.asarray(data.GetODE2Coordinates())
+        if q is None:
+            data = v.mbs.systemData
+            q, t = np.asarray(data.GetODE2Coordinates()), data.GetTime()
         deflection = np.empty(self.bank.n)
-        v.contacts.evaluate(data.GetTime())
+        v.contacts.evaluate(t, q, qd)
         compression = np.where(v.contacts.in_contact, v.contacts.compression, -HORN_HEIGHT)
         deflection[self.tyre_rows] = compression[:, None]
         deflection[self.damper_rows] = q[self.hull_rotation] - q[self.arm_rotation]
@@ -98,15 +102,23 @@ class CompiledPath:
         return deflection
 
 
-def solve_compiled(vehicle, end_time, step, settings, step_check=None):
-    """The run on the compiled path; returns exudyn_host.solve's host. The bank stands in
-    for the Python coupling afterwards (its counts: Vehicle.solver_statistics)."""
+@contextmanager
+def bank_in_use(vehicle):
+    """The compiled path's bank the vehicle's for a run (its laws the contacts', its loads
+    the records'), standing in for the Python coupling afterwards (its counts:
+    Vehicle.solver_statistics); yields the CompiledPath."""
     path = vehicle.compiled_path
     vehicle.bank = path.bank
     try:
-        return bank_path.solve(vehicle.mbs, path.bank, path.laws, path.deflections, end_time,
-                               step, settings=settings, initial=path.initial_state,
-                               step_check=step_check)
+        yield path
     finally:
         vehicle.bank = None
         vehicle.coupling = path.bank
+
+
+def solve_compiled(vehicle, end_time, step, settings, step_check=None):
+    """The run on the compiled path; returns exudyn_host.solve's host."""
+    with bank_in_use(vehicle) as path:
+        return bank_path.solve(vehicle.mbs, path.bank, path.laws, path.deflections, end_time,
+                               step, settings=settings, initial=path.initial_state,
+                               step_check=step_check)

@@ -125,12 +125,14 @@ class Contacts(KernelResults):
 
     # --- one evaluation per state ---------------------------------------------------------
 
-    def evaluate(self, t):
+    def evaluate(self, t, q=None, qd=None):
         """The contacts at the host's current state (for the coupling's readers and the
-        records)."""
+        records), or at the system's coordinates q and velocities qd where given."""
         data = self.v.mbs.systemData
-        q = np.asarray(data.GetODE2Coordinates(exu.ConfigurationType.Current))
-        qd = np.asarray(data.GetODE2Coordinates_t(exu.ConfigurationType.Current))
+        if q is None:
+            q = np.asarray(data.GetODE2Coordinates(exu.ConfigurationType.Current))
+        if qd is None:
+            qd = np.asarray(data.GetODE2Coordinates_t(exu.ConfigurationType.Current))
         self._update(t, q[self.system_index], qd[self.system_index])
 
     def _update(self, t, q, qd):

@@ -220,6 +220,7 @@ class Vehicle:
         self.joint_elements = joints
         self.spectral_radius = SPECTRAL_RADIUS
         self.newton_tolerance = NEWTON_TOLERANCE
+        self.solver = "exudyn"  # or "own": no exudyn in the time loop (own_host.py)
         self.course, self.speed = course, speed
         self.compiled = linear is None and bank_path.compiled(path, coupling)
         self.bank = None  # the compiled path's, while it runs
@@ -525,7 +526,10 @@ class Vehicle:
         self.step_check = check = StepCheck(self)
         settings = run_settings(self.spectral_radius, self.newton_tolerance)
         try:
-            if self.compiled:
+            if self.solver == "own":
+                from .own_host import OwnHost
+                self.host = OwnHost(self).run(end_time, step, check=check)
+            elif self.compiled:
                 from .compiled import solve_compiled
                 self.host = solve_compiled(self, end_time, step, settings, check)
             else:
@@ -548,7 +552,10 @@ class Vehicle:
     def solver_statistics(self):
         """exudyn's Newton iterations per solve of a step, solves (coupling passes) per
         accepted step, the steps accepted against the host steps asked for (more where
-        steps were shortened), and the solves the step check refused (step_check.py)."""
+        steps were shortened), and the solves the step check refused (step_check.py); on
+        the own solver its own (OwnHost.statistics)."""
+        if self.solver == "own":
+            return self.host.statistics()
         it = self.mbs.sys["dynamicSolver"].it
         passes = max(self.coupling.total_passes, 1)
         return {"newton_per_pass": it.newtonStepsCount / passes,

@@ -90,6 +90,22 @@ def histories(vehicle):
 
 # --- ISO 2631-1 frequency weighting Wk (vertical, seated) ----------------------------------
 
+def largest_difference(result, other, keys):
+    """The largest difference between two runs' histories of `keys` (the same times), each
+    in % of its range in `result` (over all its columns: all tyres, all bushes), and
+    the key where it is."""
+    if not np.array_equal(result["time"], other["time"]):
+        raise ValueError("the two runs' histories are not at the same times")
+    worst = (0.0, None)
+    for key in keys:
+        a, b = np.asarray(result[key], dtype=float), np.asarray(other[key], dtype=float)
+        span = np.ptp(a)
+        if not span > 0:
+            raise ValueError(f"{key}: nothing to compare (no range)")
+        worst = max(worst, (float(np.max(np.abs(a - b))) / span * 100, key))
+    return worst
+
+
 def _quadratic(f, q):
     w = 2 * math.pi * f
     return np.array([1 / w ** 2, 1 / (q * w), 1.0])

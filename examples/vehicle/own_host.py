@@ -1,0 +1,269 @@
+"""The vehicle on its own solver, no exudyn in the time loop: the solver core
+(alpha_solver.c, exudyn's generalized-alpha step) over the vehicle's equations in C
+(system.c), joined by a small C adapter (own_system.c: the core's two callbacks, so that no
+Python runs per Newton iterate), coupled to the FMUs by the coupling's compiled path (the
+bank, as compiled.py's run in exudyn).
+
+Per host step what bank_exudyn.py and exudyn_host.py do in exudyn's hooks:
+Bank.begin_step(t); a solve of the step; the deflections from the solution
+(CompiledPath.deflections at q); Bank.end_pass(t, deflections): on REPEAT the step solved
+again from its start with the new laws, Newton from the last pass's solution (exudyn's
+warm start of the next pass, where Newton has an absolute tolerance); a verdict to retry,
+or a solution the step check refuses: the step again at half its length; then
+Bank.accept(t, next_time), which records the step (Vehicle._record) from exudyn's system
+data, where the accepted step's q, v and a are written first. A step whose Newton fails is
+halved, as exudyn's adaptive step does, down to SHORTEST_STEP of the host step, then the
+run stops naming the time; after RECOVERY good steps the step is doubled again.
+
+exudyn's model (model.Vehicle) stays the description of the vehicle: the system is read
+from it (system.py), and its data hold the state the outputs read.
+"""
+
+import ctypes
+import time
+
+import numpy as np
+
+import exudyn as exu
+
+from fmu_components.coupling.bank_build import Library
+from fmu_components.coupling.exudyn_host import SHORTEST_STEP
+
+from . import alpha_solver as alpha
+from .alpha_solver import HERE
+from .compiled import bank_in_use
+from .model import VehicleError
+from .system import VehicleSystem, ordering
+
+LIBRARY = Library("vehicle_own", [HERE / "own_system.c"],
+                  [HERE / "alpha_solver.h", HERE / "bordered_band.h"],
+                  "the vehicle's own solver's adapter (own_system.c)", "--solver exudyn")
+CAPACITY = 65536  # triplets of the system's Jacobian
+# exudyn's adaptive step: steps that converge before a halved step is doubled
+# (timeIntegration.adaptiveStepRecoverySteps) and the factor (adaptiveStepIncrease)
+RECOVERY, INCREASE = 10, 2.0
+
+
+class _Context(ctypes.Structure):
+    """own_system.c's OwnContext."""
+    _fields_ = [(name, ctypes.c_void_p) for name in ("system", "residual", "jacobian",
+                                                     "constraint_jacobian", "solver")] + \
+               [("n", ctypes.c_int), ("m", ctypes.c_int), ("capacity", ctypes.c_long)] + \
+               [(name, ctypes.c_void_p) for name in ("out", "scratch", "G", "H")] + \
+               [("h", ctypes.c_double), ("seconds", ctypes.c_double * 2),
+                ("calls", ctypes.c_long * 2)]
+
+
+def _address(function):
+    return ctypes.cast(function, ctypes.c_void_p).value
+
+
+class OwnSystem:
+    """The vehicle's system (system.VehicleSystem) as the solver core's callbacks
+    (.evaluate, .jacobian, .context, as alpha_solver.PythonSystem's)."""
+
+    def __init__(self, system, capacity=CAPACITY):
+        lib = LIBRARY.load("the vehicle's own solver is not available")
+        if lib is None:
+            raise RuntimeError("the vehicle's own solver needs a C compiler (gcc)")
+        if lib.own_layout() != ctypes.sizeof(_Context):
+            raise RuntimeError("own_system.c and own_host.py disagree on the context")
+        lib.own_set_step.argtypes = [ctypes.c_void_p, ctypes.c_double]
+        lib.own_times.argtypes = [ctypes.c_void_p] * 3
+        self.lib, self.system = lib, system
+        self._arrays = [np.zeros((capacity, 3)), np.zeros((capacity, 3)),
+                        np.zeros((6 * system.m, 3)), np.zeros((system.m, 3))]
+        sys_lib = system.lib
+        self.struct = _Context(system.handle, _address(sys_lib.vsystem_residual),
+                               _address(sys_lib.vsystem_jacobian),
+                               _address(sys_lib.vsystem_constraint_jacobian), None,
+                               system.n, system.m, capacity,
+                               *(a.ctypes.data for a in self._arrays))
+        self.context = ctypes.addressof(self.struct)
+        self.evaluate = alpha.EVALUATE(_address(lib.own_evaluate))
+        self.jacobian = alpha.JACOBIAN(_address(lib.own_jacobian))
+
+    def bind(self, solver):
+        self.struct.solver = solver.handle
+
+    def set_step(self, h):
+        self.lib.own_set_step(self.context, h)
+
+    def times(self):
+        """CPU seconds in the system's evaluation (f, g, G) and its Jacobian (K, D, the
+        multipliers' term), and their calls."""
+        seconds, calls = np.zeros(2), np.zeros(2, dtype=np.int64)
+        self.lib.own_times(self.context, seconds.ctypes.data, calls.ctypes.data)
+        return seconds, calls
+
+
+def solver_for(vehicle, laws, relative_tolerance=1e-8):
+    """(OwnSystem, AlphaSolver) for `vehicle` with the laws of `laws` (a bank or a
+    LawTable), with the run's settings: the vehicle's spectral radius and Newton absolute
+    tolerance, full Newton. (exudyn's documentation of newton.absoluteTolerance divides the
+    residual's norm by the number of coordinates; its runs of the vehicle take the
+    core's iterations with the norm itself, to round-off: tests/test_vehicle_own.py.)"""
+    system = VehicleSystem(vehicle, laws)
+    own = OwnSystem(system)
+    order, half_bandwidth, border = ordering(system)
+    settings = alpha.Settings(spectral_radius=vehicle.spectral_radius,
+                              relative_tolerance=relative_tolerance,
+                              absolute_tolerance=vehicle.newton_tolerance,
+                              use_modified_newton=0)
+    solver = alpha.AlphaSolver(own, system.mass_diagonal(), system.m, order,
+                               len(order) - border, half_bandwidth, settings, CAPACITY)
+    own.bind(solver)
+    return own, solver
+
+
+class OwnHost:
+    """The run of `vehicle` (prepared on the compiled path: Vehicle.prepare) on the own
+    solver; run() as exudyn_host.solve. Its counts: statistics()."""
+
+    def __init__(self, vehicle, relative_tolerance=1e-8):
+        if not vehicle.compiled:
+            raise ValueError("the own solver runs the coupling's compiled path (the bank)")
+        self.v = vehicle
+        self.path = vehicle.compiled_path
+        self.bank = self.path.bank
+        self.own, self.solver = solver_for(vehicle, self.bank, relative_tolerance)
+        self.refused = 0  # solutions the step check refused
+        self.halved = 0  # steps whose Newton failed
+        self.solves = self.newton = 0
+        self._written = None  # the time of the solution in exudyn's data, where it is there
+        self.seconds = dict(solve=0.0, bank=0.0, deflections=0.0, record=0.0, check=0.0)
+
+    # --- the state in exudyn's data (the outputs' and the step check's) -------------------
+
+    def _put(self, configuration, t=None):
+        data, solver = self.v.mbs.systemData, self.solver
+        q, v, a, _ = solver.state()
+        data.SetODE2Coordinates(q, configuration)
+        data.SetODE2Coordinates_t(v, configuration)
+        data.SetODE2Coordinates_tt(a, configuration)
+        if t is not None:
+            data.SetTime(t, configuration)
+
+    # --- one step ---------------------------------------------------------------------------
+
+    def _solve(self, h, t_new, first, warm):
+        began = time.process_time()
+        self._written = None
+        self.own.set_step(h)
+        status = (self.solver.step(h, t_new) if first
+                  else self.solver.repeat(h, t_new, warm))
+        self.seconds["solve"] += time.process_time() - began
+        self.solves += 1
+        self.newton += self.solver.report()["iterations"]
+        return status
+
+    def _pass_end(self, t_new, check):
+        """The step check's and the bank's verdict on a solved pass: (refused, verdict)."""
+        if check is not None:
+            began = time.process_time()
+            self._put(exu.ConfigurationType.Current, t_new)
+            self._written = t_new
+            jumped = check(self.v.mbs, t_new)
+            self.seconds["check"] += time.process_time() - began
+            if jumped is not None:
+                return jumped, None
+        began = time.process_time()
+        q, v, _, _ = self.solver.state()
+        deflections = self.path.deflections(q, v, t_new)
+        self.seconds["deflections"] += time.process_time() - began
+        began = time.process_time()
+        verdict = self.bank.end_pass(t_new, deflections)
+        self.seconds["bank"] += time.process_time() - began
+        return None, verdict
+
+    def _step(self, t, h, check):
+        """Solve the step from t to t + h with the bank's passes; the step taken (h, or
+        shorter where a verdict or the step check asked) and its end."""
+        passes = self.bank.scheme.passes + 1  # exudyn's discontinuous.maxIterations
+        if check is not None:  # what the step check compares with
+            self._put(exu.ConfigurationType.StartOfStep, t)
+        while True:
+            t_new = t + h
+            began = time.process_time()
+            self.bank.begin_step(t_new)
+            self.seconds["bank"] += time.process_time() - began
+            retry = None
+            for number in range(passes):
+                status = self._solve(h, t_new, number == 0, warm=number > 0)
+                if status != 0:
+                    retry = "Newton"
+                    break
+                jumped, verdict = self._pass_end(t_new, check)
+                if jumped is not None:
+                    retry = jumped
+                    self.bank.reject()
+                    self.refused += 1
+                    break
+                if verdict.retry_step is not None:
+                    retry = "the coupling"
+                    break
+                if not verdict.repeat:
+                    return h, t_new
+            else:  # the passes spent: accepted (exudyn's discontinuous.ignoreMaxIterations)
+                return h, t_new
+            self.solver.restart()  # the step's start (the bank's: begin_step)
+            if retry == "Newton":
+                self.halved += 1
+            if 0.5 * h < self.shortest * (1.0 - 1e-9):
+                raise VehicleError(f"the own solver gave up at t = {t:.4f} s: the step to "
+                                   f"{t_new:.4f} s failed ({retry}) on steps down to "
+                                   f"{h * 1e6:.3g} us")
+            h = 0.5 * h
+
+    def _accept(self, t, next_time):
+        began = time.process_time()
+        if self._written != t:  # else the step check's pass wrote it
+            self._put(exu.ConfigurationType.Current, t)
+        self.bank.accept(t, next_time)  # records the step (Vehicle._record)
+        self.seconds["record"] += time.process_time() - began
+
+    def run(self, end_time, step, start_time=0.0, check=None):
+        """Start the bank at the host's initial state, then integrate to the first multiple
+        of `step` at or after end_time. Frees the bank."""
+        self.shortest = SHORTEST_STEP * step
+        steps = int(np.ceil((end_time - start_time) / step - 1e-9))
+        end = start_time + steps * step
+        with bank_in_use(self.v):
+            return self._run(start_time, end, step, check)
+
+    def _run(self, start_time, end, step, check):
+        data = self.v.mbs.systemData
+        current = exu.ConfigurationType.Current
+        q0 = np.array(data.GetODE2Coordinates(current))
+        v0 = np.array(data.GetODE2Coordinates_t(current))
+        self.bank.start(start_time, *self.path.initial_state())
+        try:
+            status = self.solver.initialize(start_time, q0, v0)
+            if status:
+                raise VehicleError(f"the own solver's initial accelerations failed: "
+                                   f"{alpha.STATUS[status]}")
+            self._accept(start_time, None)  # the initial state's record, as exudyn's
+            began = time.process_time()
+            t, h, good = start_time, step, 0
+            while end - t > 1e-9 * step:
+                h = min(h, end - t)
+                taken, t = self._step(t, h, check)
+                good = good + 1 if taken < step else 0
+                h = taken
+                if taken < step and good >= RECOVERY:
+                    h, good = min(INCREASE * taken, step), 0
+                self._accept(t, min(t + h, end) if end - t > 1e-9 * step else None)
+            self.solve_cpu = time.process_time() - began
+        finally:
+            self.bank.free()
+        return self
+
+    def statistics(self):
+        """As Vehicle.solver_statistics's, and the split of the solve's time."""
+        seconds, calls = self.own.times()
+        return {"newton_per_pass": self.newton / max(self.solves, 1),
+                "passes_per_step": self.solves / max(self.bank.steps, 1),
+                "steps": self.bank.steps, "host_steps": self.v.host_steps,
+                "refused": self.refused, "halved": self.halved,
+                "evaluate_s": seconds[0], "jacobian_s": seconds[1],
+                "evaluations": int(calls[0]), "jacobians": int(calls[1]), **self.seconds}

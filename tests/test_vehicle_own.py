@@ -1,0 +1,126 @@
+"""The vehicle on its own solver (examples/vehicle/own_host.py, own_system.c; docs/vehicle.md,
+The vehicle on its own solver) against the same vehicle in exudyn: the same scheme
+(corrected), step (1 ms), spectral radius, Newton tolerances and full Newton, from the
+stored static point over 0.02 s at 3 m/s on the bump. The two take the same Newton
+iterations, and their histories agree far below Newton's tolerance (the same iterates, to
+round-off). The host's halving of a step whose Newton fails, on stand-ins."""
+
+import sys
+
+import numpy as np
+import pytest
+
+from conftest import ROOT
+
+sys.path.insert(0, str(ROOT / "examples"))  # the example scripts, imported as modules
+
+NO_EXUDYN = 'exudyn is not installed: pip install -e ".[examples]"'
+END, STEP, SPEED = 0.02, 1e-3, 3.0
+KEYS = ("hull_vertical_acceleration", "hull_pitch_acceleration",
+        "seat_vertical_acceleration", "hull_y", "tyre_force", "damper_torque",
+        "bush_radial_force", "bush_torque")
+
+
+@pytest.fixture(scope="module")
+def runs(native_fmus):
+    """{solver: (histories, solver statistics)}"""
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from tracked_vehicle import simulate
+    from vehicle.model import static_points
+
+    fmu_dir = native_fmus["RoadWheelTyre"].parent
+    statics = static_points(fmu_dir)
+    result = {}
+    for solver in ("exudyn", "own"):
+        vehicle, histories, _, _ = simulate("bump", SPEED, END, STEP, statics=statics,
+                                            fmu_dir=fmu_dir, solver=solver)
+        result[solver] = histories, vehicle.solver_statistics()
+    return result
+
+
+def test_the_own_solver_takes_exudyns_steps_and_iterations(runs):
+    (_, exudyn), (histories, own) = runs["exudyn"], runs["own"]
+    assert len(histories["time"]) == round(END / STEP) + 1
+    for statistics in (exudyn, own):
+        assert statistics["steps"] == statistics["host_steps"] == round(END / STEP)
+        assert statistics["refused"] == 0
+    assert own["passes_per_step"] == exudyn["passes_per_step"] >= 1.0
+    assert own["newton_per_pass"] == exudyn["newton_per_pass"]
+
+
+def test_the_own_solver_agrees_with_exudyn_below_newtons_tolerance(runs):
+    """Every history compared to 1e-5 % of its range (measured 1.2e-7 %, the hull's
+    accelerations: the same iterates, apart by the two LUs' round-off)."""
+    from vehicle.outputs import largest_difference
+
+    difference, _ = largest_difference(runs["exudyn"][0], runs["own"][0], KEYS)
+    assert 0.0 < difference <= 1e-5  # not the same run twice
+
+
+class _Solver:
+    """A solver core whose Newton converges only on steps up to `longest`."""
+
+    def __init__(self, longest):
+        self.longest, self.restarts = longest, 0
+
+    def step(self, h, t_new):
+        return 0 if h <= self.longest * (1 + 1e-12) else 1
+
+    def restart(self):
+        self.restarts += 1
+
+    def report(self):
+        return {"iterations": 1}
+
+    def state(self):
+        return (np.zeros(3),) * 4
+
+
+class _Bank:
+    """A bank of one pass that accepts every solution."""
+
+    class scheme:
+        passes = 1
+
+    def __init__(self):
+        self.begun = []
+
+    def begin_step(self, time):
+        self.begun.append(time)
+
+    def end_pass(self, time, deflections):
+        from fmu_components.coupling.master import Verdict
+        return Verdict()
+
+
+def _host(longest):
+    """An OwnHost over the stand-ins above (no vehicle): its step's halving alone."""
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle.own_host import OwnHost
+
+    host = OwnHost.__new__(OwnHost)
+    host.solver, host.bank = _Solver(longest), _Bank()
+    host.own = type("Own", (), {"set_step": lambda self, h: None})()
+    host.path = type("Path", (), {"deflections": lambda self, q, v, t: q})()
+    host.refused = host.halved = host.solves = host.newton = 0
+    host._written = None
+    host.seconds = dict(solve=0.0, bank=0.0, deflections=0.0, record=0.0, check=0.0)
+    host.shortest = STEP / 64
+    return host
+
+
+def test_a_step_whose_newton_fails_is_halved_and_begun_again():
+    host = _host(longest=STEP / 4)
+    taken, end = host._step(0.01, STEP, None)
+    assert taken == STEP / 4 and end == 0.01 + STEP / 4
+    assert host.bank.begun == [0.01 + STEP, 0.01 + STEP / 2, 0.01 + STEP / 4]
+    assert host.halved == 2 and host.solver.restarts == 2
+
+
+def test_a_step_that_fails_down_to_the_floor_stops_naming_the_time():
+    from vehicle.model import VehicleError
+
+    host = _host(longest=STEP / 1000)
+    with pytest.raises(VehicleError, match=r"gave up at t = 0\.0100 s.*Newton"):
+        host._step(0.01, STEP, None)
+    assert host.halved == 7  # the steps of 1 ms down to 1/64 of it, each failed
