@@ -103,7 +103,7 @@ def _host(longest):
     host.own = type("Own", (), {"set_step": lambda self, h: None})()
     host.path = type("Path", (), {"deflections": lambda self, q, v, t: q})()
     host.refused = host.halved = host.solves = host.newton = 0
-    host._written = None
+    host._start = None
     host.seconds = dict(solve=0.0, bank=0.0, deflections=0.0, record=0.0, check=0.0)
     host.shortest = STEP / 64
     return host

@@ -552,9 +552,10 @@ class Contacts(KernelResults):
 
     # --- checks and records ---------------------------------------------------------------
 
-    def check(self, t):
-        """Stop with the part and the time where the model no longer holds."""
-        self.evaluate(t)
+    def check(self, t, q=None, qd=None):
+        """Stop with the part and the time where the model no longer holds (at the
+        host's current state, or at q, qd: evaluate's)."""
+        self.evaluate(t, q, qd)
         for w in range(len(self.wheels)):
             compression = self.compression[w]
             if compression > lay.TYRE_RUBBER:

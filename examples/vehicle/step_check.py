@@ -51,15 +51,20 @@ class StepCheck:
                       c.tooth_gap.copy())
 
     def __call__(self, mbs, t):
-        """None where the solution is one the step can reach, else what jumped. Each part
-        tests its largest value first (the common case, nothing jumped, in a few array
-        operations); only a value beyond a threshold takes the part's full comparison."""
+        """None where the solution in exudyn's data (the exudyn run's, at t) is one the
+        step can reach, else what jumped (judge)."""
         data = mbs.systemData
         start = exu.ConfigurationType.StartOfStep
-        h = t - data.GetTime(start)
-        q1 = np.asarray(data.GetODE2Coordinates())
-        beyond = (q1 - np.asarray(data.GetODE2Coordinates(start))
-                  - h * np.asarray(data.GetODE2Coordinates_t(start)))[self.links]
+        return self.judge(t, t - data.GetTime(start), np.asarray(data.GetODE2Coordinates()),
+                          None, np.asarray(data.GetODE2Coordinates(start)),
+                          np.asarray(data.GetODE2Coordinates_t(start)))
+
+    def judge(self, t, h, q1, v1, q0, v0):
+        """None where the solution q1, v1 at t (v1 None: exudyn's current velocities) is
+        one the step of length h from q0, v0 can reach, else what jumped. Each part tests
+        its largest value first (the common case, nothing jumped, in a few array
+        operations); only a value beyond a threshold takes the part's full comparison."""
+        beyond = (q1 - q0 - h * v0)[self.links]
         moved = np.hypot(beyond[:, 0], beyond[:, 1])
         turned = np.abs(beyond[:, 2])
         # not all within (rather than max above): a NaN takes the full comparison
@@ -73,7 +78,7 @@ class StepCheck:
             return None
         compression0, rate0, contact0, gap0 = self.start
         contacts = self.v.contacts
-        contacts.evaluate(t)  # the coupling's deflections use this evaluation
+        contacts.evaluate(t, q1, v1)  # the coupling's deflections use this evaluation
         jump = np.abs(contacts.compression - compression0 - h * rate0)
         # a wheel out of contact has compression -inf at both ends: NaN here
         if not (jump <= TYRE_JUMP).all():
