@@ -38,8 +38,13 @@ class StepCheck:
     def __init__(self, vehicle):
         self.v = vehicle
         mbs = vehicle.mbs
-        self.links = np.array([mbs.GetNodeODE2Index(n) for n in vehicle.link_nodes])[:, None] \
+        links = np.array([mbs.GetNodeODE2Index(n) for n in vehicle.link_nodes])[:, None] \
             + [0, 1, 2]
+        # the links' coordinates: a slice (a view) where they are one run, as exudyn has them
+        first = links[0, 0]
+        contiguous = np.array_equal(links.ravel(), np.arange(first, first + links.size))
+        self.links = (slice(first, first + links.size) if contiguous else links.ravel())
+        self.link_count = len(links)
         self.reference = np.array([mbs.GetNodeParameter(n, "referenceCoordinates")
                                    for n in vehicle.link_nodes], dtype=float)
         self.start = None  # the contacts' values at the last accepted step
@@ -64,14 +69,15 @@ class StepCheck:
         one the step of length h from q0, v0 can reach, else what jumped. Each part tests
         its largest value first (the common case, nothing jumped, in a few array
         operations); only a value beyond a threshold takes the part's full comparison."""
-        beyond = (q1 - q0 - h * v0)[self.links]
+        links = self.links
+        beyond = (q1[links] - q0[links] - h * v0[links]).reshape(self.link_count, 3)
         moved = np.hypot(beyond[:, 0], beyond[:, 1])
         turned = np.abs(beyond[:, 2])
         # not all within (rather than max above): a NaN takes the full comparison
         if not ((moved <= LINK_JUMP).all() and (turned <= LINK_TURN).all()):
             k = int(np.argmax(np.maximum(moved / LINK_JUMP, turned / LINK_TURN)))
             if moved[k] > LINK_JUMP or turned[k] > LINK_TURN:
-                return (f"link {k}{self._where(k, q1[self.links[k]])} moved "
+                return (f"link {k}{self._where(k, q1[links][3 * k:3 * k + 3])} moved "
                         f"{moved[k] * 1e3:.1f} mm and turned {math.degrees(turned[k]):.1f} deg "
                         f"in one step beyond its motion at the step's start")
         if self.start is None:
