@@ -8,8 +8,6 @@ import numpy as np
 from scipy import signal
 from scipy.integrate import cumulative_trapezoid
 
-import exudyn as exu
-
 from . import layout as lay
 from .bush_shear import seat_offsets, warn_across_track
 
