@@ -35,6 +35,7 @@ def runs(native_fmus):
         vehicle, histories, _, _ = simulate("bump", SPEED, END, STEP, statics=statics,
                                             fmu_dir=fmu_dir, solver=solver)
         result[solver] = histories, vehicle.solver_statistics()
+    result["own vehicle"] = vehicle
     return result
 
 
@@ -55,6 +56,30 @@ def test_the_own_solver_agrees_with_exudyn_below_newtons_tolerance(runs):
 
     difference, _ = largest_difference(runs["exudyn"][0], runs["own"][0], KEYS)
     assert 0.0 < difference <= 1e-5  # not the same run twice
+
+
+def test_the_step_check_judges_the_solvers_arrays_as_exudyns_data(runs):
+    """StepCheck.judge (the own run's, on the solver's arrays) and StepCheck.__call__ (the
+    exudyn run's, on exudyn's data) are one check: a link moved beyond its reach in one
+    step refused by both in the same words, the step's own motion passed."""
+    import exudyn as exu
+    from vehicle.step_check import LINK_JUMP, StepCheck
+
+    vehicle = runs["own vehicle"]
+    check, data = StepCheck(vehicle), vehicle.mbs.systemData
+    t, h = data.GetTime(), STEP  # the own run's last state, written there after its run
+    q0, v0 = np.array(data.GetODE2Coordinates()), np.array(data.GetODE2Coordinates_t())
+    q1 = q0 + h * v0
+    assert check.judge(t + h, h, q1, v0, q0, v0) is None
+    q1[vehicle.mbs.GetNodeODE2Index(vehicle.link_nodes[7]) + 1] += 1.5 * LINK_JUMP
+    message = check.judge(t + h, h, q1, v0, q0, v0)
+    assert message.startswith("link 7") and "moved 15.0 mm" in message
+    start, current = exu.ConfigurationType.StartOfStep, exu.ConfigurationType.Current
+    for put, values in ((data.SetODE2Coordinates, q0), (data.SetODE2Coordinates_t, v0)):
+        put(values, start)
+    data.SetTime(t, start)
+    data.SetODE2Coordinates(q1, current)
+    assert check(vehicle.mbs, t + h) == message
 
 
 class _Solver:
@@ -103,7 +128,7 @@ def _host(longest):
     host.own = type("Own", (), {"set_step": lambda self, h: None})()
     host.path = type("Path", (), {"deflections": lambda self, q, v, t: q})()
     host.refused = host.halved = host.solves = host.newton = 0
-    host._written = None
+    host._start = None
     host.seconds = dict(solve=0.0, bank=0.0, deflections=0.0, record=0.0, check=0.0)
     host.shortest = STEP / 64
     return host

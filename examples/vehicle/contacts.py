@@ -552,10 +552,13 @@ class Contacts(KernelResults):
 
     # --- checks and records ---------------------------------------------------------------
 
-    def check(self, t):
-        """Stop with the part and the time where the model no longer holds."""
-        self.evaluate(t)
-        for w in range(len(self.wheels)):
+    def check(self, t, q=None, qd=None):
+        """Stop with the part and the time where the model no longer holds (at the
+        host's current state, or at q, qd: evaluate's)."""
+        self.evaluate(t, q, qd)
+        # each wheel in turn only where one is out of bounds (the first named)
+        beyond = (self.compression > lay.TYRE_RUBBER) | (self.compression < -HORN_HEIGHT)
+        for w in np.flatnonzero(beyond)[:1]:
             compression = self.compression[w]
             if compression > lay.TYRE_RUBBER:
                 raise VehicleError(

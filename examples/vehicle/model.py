@@ -238,6 +238,7 @@ class Vehicle:
         self.records = []
         self.settling = False
         self.step_check = None  # the run's (step_check.py), while it runs
+        self.given_state = None  # (q, v, a) a host of its own records (own_host.py)
         # every instance in one list (the bank's order); rows of it by kind
         self.components = []
         self.rows = {"tyre": [], "damper": [], "radial": [], "torsion": []}
@@ -495,11 +496,8 @@ class Vehicle:
         return settle(self, longest, step, store)
 
     def _record(self, t):
-        from .outputs import snapshot
-        self.contacts.check(t)
-        if self.step_check is not None:
-            self.step_check.accepted()
-        self.records.append(snapshot(self, t))
+        from .outputs import record
+        record(self, t)
 
     def prepare(self):
         """What the run sets up before its first step (after the settling, which runs on

@@ -8,21 +8,36 @@ import numpy as np
 from scipy import signal
 from scipy.integrate import cumulative_trapezoid
 
-import exudyn as exu
-
 from . import layout as lay
 from .bush_shear import seat_offsets, warn_across_track
 
 
-def snapshot(vehicle, t):
-    """What is kept after an accepted step: the system's values as they are (copies), the
-    histories picked out of them after the run (histories), so that a step's record costs
-    little."""
-    mbs, contacts = vehicle.mbs, vehicle.contacts
-    contacts.evaluate(t)
-    node = vehicle.hull_node
-    acceleration = mbs.GetNodeOutput(node, exu.OutputVariableType.Acceleration)
-    angular = mbs.GetNodeOutput(node, exu.OutputVariableType.AngularAcceleration)[2]
+def exudyn_state(mbs):
+    """(q, v, a), the present state in exudyn's data."""
+    data = mbs.systemData
+    return (np.asarray(data.GetODE2Coordinates()), np.asarray(data.GetODE2Coordinates_t()),
+            np.asarray(data.GetODE2Coordinates_tt()))
+
+
+def record(vehicle, t):
+    """Vehicle._record: the accepted state at t (the one its host gives,
+    Vehicle.given_state, else exudyn's data) checked (Contacts.check), the step check's
+    start kept (StepCheck.accepted) and its values kept (snapshot)."""
+    q, qd, a = vehicle.given_state or exudyn_state(vehicle.mbs)
+    vehicle.contacts.check(t, q, qd)
+    if vehicle.step_check is not None:
+        vehicle.step_check.accepted()
+    vehicle.records.append(snapshot(vehicle, t, q, qd, a))
+
+
+def snapshot(vehicle, t, q, qd, a):
+    """What is kept after an accepted step at the state (q, qd, a): the system's values as
+    they are (copies), the histories picked out of them after the run (histories), so
+    that a step's record costs little."""
+    contacts = vehicle.contacts
+    contacts.evaluate(t, q, qd)
+    hull = vehicle.mbs.GetNodeODE2Index(vehicle.hull_node)
+    acceleration, angular = a[hull:hull + 2], a[hull + 2]
     omega = contacts.hull_v[2]
     theta = contacts.hull[2]
     seat = (math.cos(theta) * lay.SEAT[0] - math.sin(theta) * lay.SEAT[1],

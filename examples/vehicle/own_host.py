@@ -5,18 +5,18 @@ Python runs per Newton iterate), coupled to the FMUs by the coupling's compiled 
 bank, as compiled.py's run in exudyn).
 
 Per host step what bank_exudyn.py and exudyn_host.py do in exudyn's hooks:
-Bank.begin_step(t); a solve of the step; the deflections from the solution
-(CompiledPath.deflections at q); Bank.end_pass(t, deflections): on REPEAT the step solved
-again from its start with the new laws, Newton from the last pass's solution (exudyn's
-warm start of the next pass, where Newton has an absolute tolerance); a verdict to retry,
-or a solution the step check refuses: the step again at half its length; then
-Bank.accept(t, next_time), which records the step (Vehicle._record) from exudyn's system
-data, where the accepted step's q, v and a are written first. A step whose Newton fails is
+Bank.begin_step(t); a solve of the step; the step check (StepCheck.judge on the solver's
+q and v); the deflections from the solution (CompiledPath.deflections at q);
+Bank.end_pass(t, deflections): on REPEAT the step solved again from its start with the
+new laws, Newton from the last pass's solution (exudyn's warm start of the next pass,
+where Newton has an absolute tolerance); a verdict to retry, or a solution the step check
+refuses: the step again at half its length; then Bank.accept(t, next_time), which records
+the step (outputs.record) from the last pass's q, v and a (Vehicle.given_state). A step whose Newton fails is
 halved, as exudyn's adaptive step does, down to SHORTEST_STEP of the host step, then the
 run stops naming the time; after RECOVERY good steps the step is doubled again.
 
 exudyn's model (model.Vehicle) stays the description of the vehicle: the system is read
-from it (system.py), and its data hold the state the outputs read.
+from it (system.py); its data get the run's last state at the end.
 """
 
 import ctypes
@@ -130,25 +130,27 @@ class OwnHost:
         self.refused = 0  # solutions the step check refused
         self.halved = 0  # steps whose Newton failed
         self.solves = self.newton = 0
-        self._written = None  # the time of the solution in exudyn's data, where it is there
+        self._start = None  # (q, v) at the step's start, where the step check compares
+        # the solver's state (q, v, a) after the last pass, and at the last accepted step
+        self._solved = self._accepted = None
         self.seconds = dict(solve=0.0, bank=0.0, deflections=0.0, record=0.0, check=0.0)
 
-    # --- the state in exudyn's data (the outputs' and the step check's) -------------------
+    # --- the state in exudyn's data (for readers of it after the run, or a record that
+    # reads it: energy.audited_run's) --------------------------------------------------------
 
-    def _put(self, configuration, t=None):
-        data, solver = self.v.mbs.systemData, self.solver
-        q, v, a, _ = solver.state()
-        data.SetODE2Coordinates(q, configuration)
-        data.SetODE2Coordinates_t(v, configuration)
-        data.SetODE2Coordinates_tt(a, configuration)
-        if t is not None:
-            data.SetTime(t, configuration)
+    def _put(self, t, state):
+        data, current = self.v.mbs.systemData, exu.ConfigurationType.Current
+        q, v, a = state
+        data.SetODE2Coordinates(q, current)
+        data.SetODE2Coordinates_t(v, current)
+        data.SetODE2Coordinates_tt(a, current)
+        data.SetTime(t, current)
 
     # --- one step ---------------------------------------------------------------------------
 
     def _solve(self, h, t_new, first, warm):
         began = time.process_time()
-        self._written = None
+        self._solved = None
         self.own.set_step(h)
         status = (self.solver.step(h, t_new) if first
                   else self.solver.repeat(h, t_new, warm))
@@ -157,18 +159,16 @@ class OwnHost:
         self.newton += self.solver.report()["iterations"]
         return status
 
-    def _pass_end(self, t_new, check):
+    def _pass_end(self, t, t_new, check):
         """The step check's and the bank's verdict on a solved pass: (refused, verdict)."""
+        self._solved = q, v, _ = self.solver.state()[:3]
         if check is not None:
             began = time.process_time()
-            self._put(exu.ConfigurationType.Current, t_new)
-            self._written = t_new
-            jumped = check(self.v.mbs, t_new)
+            jumped = check.judge(t_new, t_new - t, q, v, *self._start)
             self.seconds["check"] += time.process_time() - began
             if jumped is not None:
                 return jumped, None
         began = time.process_time()
-        q, v, _, _ = self.solver.state()
         deflections = self.path.deflections(q, v, t_new)
         self.seconds["deflections"] += time.process_time() - began
         began = time.process_time()
@@ -181,7 +181,7 @@ class OwnHost:
         shorter where a verdict or the step check asked) and its end."""
         passes = self.bank.scheme.passes + 1  # exudyn's discontinuous.maxIterations
         if check is not None:  # what the step check compares with
-            self._put(exu.ConfigurationType.StartOfStep, t)
+            self._start = self._accepted[:2]
         while True:
             t_new = t + h
             began = time.process_time()
@@ -193,7 +193,7 @@ class OwnHost:
                 if status != 0:
                     retry = "Newton"
                     break
-                jumped, verdict = self._pass_end(t_new, check)
+                jumped, verdict = self._pass_end(t, t_new, check)
                 if jumped is not None:
                     retry = jumped
                     self.bank.reject()
@@ -216,10 +216,19 @@ class OwnHost:
             h = 0.5 * h
 
     def _accept(self, t, next_time):
+        """Record the accepted step (Bank.accept calls the record: outputs.record, of the
+        solver's state, or another that reads exudyn's data, where it is written)."""
         began = time.process_time()
-        if self._written != t:  # else the step check's pass wrote it
-            self._put(exu.ConfigurationType.Current, t)
-        self.bank.accept(t, next_time)  # records the step (Vehicle._record)
+        # the last pass's solution, or the initial state
+        state = self._accepted = self._solved or self.solver.state()[:3]
+        if self.bank.record == self.v._record:
+            self.v.given_state = state
+        else:
+            self._put(t, state)
+        try:
+            self.bank.accept(t, next_time)
+        finally:
+            self.v.given_state = None
         self.seconds["record"] += time.process_time() - began
 
     def run(self, end_time, step, start_time=0.0, check=None):
@@ -254,6 +263,7 @@ class OwnHost:
                     h, good = min(INCREASE * taken, step), 0
                 self._accept(t, min(t + h, end) if end - t > 1e-9 * step else None)
             self.solve_cpu = time.process_time() - began
+            self._put(t, self._accepted)  # the run's last state in exudyn's data
         finally:
             self.bank.free()
         return self

@@ -38,8 +38,13 @@ class StepCheck:
     def __init__(self, vehicle):
         self.v = vehicle
         mbs = vehicle.mbs
-        self.links = np.array([mbs.GetNodeODE2Index(n) for n in vehicle.link_nodes])[:, None] \
+        links = np.array([mbs.GetNodeODE2Index(n) for n in vehicle.link_nodes])[:, None] \
             + [0, 1, 2]
+        # the links' coordinates: a slice (a view) where they are one run, as exudyn has them
+        first = links[0, 0]
+        contiguous = np.array_equal(links.ravel(), np.arange(first, first + links.size))
+        self.links = (slice(first, first + links.size) if contiguous else links.ravel())
+        self.link_count = len(links)
         self.reference = np.array([mbs.GetNodeParameter(n, "referenceCoordinates")
                                    for n in vehicle.link_nodes], dtype=float)
         self.start = None  # the contacts' values at the last accepted step
@@ -51,29 +56,35 @@ class StepCheck:
                       c.tooth_gap.copy())
 
     def __call__(self, mbs, t):
-        """None where the solution is one the step can reach, else what jumped. Each part
-        tests its largest value first (the common case, nothing jumped, in a few array
-        operations); only a value beyond a threshold takes the part's full comparison."""
+        """None where the solution in exudyn's data (the exudyn run's, at t) is one the
+        step can reach, else what jumped (judge)."""
         data = mbs.systemData
         start = exu.ConfigurationType.StartOfStep
-        h = t - data.GetTime(start)
-        q1 = np.asarray(data.GetODE2Coordinates())
-        beyond = (q1 - np.asarray(data.GetODE2Coordinates(start))
-                  - h * np.asarray(data.GetODE2Coordinates_t(start)))[self.links]
+        return self.judge(t, t - data.GetTime(start), np.asarray(data.GetODE2Coordinates()),
+                          None, np.asarray(data.GetODE2Coordinates(start)),
+                          np.asarray(data.GetODE2Coordinates_t(start)))
+
+    def judge(self, t, h, q1, v1, q0, v0):
+        """None where the solution q1, v1 at t (v1 None: exudyn's current velocities) is
+        one the step of length h from q0, v0 can reach, else what jumped. Each part tests
+        its largest value first (the common case, nothing jumped, in a few array
+        operations); only a value beyond a threshold takes the part's full comparison."""
+        links = self.links
+        beyond = (q1[links] - q0[links] - h * v0[links]).reshape(self.link_count, 3)
         moved = np.hypot(beyond[:, 0], beyond[:, 1])
         turned = np.abs(beyond[:, 2])
         # not all within (rather than max above): a NaN takes the full comparison
         if not ((moved <= LINK_JUMP).all() and (turned <= LINK_TURN).all()):
             k = int(np.argmax(np.maximum(moved / LINK_JUMP, turned / LINK_TURN)))
             if moved[k] > LINK_JUMP or turned[k] > LINK_TURN:
-                return (f"link {k}{self._where(k, q1[self.links[k]])} moved "
+                return (f"link {k}{self._where(k, q1[links][3 * k:3 * k + 3])} moved "
                         f"{moved[k] * 1e3:.1f} mm and turned {math.degrees(turned[k]):.1f} deg "
                         f"in one step beyond its motion at the step's start")
         if self.start is None:
             return None
         compression0, rate0, contact0, gap0 = self.start
         contacts = self.v.contacts
-        contacts.evaluate(t)  # the coupling's deflections use this evaluation
+        contacts.evaluate(t, q1, v1)  # the coupling's deflections use this evaluation
         jump = np.abs(contacts.compression - compression0 - h * rate0)
         # a wheel out of contact has compression -inf at both ends: NaN here
         if not (jump <= TYRE_JUMP).all():
