@@ -152,12 +152,13 @@ static void band_backward(const bb_matrix *m, double *y, int columns, int stride
             const double *yj = y + (size_t)j * stride;
             for (int c = 0; c < columns; c++) yi[c] -= u * yj[c];
         }
-        double d = BAND(m, i, i);
-        for (int c = 0; c < columns; c++) yi[c] /= d;
+        double d = 1.0 / BAND(m, i, i);  /* a product: a division each is slow */
+        for (int c = 0; c < columns; c++) yi[c] *= d;
     }
 }
 
-/* Y = A^-1 B for B's first `coupled` columns (in place of upper): the forward pass run
+/* Y = A^-1 B for B's first `coupled` columns (in place of upper), each column's first
+   row not zero in `first`: the forward pass run
    from the row where the first column becomes not zero, over the columns not zero by then
    (a border body touches few band rows: the rows above them stay zero), then the
    backward pass over all */
@@ -165,9 +166,7 @@ static void y_solve(bb_matrix *m)
 {
     int nb = m->nb, nd = m->nd, coupled = m->coupled, count = 0;
     for (int k = 0; k < coupled; k++) {
-        int i = 0;
-        while (i < nb && m->upper[(size_t)i * nd + k] == 0.0) i++;
-        m->first[k] = i;
+        int i = m->first[k];
         int p = count++;  /* insertion by first row */
         while (p > 0 && m->first[m->by_first[p - 1]] > i) {
             m->by_first[p] = m->by_first[p - 1];
@@ -219,17 +218,24 @@ EXPORT int bb_factorize(bb_matrix *m)
     /* Y = A^-1 B for the border's columns up to the last that touches the band (the
        multipliers, last in the order, touch only the border: their columns of Y are
        zero); S = E - C Y, skipping C's zeros (a border row touches few band rows) */
-    int coupled = 0;
-    for (int i = 0; i < nb; i++)
-        for (int k = nd - 1; k >= coupled; k--)
-            if (m->upper[(size_t)i * nd + k] != 0.0) { coupled = k + 1; break; }
+    int coupled = 0, *first = m->first;
+    for (int k = 0; k < nd; k++) first[k] = nb;
+    for (int i = 0; i < nb; i++) {  /* row by row, as stored */
+        const double *b = m->upper + (size_t)i * nd;
+        for (int k = 0; k < nd; k++)
+            if (b[k] != 0.0 && first[k] == nb) first[k] = i;
+    }
+    for (int k = 0; k < nd; k++)
+        if (first[k] < nb) coupled = k + 1;
     m->coupled = coupled;
     y_solve(m);
     for (int r = 0; r < nd; r++) {  /* C's entries not zero, listed for bb_solve, bb_zero */
         const double *c = m->lower + (size_t)r * nb;
         int *index = m->lower_index + (size_t)r * nb, count = 0;
-        for (int j = 0; j < nb; j++)
-            if (c[j] != 0.0) index[count++] = j;
+        for (int j = 0; j < nb; j++) {  /* without a branch: most are zero */
+            index[count] = j;
+            count += c[j] != 0.0;
+        }
         m->lower_count[r] = count;
     }
     m->lower_listed = 1;
