@@ -12,6 +12,12 @@
 
 #include "bordered_band.h"
 
+/* the loops over a row's columns vectorized (-O2's very cheap cost model leaves loops of a
+   run-time count scalar); elementwise, so the same numbers */
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC optimize("vect-cost-model=dynamic")
+#endif
+
 #define BAND(m, i, j) ((m)->band[(size_t)(i) * (2 * (m)->w + 1) + (j) - (i) + (m)->w])
 
 EXPORT void bb_free(bb_matrix *m)
@@ -19,6 +25,7 @@ EXPORT void bb_free(bb_matrix *m)
     if (!m) return;
     free(m->order); free(m->position); free(m->band); free(m->upper); free(m->lower);
     free(m->corner); free(m->pivot); free(m->scale); free(m->work);
+    free(m->first); free(m->by_first); free(m->lower_count); free(m->lower_index);
     free(m);
 }
 
@@ -39,8 +46,13 @@ EXPORT bb_matrix *bb_create(int n, const int *order, int nb, int w)
     m->pivot = malloc(sizeof(int) * (nd + 1));
     m->scale = malloc(sizeof(double) * (nb + 1));
     m->work = malloc(sizeof(double) * n);
+    m->first = malloc(sizeof(int) * (nd + 1));
+    m->by_first = malloc(sizeof(int) * (nd + 1));
+    m->lower_count = calloc(nd + 1, sizeof(int));
+    m->lower_index = malloc(sizeof(int) * ((size_t)nb * nd + 1));
     if (!m->order || !m->position || !m->band || !m->upper || !m->lower || !m->corner
-        || !m->pivot || !m->scale || !m->work) {
+        || !m->pivot || !m->scale || !m->work || !m->first || !m->by_first
+        || !m->lower_count || !m->lower_index) {
         bb_free(m);
         return NULL;
     }
@@ -62,7 +74,15 @@ EXPORT void bb_zero(bb_matrix *m)
 {
     memset(m->band, 0, sizeof(double) * (size_t)m->nb * (2 * m->w + 1));
     memset(m->upper, 0, sizeof(double) * (size_t)m->nb * m->nd);
-    memset(m->lower, 0, sizeof(double) * (size_t)m->nb * m->nd);
+    if (m->lower_listed) {  /* only the entries the last factorization found not zero */
+        for (int r = 0; r < m->nd; r++) {
+            double *c = m->lower + (size_t)r * m->nb;
+            const int *index = m->lower_index + (size_t)r * m->nb;
+            for (int k = 0; k < m->lower_count[r]; k++) c[index[k]] = 0.0;
+        }
+    } else {
+        memset(m->lower, 0, sizeof(double) * (size_t)m->nb * m->nd);
+    }
     memset(m->corner, 0, sizeof(double) * (size_t)m->nd * m->nd);
 }
 
@@ -84,6 +104,7 @@ EXPORT int bb_add(bb_matrix *m, int row, int col, double value)
         m->upper[(size_t)i * nd + (j - nb)] += value;
     } else if (j < nb) {
         m->lower[(size_t)(i - nb) * nb + j] += value;
+        m->lower_listed = 0;
     } else {
         m->corner[(size_t)(i - nb) * nd + (j - nb)] += value;
     }
@@ -100,20 +121,28 @@ EXPORT int bb_add_many(bb_matrix *m, int count, const int *row, const int *col,
     return BB_OK;
 }
 
-/* y <- A^-1 y for `columns` right-hand sides, row i's at y + i * stride. */
-static void band_solve(const bb_matrix *m, double *y, int columns, int stride)
+/* y <- L^-1 y in rows from .. to - 1 (the rows before done) for the right-hand sides
+   (columns) lo .. hi - 1, row i's at y + i * stride */
+static void band_forward(const bb_matrix *m, double *y, int from, int to, int lo, int hi,
+                         int stride)
 {
-    int nb = m->nb, w = m->w;
-    for (int i = 0; i < nb; i++) {
+    int w = m->w;
+    for (int i = from; i < to; i++) {
         double *yi = y + (size_t)i * stride;
         int k0 = i - w > 0 ? i - w : 0;
         for (int k = k0; k < i; k++) {
             double l = BAND(m, i, k);
             if (l == 0.0) continue;
             const double *yk = y + (size_t)k * stride;
-            for (int c = 0; c < columns; c++) yi[c] -= l * yk[c];
+            for (int c = lo; c < hi; c++) yi[c] -= l * yk[c];
         }
     }
+}
+
+/* y <- U^-1 y for `columns` right-hand sides, row i's at y + i * stride */
+static void band_backward(const bb_matrix *m, double *y, int columns, int stride)
+{
+    int nb = m->nb, w = m->w;
     for (int i = nb - 1; i >= 0; i--) {
         double *yi = y + (size_t)i * stride;
         int j1 = i + w < nb - 1 ? i + w : nb - 1;
@@ -123,9 +152,39 @@ static void band_solve(const bb_matrix *m, double *y, int columns, int stride)
             const double *yj = y + (size_t)j * stride;
             for (int c = 0; c < columns; c++) yi[c] -= u * yj[c];
         }
-        double d = BAND(m, i, i);
-        for (int c = 0; c < columns; c++) yi[c] /= d;
+        double d = 1.0 / BAND(m, i, i);  /* a product: a division each is slow */
+        for (int c = 0; c < columns; c++) yi[c] *= d;
     }
+}
+
+/* Y = A^-1 B for B's first `coupled` columns (in place of upper), each column's first
+   row not zero in `first`: the forward pass run
+   from the row where the first column becomes not zero, over the columns not zero by then
+   (a border body touches few band rows: the rows above them stay zero), then the
+   backward pass over all */
+static void y_solve(bb_matrix *m)
+{
+    int nb = m->nb, nd = m->nd, coupled = m->coupled, count = 0;
+    for (int k = 0; k < coupled; k++) {
+        int i = m->first[k];
+        int p = count++;  /* insertion by first row */
+        while (p > 0 && m->first[m->by_first[p - 1]] > i) {
+            m->by_first[p] = m->by_first[p - 1];
+            p--;
+        }
+        m->by_first[p] = k;
+    }
+    int lo = coupled, hi = 0;
+    for (int p = 0; p < count; p++) {
+        int k = m->by_first[p], from = m->first[k];
+        if (from >= nb) break;
+        if (k < lo) lo = k;
+        if (k + 1 > hi) hi = k + 1;
+        int to = p + 1 < count ? m->first[m->by_first[p + 1]] : nb;
+        if (to > from)  /* rows from .. to - 1 over the columns started by then */
+            band_forward(m, m->upper, from, to, lo, hi, nd);
+    }
+    band_backward(m, m->upper, coupled, nd);
 }
 
 EXPORT int bb_factorize(bb_matrix *m)
@@ -159,17 +218,33 @@ EXPORT int bb_factorize(bb_matrix *m)
     /* Y = A^-1 B for the border's columns up to the last that touches the band (the
        multipliers, last in the order, touch only the border: their columns of Y are
        zero); S = E - C Y, skipping C's zeros (a border row touches few band rows) */
-    int coupled = 0;
-    for (int i = 0; i < nb; i++)
-        for (int k = nd - 1; k >= coupled; k--)
-            if (m->upper[(size_t)i * nd + k] != 0.0) { coupled = k + 1; break; }
+    int coupled = 0, *first = m->first;
+    for (int k = 0; k < nd; k++) first[k] = nb;
+    for (int i = 0; i < nb; i++) {  /* row by row, as stored */
+        const double *b = m->upper + (size_t)i * nd;
+        for (int k = 0; k < nd; k++)
+            if (b[k] != 0.0 && first[k] == nb) first[k] = i;
+    }
+    for (int k = 0; k < nd; k++)
+        if (first[k] < nb) coupled = k + 1;
     m->coupled = coupled;
-    band_solve(m, m->upper, coupled, nd);
+    y_solve(m);
+    for (int r = 0; r < nd; r++) {  /* C's entries not zero, listed for bb_solve, bb_zero */
+        const double *c = m->lower + (size_t)r * nb;
+        int *index = m->lower_index + (size_t)r * nb, count = 0;
+        for (int j = 0; j < nb; j++) {  /* without a branch: most are zero */
+            index[count] = j;
+            count += c[j] != 0.0;
+        }
+        m->lower_count[r] = count;
+    }
+    m->lower_listed = 1;
     for (int r = 0; r < nd; r++) {
         double *s = m->corner + (size_t)r * nd;
         const double *c = m->lower + (size_t)r * nb;
-        for (int j = 0; j < nb; j++) {
-            if (c[j] == 0.0) continue;
+        const int *index = m->lower_index + (size_t)r * nb;
+        for (int q = 0; q < m->lower_count[r]; q++) {
+            int j = index[q];
             const double *y = m->upper + (size_t)j * nd;
             for (int k = 0; k < coupled; k++) s[k] -= c[j] * y[k];
         }
@@ -212,12 +287,14 @@ EXPORT void bb_solve(bb_matrix *m, const double *rhs, double *x)
     int nb = m->nb, nd = m->nd;
     double *y = m->work, *z = m->work + nb;
     for (int p = 0; p < m->n; p++) y[p] = rhs[m->order[p]];
-    band_solve(m, y, 1, 1);
+    band_forward(m, y, 0, nb, 0, 1, 1);
+    band_backward(m, y, 1, 1);
     if (nd > 0) {
         for (int r = 0; r < nd; r++) {
             const double *c = m->lower + (size_t)r * nb;
+            const int *index = m->lower_index + (size_t)r * nb;
             double s = z[r];
-            for (int j = 0; j < nb; j++) s -= c[j] * y[j];
+            for (int q = 0; q < m->lower_count[r]; q++) s -= c[index[q]] * y[index[q]];
             z[r] = s;
         }
         const double *S = m->corner;

@@ -32,6 +32,11 @@ typedef struct {
     double *scale;        /* nb: each band row's largest magnitude (the pivot test) */
     double *work;         /* n */
     int coupled;          /* the border's columns up to the last touching the band */
+    int *first;           /* nd: each border column's first band row not zero */
+    int *by_first;        /* nd: the coupled border columns by their first band row */
+    int *lower_count;     /* nd: each border row's band columns not zero */
+    int *lower_index;     /* nd x nb: those columns, row by row */
+    int lower_listed;     /* lower's entries not zero all in lower_index (bb_zero's hint) */
     double pivot_tolerance;
     int bad_row, bad_col; /* unknowns (not positions) named by the last error */
 } bb_matrix;
