@@ -181,15 +181,19 @@ static void predict(alpha_solver *s, double h)
     }
 }
 
-static void restore(alpha_solver *s)
+/* The state kept as the step's start (keep) or set back to it (!keep). */
+static void copy_start(alpha_solver *s, int keep)
 {
-    int nq = s->nq;
-    memcpy(s->q, s->q0, sizeof(double) * nq);
-    memcpy(s->v, s->v0, sizeof(double) * nq);
-    memcpy(s->a, s->a0, sizeof(double) * nq);
-    memcpy(s->a_alg, s->a_alg0, sizeof(double) * nq);
-    memcpy(s->lambda, s->lambda0, sizeof(double) * s->nm);
+    double *now[] = {s->q, s->v, s->a, s->a_alg, s->lambda};
+    double *start[] = {s->q0, s->v0, s->a0, s->a_alg0, s->lambda0};
+    for (int k = 0; k < 5; k++) {
+        size_t bytes = sizeof(double) * (size_t)(k < 4 ? s->nq : s->nm);
+        if (bytes)
+            memcpy(keep ? start[k] : now[k], keep ? now[k] : start[k], bytes);
+    }
 }
+
+static void restore(alpha_solver *s) { copy_start(s, 0); }
 
 /* One step from the current state to t_new = t + h (the caller's time, as exudyn's
    step index times h); on any status but ALPHA_CONVERGED the state is the step's start. */
@@ -197,12 +201,7 @@ static int solve(alpha_solver *s, double h, double t_new, int warm);
 
 EXPORT int alpha_step(alpha_solver *s, double h, double t_new)
 {
-    int nq = s->nq;
-    memcpy(s->q0, s->q, sizeof(double) * nq);
-    memcpy(s->v0, s->v, sizeof(double) * nq);
-    memcpy(s->a0, s->a, sizeof(double) * nq);
-    memcpy(s->a_alg0, s->a_alg, sizeof(double) * nq);
-    memcpy(s->lambda0, s->lambda, sizeof(double) * s->nm);
+    copy_start(s, 1);
     return solve(s, h, t_new, 0);
 }
 
