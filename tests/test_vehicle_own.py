@@ -125,7 +125,6 @@ def _host(longest):
 
     host = OwnHost.__new__(OwnHost)
     host.solver, host.bank = _Solver(longest), _Bank()
-    host.own = type("Own", (), {"set_step": lambda self, h: None})()
     host.path = type("Path", (), {"deflections": lambda self, q, v, t: q})()
     host.refused = host.halved = host.solves = host.newton = 0
     host._start = None

@@ -138,6 +138,7 @@ static int newton_matrix(alpha_solver *s, double t, double h)
     double beta_prime = (1 - s->alpha_m) / (h * h * s->beta * (1 - s->alpha_f));
     double gamma_prime = s->gamma / (h * s->beta);
     s->K.count = s->D.count = 0;
+    s->jacobian_h = h;
     if (s->jacobian(s->context, t, s->q, s->v, &s->K, &s->D) != 0
         || s->K.count > s->K.capacity || s->D.count > s->D.capacity)
         return ALPHA_CALLBACK;

@@ -59,6 +59,7 @@ typedef struct {
     double *f, *g, *residual, *delta;
     int jacobian_update_requested;
     double factorized_h;
+    double jacobian_h;  /* the step whose Newton matrix the jacobian callback is asked for */
     /* the last step's report */
     int iterations, jacobians, total_jacobians, bad_row, bad_col;
     double residual_norm, initial_residual;

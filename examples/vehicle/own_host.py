@@ -50,7 +50,7 @@ class _Context(ctypes.Structure):
                                                      "constraint_jacobian", "solver")] + \
                [("n", ctypes.c_int), ("m", ctypes.c_int), ("capacity", ctypes.c_long)] + \
                [(name, ctypes.c_void_p) for name in ("out", "scratch", "G", "H")] + \
-               [("h", ctypes.c_double), ("seconds", ctypes.c_double * 2),
+               [("seconds", ctypes.c_double * 2),
                 ("calls", ctypes.c_long * 2)]
 
 
@@ -68,7 +68,6 @@ class OwnSystem:
             raise RuntimeError("the vehicle's own solver needs a C compiler (gcc)")
         if lib.own_layout() != ctypes.sizeof(_Context):
             raise RuntimeError("own_system.c and own_host.py disagree on the context")
-        lib.own_set_step.argtypes = [ctypes.c_void_p, ctypes.c_double]
         lib.own_times.argtypes = [ctypes.c_void_p] * 3
         self.lib, self.system = lib, system
         self._arrays = [np.zeros((capacity, 3)), np.zeros((capacity, 3)),
@@ -85,9 +84,6 @@ class OwnSystem:
 
     def bind(self, solver):
         self.struct.solver = solver.handle
-
-    def set_step(self, h):
-        self.lib.own_set_step(self.context, h)
 
     def times(self):
         """CPU seconds in the system's evaluation (f, g, G) and its Jacobian (K, D, the
@@ -151,7 +147,6 @@ class OwnHost:
     def _solve(self, h, t_new, first, warm):
         began = time.process_time()
         self._solved = None
-        self.own.set_step(h)
         status = (self.solver.step(h, t_new) if first
                   else self.solver.repeat(h, t_new, warm))
         self.seconds["solve"] += time.process_time() - began

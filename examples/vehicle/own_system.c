@@ -34,14 +34,11 @@ typedef struct {
     long capacity;           /* of out and scratch, triplets */
     double *out, *scratch;   /* capacity x 3 each */
     double *G, *H;           /* 6 m and m triplets */
-    double h;                /* the step being solved (own_set_step) */
     double seconds[2];       /* CPU time in evaluate, in jacobian */
     long calls[2];
 } OwnContext;
 
 EXPORT int own_layout(void) { return (int)sizeof(OwnContext); }
-
-EXPORT void own_set_step(OwnContext *c, double h) { c->h = h; }
 
 EXPORT void own_times(const OwnContext *c, double *seconds, long *calls)
 {
@@ -89,7 +86,7 @@ EXPORT int own_jacobian(void *context, double t, const double *q, const double *
     OwnContext *c = context;
     const alpha_solver *s = c->solver;
     double start = cpu_now();
-    long count = c->jacobian(c->system, t, q, v, 1.0, s->gamma / (c->h * s->beta), c->out,
+    long count = c->jacobian(c->system, t, q, v, 1.0, s->gamma / (s->jacobian_h * s->beta), c->out,
                              c->capacity, c->scratch);
     K->count = D->count = 0;
     int status = count > c->capacity || append(K, c->out, count);
