@@ -22,7 +22,7 @@ damper, and the tyre where its tangent changes over a step) are linearised in C 
         bank.accept(t + h)
 
 The same schemes give the same numbers as the Python path (tests/test_bank.py checks it to
-the bit); `corrected`, `converged` and `explicit` (`predicted` and `nepce`: the Python
+the bit); `corrected`, `iterated`, `converged` and `explicit` (`predicted` and `nepce`: the Python
 path). A bank is used by the thread that made it: another thread's call is refused.
 """
 
