@@ -5,6 +5,7 @@ and the track span (10 links on 8e7 N/m bushes). Prints Markdown tables.
     python benchmarks/coupling_study.py                  # both examples (minutes)
     python benchmarks/coupling_study.py --only station --speed 3
     python benchmarks/coupling_study.py --only station --damper-tangent
+    python benchmarks/coupling_study.py --schemes corrected iterated converged
 
 For each scheme and host step: the total error against a fine reference (the station:
 its own equations of motion with the Model Exchange FMUs by Radau at rtol 1e-10; the
@@ -23,7 +24,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "examples"), str(ROOT / "src")]
 
-from coupling_study import STUDY_GRID, STUDY_STEPS, format_table, progress, tightness  # noqa: E402
+from coupling_study import (STUDY_GRID, STUDY_SCHEMES, STUDY_STEPS, format_table,  # noqa: E402
+                            progress, tightness)
 
 
 def print_tightness(run, keys, steps):
@@ -33,11 +35,11 @@ def print_tightness(run, keys, steps):
                                   for step, value in found.items()) + "\n")
 
 
-def station(speed, damper_tangent=False, steps=None, end_time=None):
+def station(speed, damper_tangent=False, steps=None, end_time=None, schemes=None):
     import road_wheel_station as example
 
     profile = example.RoadProfile()
-    schemes = example.STUDY_SCHEMES
+    schemes = schemes or example.STUDY_SCHEMES
     if damper_tangent:
         example.DAMPER_STEP_MODEL = "tangent"
         schemes = ("corrected", "converged")
@@ -55,11 +57,12 @@ def station(speed, damper_tangent=False, steps=None, end_time=None):
     print()
 
 
-def span(steps=None, end_time=None):
+def span(steps=None, end_time=None, schemes=None):
     import track_span as example
 
     reference, table = example.coupling_study(end_time=end_time or 1.0,
                                               steps=steps or example.STUDY_STEPS,
+                                              schemes=schemes or example.STUDY_SCHEMES,
                                               progress=progress)
     print("## Track span, 10 links, end lifted 10 mm at 6 Hz\n")
     print(f"Reference: `converged` at {example.FINE_STEP * 1e3:g} ms "
@@ -81,14 +84,17 @@ def main():
     parser.add_argument("--steps", type=float, nargs="+", help="host steps, s (default: "
                         "4, 2, 1, 0.5 and 0.25 ms)")
     parser.add_argument("--end-time", type=float, help="s; default: the examples' runs")
+    parser.add_argument("--schemes", nargs="+", choices=STUDY_SCHEMES,
+                        help="some of the schemes (default all; converged is always run: "
+                             "the own errors' measure)")
     args = parser.parse_args()
     started = time.perf_counter()
     print(f"Errors: max on a {STUDY_GRID * 1e3:g} ms grid, % of the reference's range. "
           f"Costs: per host step and FMU.\n")
     if args.only in (None, "station"):
-        station(args.speed, args.damper_tangent, args.steps, args.end_time)
+        station(args.speed, args.damper_tangent, args.steps, args.end_time, args.schemes)
     if args.only in (None, "span"):
-        span(args.steps, args.end_time)
+        span(args.steps, args.end_time, args.schemes)
     print(f"wall time {time.perf_counter() - started:.0f} s")
 
 

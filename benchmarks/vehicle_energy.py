@@ -26,11 +26,10 @@ from scipy.integrate import cumulative_trapezoid
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "examples"), str(ROOT / "src")]
 
-from fmu_components.coupling import DEFAULT_SCHEME  # noqa: E402
 
 from vehicle.course import COURSES  # noqa: E402
 from vehicle.energy import audited_run, radial_account, window_account  # noqa: E402
-from vehicle.model import Vehicle, static_points  # noqa: E402
+from vehicle.model import COUPLING, Vehicle, static_points  # noqa: E402
 
 CLASSES = ("tyres", "ground", "sprocket", "idler", "roller", "speed hold", "drive")
 ACCOUNT = ("applied", "fmu", "cut", "rest", "torsion", "dampers", "linear", "stored",
@@ -107,7 +106,7 @@ def main(argv=None):
     parser.add_argument("--course", choices=sorted(COURSES), default="bump")
     parser.add_argument("--end-time", type=float, default=0.4)
     parser.add_argument("--step", type=float, default=1e-3)
-    parser.add_argument("--coupling", default=DEFAULT_SCHEME)
+    parser.add_argument("--coupling", default=COUPLING)
     parser.add_argument("--window", type=float, default=0.05, help="s")
     parser.add_argument("--spectral-radius", type=float, default=None,
                         help="generalized-alpha's at infinite frequency (default the "

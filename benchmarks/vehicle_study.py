@@ -47,7 +47,6 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "examples"), str(ROOT / "src")]
 
-from fmu_components.coupling import DEFAULT_SCHEME  # noqa: E402
 from fmu_components.coupling.schemes import Converged  # noqa: E402
 
 import bank_path  # noqa: E402
@@ -207,7 +206,7 @@ def parse(argv=None):
     parser.add_argument("--end-time", type=float, default=0.05)
     parser.add_argument("--speed", type=float, default=5.0)
     parser.add_argument("--course", default="bump")
-    parser.add_argument("--scheme", default=DEFAULT_SCHEME)
+    parser.add_argument("--scheme", default=model.COUPLING)
     parser.add_argument("--settle-time", type=float, default=3.0)
     parser.add_argument("--window", type=float, default=0.025,
                         help="s, the windows the hull error is also given in")

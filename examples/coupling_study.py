@@ -28,7 +28,7 @@ from fmu_components.coupling import DEFAULT_SCHEME, SCHEMES
 STUDY_STEPS = (4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4)
 STUDY_GRID = 4e-3  # s: on every host step's grid
 # The schemes in the order of the table: the non-iterative ones, then the repeating ones.
-STUDY_SCHEMES = ("explicit", "predicted", "nepce", "corrected", "converged")
+STUDY_SCHEMES = ("explicit", "predicted", "nepce", "corrected", "iterated", "converged")
 assert set(STUDY_SCHEMES) == set(SCHEMES)
 
 

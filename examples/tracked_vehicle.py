@@ -22,20 +22,19 @@ import time
 import warnings
 from pathlib import Path
 
-from fmu_components.coupling import DEFAULT_SCHEME
 
 import bank_path
 from coupling_study import write_csv
 from vehicle import outputs
 from vehicle.course import COURSES
 from vehicle.flags import add_run_arguments
-from vehicle.model import (DEFAULT_JOINTS, JOINTS, NEWTON_TOLERANCE, SPECTRAL_RADIUS, Linear,
-                           Vehicle, VehicleError, static_points)
+from vehicle.model import (COUPLING, DEFAULT_JOINTS, JOINTS, NEWTON_TOLERANCE, SPECTRAL_RADIUS,
+                           Linear, Vehicle, VehicleError, static_points)
 
 DEFAULT_STEP = 1e-3  # s
 
 
-def simulate(course_name, speed, end_time, step, coupling=DEFAULT_SCHEME, linear=None,
+def simulate(course_name, speed, end_time, step, coupling=COUPLING, linear=None,
              statics=None, settle_time=3.0, fmu_dir=None, path=bank_path.DEFAULT_PATH,
              contacts=None, joints=DEFAULT_JOINTS, spectral_radius=SPECTRAL_RADIUS,
              newton_tolerance=NEWTON_TOLERANCE, solver="exudyn"):
@@ -92,7 +91,8 @@ def check_solver_arguments(parser, args):
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     # 3 m/s: the default run finishes (at 5 m/s runs stop within 2 s; docs/vehicle.md)
-    add_run_arguments(parser, end_time=1.0, step=DEFAULT_STEP, speed=3.0)
+    add_run_arguments(parser, end_time=1.0, step=DEFAULT_STEP, speed=3.0,
+                      coupling=COUPLING)
     parser.add_argument("--settle-time", type=float, default=3.0,
                         help="longest damped settling to the static point, s (solved once, "
                              "then stored; 0: start from the laid-out geometry)")

@@ -128,7 +128,7 @@ def test_the_compact_exponential_takes_every_state_count_to_the_bit():
     assert linearised.compiled_expm()(d, flat.ctypes.data) == -1
 
 
-@pytest.mark.parametrize("scheme", ["corrected", "explicit", "converged"])
+@pytest.mark.parametrize("scheme", ["corrected", "iterated", "explicit", "converged"])
 def test_the_bank_gives_the_python_paths_numbers(native_fmus, scheme, python_exponential):
     """A tyre, both bushes and the damper, every pass's law and every accepted load: to
     the bit, the damper's linearised law too (its matrix exponential in C, operation for

@@ -234,6 +234,38 @@ def test_a_non_finite_output_raises(native_fmus):
         tyre.free()
 
 
+def test_the_iterated_scheme_solves_again_only_where_two_solves_leave_the_loads_apart(
+        native_fmus):
+    """`iterated` takes corrected's two solves (also where the first already agrees), a
+    third where the second's loads still differ by more than 1e-4 of their scale, none
+    where they agree, and warns where its eight solves are spent."""
+    from fmu_components.coupling.schemes import Converged, scheme_named
+
+    iterated = scheme_named("iterated")
+    assert not iterated.done(1, 0.0) and iterated.done(2, 0.0) and Converged().done(1, 0.0)
+    tyre = FmuComponent(native_fmus["RoadWheelTyre"], "tyre", unilateral=True)
+    coupling = Coupling("iterated")
+    deflection = [3e-3]
+    coupling.add(tyre, lambda: (deflection[0], 0.0))
+    coupling.start(0.0)
+    try:
+        coupling.begin_step(1e-3)
+        repeats = []
+        for x in (3.5e-3, 3.2e-3, 3.2e-3):  # the third at the second's: its law is exact
+            deflection[0] = x
+            repeats.append(coupling.end_pass(1e-3).repeat)
+        assert repeats == [True, True, False]
+        coupling.accept(1e-3)
+        coupling.begin_step(2e-3)
+        with pytest.warns(UserWarning, match="still differ .* after 8 passes"):
+            for k in range(8):  # a host far from the law at every pass
+                deflection[0] = 3.5e-3 if k % 2 else 3.1e-3
+                verdict = coupling.end_pass(2e-3)
+        assert not verdict.repeat and coupling.unconverged_steps == 1
+    finally:
+        coupling.free()
+
+
 def test_the_converged_scheme_warns_where_its_pass_limit_stops_it(native_fmus):
     tyre = FmuComponent(native_fmus["RoadWheelTyre"], "tyre", unilateral=True)
     coupling = Coupling("converged")

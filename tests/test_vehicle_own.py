@@ -1,6 +1,6 @@
 """The vehicle on its own solver (examples/vehicle/own_host.py, own_system.c; docs/vehicle.md,
 The vehicle on its own solver) against the same vehicle in exudyn: the same scheme
-(corrected), step (1 ms), spectral radius, Newton tolerances and full Newton, from the
+(the vehicle's default, iterated), step (1 ms), spectral radius, Newton tolerances and full Newton, from the
 stored static point over 0.02 s at 3 m/s on the bump. The two take the same Newton
 iterations, and their histories agree far below Newton's tolerance (the same iterates, to
 round-off). The host's halving of a step whose Newton fails, on stand-ins."""

@@ -173,7 +173,7 @@ def test_the_same_steps_flag_reaches_the_converged_run_only(study, monkeypatch):
 
     monkeypatch.setattr(study, "run", run)
     study.main(["--same-steps", "--course", "sine"])
-    assert checks["corrected"] is own and checks["course"] == "sine"
+    assert checks[study.model.COUPLING] is own and checks["course"] == "sine"
     assert checks["converged"] is not own and issubclass(checks["converged"], own)
     assert study.step_check.StepCheck is own
     study.main(["--course", "random"])

@@ -44,9 +44,11 @@ EXPORT void bank_bind(Bank *bank, const double *deflection, double *laws, double
 
 EXPORT void bank_bind_call(Bank *bank, BankCall *call) { bank->call = call; }
 
-EXPORT void bank_set_scheme(Bank *bank, int scheme, int passes, double tolerance) {
+EXPORT void bank_set_scheme(Bank *bank, int scheme, int passes, int least_passes,
+                            double tolerance) {
     bank->scheme = scheme;
     bank->passes = passes;
+    bank->least_passes = least_passes;
     bank->tolerance = tolerance;
 }
 
@@ -491,7 +493,8 @@ EXPORT int bank_end_pass(Bank *bank) {
                                           c->flags & UNILATERAL, bank->deflection[i])) / scale;
         if (off > worst || i == 0) worst = off;
     }
-    if (pass >= bank->passes || worst <= bank->tolerance) goto done;
+    if (pass >= bank->passes || (pass >= bank->least_passes && worst <= bank->tolerance))
+        goto done;
     verdict = REPEAT;
     for (int i = 0; i < bank->n; i++)
         if (corrected_law(bank, i, time) != 0) {

@@ -111,7 +111,7 @@ typedef struct {
 } BankCall;
 
 typedef struct {
-    int n, scheme, passes;
+    int n, scheme, passes, least_passes;
     BankCall *call;
     double tolerance;
     Instance *instances;

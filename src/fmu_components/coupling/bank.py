@@ -22,7 +22,7 @@ damper, and the tyre where its tangent changes over a step) are linearised in C 
         bank.accept(t + h)
 
 The same schemes give the same numbers as the Python path (tests/test_bank.py checks it to
-the bit); `corrected`, `converged` and `explicit` (`predicted` and `nepce`: the Python
+the bit); `corrected`, `iterated`, `converged` and `explicit` (`predicted` and `nepce`: the Python
 path). A bank is used by the thread that made it: another thread's call is refused.
 """
 
@@ -42,7 +42,7 @@ MAX_OUTPUTS = 8
 # x*, F*, K, Q, K_touch; then Q/2, and the secant's bounds; then the reversal's kink: where,
 # the law's load there, the tangent beyond it, the side (law.py)
 LAW_COLUMNS = 12
-SCHEME_CODES = {"explicit": 0, "corrected": 1, "converged": 2}
+SCHEME_CODES = {"explicit": 0, "corrected": 1, "iterated": 2, "converged": 2}
 UNILATERAL, STEP_TANGENT, CURVATURE, LINEARISABLE, LINEARISED, REVERSIBLE = 1, 2, 4, 8, 16, 32
 ACCEPT, REPEAT, RETRY, FAILED, BUSY, NOTICE = 0, 1, 2, -1, -2, 4
 FUNCTIONS = {2: ("fmi2SetReal", "fmi2GetReal", "fmi2DoStep", "fmi2GetFMUstate",
@@ -73,7 +73,7 @@ def library():
         lib.bank_new.restype = pointer
         lib.bank_new.argtypes = [integer]
         lib.bank_bind.argtypes = [pointer] * 9
-        lib.bank_set_scheme.argtypes = [pointer, integer, integer, double]
+        lib.bank_set_scheme.argtypes = [pointer, integer, integer, integer, double]
         lib.bank_set_instance.argtypes = [pointer, integer, integer, pointer, pointer, pointer,
                                           integer, integer, integer, integer]
         lib.bank_set_model.argtypes = [pointer, integer, pointer, pointer, integer, pointer,
@@ -173,7 +173,7 @@ class Bank:
             self.deflection, self.laws, self.accepted, self.outputs, self.trial_outputs,
             self._seen, self._counts, self._flagged)))
         lib.bank_set_scheme(self._handle, SCHEME_CODES[self.scheme.name], self.scheme.passes,
-                            self.scheme.tolerance)
+                            self.scheme.least_passes, self.scheme.tolerance)
         self.unilateral = np.array([c.unilateral for c in self.components], dtype=bool)
         # instances whose laws may have a reversal's kink (fmu.py's reversible_law)
         self.reversible = np.array([self.scheme.name != "explicit" and c._reversible()
