@@ -148,3 +148,31 @@ def test_a_step_that_fails_down_to_the_floor_stops_naming_the_time():
     with pytest.raises(VehicleError, match=r"gave up at t = 0\.0100 s.*Newton"):
         host._step(0.01, STEP, None)
     assert host.halved == 7  # the steps of 1 ms down to 1/64 of it, each failed
+
+
+class _Refusing(_Solver):
+    """A solver core whose Newton matrix has an entry outside its band (unknowns 120 and
+    126) at every step."""
+
+    def step(self, h, t_new):
+        return 3  # alpha_solver.STATUS: an entry outside the band and the border
+
+    def report(self):
+        return {"iterations": 1, "bad_row": 120, "bad_col": 126}
+
+
+def test_an_entry_outside_the_band_stops_the_run_naming_it_not_halved():
+    """A structure the solver's order does not hold is no Newton failure: halving the
+    step would not change it."""
+    from vehicle.model import VehicleError
+
+    host = _host(longest=STEP)
+    host.solver = _Refusing(STEP)
+    names = {120: "link 32's x", 126: "link 34's x"}
+    host.own = type("Own", (), {"system": type("System", (), {
+        "coordinate_name": staticmethod(names.get)})()})()
+    with pytest.raises(VehicleError, match=r"t = 0\.0110 s.*\(link 32's x, link 34's x\) "
+                                           r"outside the band and the border"):
+        host._step(0.01, STEP, None)
+    assert host.halved == 0 and host.solver.restarts == 0
+    assert host.bank.begun == [0.01 + STEP]

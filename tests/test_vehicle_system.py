@@ -155,3 +155,70 @@ def test_every_entry_falls_in_the_band_or_the_border(run):
         swapped = order.copy()
         swapped[[0, 1, 2, 60, 61, 62]] = order[[60, 61, 62, 0, 1, 2]]
         assert len(outside_band(swapped, half, border, rows, columns)) > 0
+
+
+BEND = np.radians(24.0)  # each of two joints in a row: a wheel's blend then reaches 2 links
+
+
+def _sharp_bends(system, state, wheel):
+    """state's q with the link beneath `wheel` moved under the wheel's centre and its two
+    neighbours turned BEND towards the wheel about their joints with it (the track
+    bending up round the wheel, as at the bump's foot at 5 m/s): (q, that link). The
+    wheel's centre then lies within HANDOVER / 2 of both bisectors of the link's joints."""
+    from vehicle import layout as lay
+
+    q = state.q.copy()
+    system.residual(state.t, q, state.v)
+    centre = system.contacts.views["wheels"].reshape(-1, 2)[wheel]
+    links = (system.reference + q)[system.link_index].reshape(-1, 3)
+    u = np.stack([np.cos(links[:, 2]), np.sin(links[:, 2])], axis=1)
+    r = centre - links[:, :2]
+    along, height = np.sum(r * u, axis=1), r[:, 1] * u[:, 0] - r[:, 0] * u[:, 1]
+    below = np.flatnonzero((height > 0.0) & (height < 2 * lay.WHEEL_RADIUS))
+    k = below[np.argmin(np.abs(along[below]))]
+    placed, half = links.copy(), 0.5 * lay.LINK_PITCH
+    placed[k, :2] += along[k] * u[k]
+    for side in (-1, 1):
+        angle = links[k, 2] + side * BEND
+        joint = placed[k, :2] + side * half * u[k]
+        placed[k + side] = [*(joint + side * half * np.array([np.cos(angle), np.sin(angle)])),
+                            angle]
+    q[system.link_index] = placed.ravel() - system.reference[system.link_index]
+    return q, k
+
+
+def test_a_wheel_over_two_sharp_bends_reaches_two_links_left_out_of_the_band(run):
+    """Where a wheel's blend reaches two links (beyond system.REACH): those entries are
+    the residual's derivatives (central differences, to 1e-6 of the block), the ordering's
+    band does not hold them, and the solver's Jacobian (keep_band) leaves exactly them
+    out, counted; the rest unchanged."""
+    from vehicle.system import VehicleSystem, dense, ordering, outside_band
+
+    vehicle, states, _ = run
+    state = states[PICKS[-1]]
+    system = VehicleSystem(vehicle, state.laws)
+    order, half, border = ordering(system)
+    q, k = _sharp_bends(system, state, 0)
+    K = system.jacobian(state.t, q, state.v, 1.0, 0.0).copy()
+    outside = np.zeros(len(K), dtype=bool)
+    outside[outside_band(order, half, border, K[:, 0], K[:, 1])] = True
+    behind, ahead = (system.link_index[3 * j:3 * j + 3] for j in (k - 1, k + 1))
+    pairs = {tuple(sorted(map(int, entry))) for entry in K[outside, :2]}
+    assert pairs and all(a in behind and b in ahead for a, b in pairs)
+    assert system.coordinate_name(int(behind[0])) == f"link {k - 1}'s x"
+    block, h = dense(K, system.n)[np.ix_(behind, ahead)], 1e-8
+    differences = np.zeros((3, 3))
+    for j, column in enumerate(ahead):
+        sides = []
+        for sign in (1.0, -1.0):
+            moved = q.copy()
+            moved[column] += sign * h
+            sides.append(system.residual(state.t, moved, state.v)[0][behind].copy())
+        differences[:, j] = -(sides[0] - sides[1]) / (2 * h)
+    assert np.abs(block).max() > 1e3  # N/m: entries there to compare
+    assert np.abs(block - differences).max() <= 1e-6 * np.abs(block).max()
+    system.keep_band(order, half, border)
+    kept = system.jacobian(state.t, q, state.v, 1.0, 0.0)
+    assert len(outside_band(order, half, border, kept[:, 0], kept[:, 1])) == 0
+    assert np.array_equal(kept, K[~outside])
+    assert system.left_out() == (outside.sum(), np.abs(K[outside, 2]).max())

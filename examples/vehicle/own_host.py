@@ -42,6 +42,7 @@ CAPACITY = 65536  # triplets of the system's Jacobian
 # exudyn's adaptive step: steps that converge before a halved step is doubled
 # (timeIntegration.adaptiveStepRecoverySteps) and the factor (adaptiveStepIncrease)
 RECOVERY, INCREASE = 10, 2.0
+OUTSIDE = 3  # alpha_solver.h's ALPHA_OUTSIDE: the Newton matrix's structure, not Newton
 
 
 class _Context(ctypes.Structure):
@@ -102,6 +103,7 @@ def solver_for(vehicle, laws, relative_tolerance=1e-8):
     system = VehicleSystem(vehicle, laws)
     own = OwnSystem(system)
     order, half_bandwidth, border = ordering(system)
+    system.keep_band(order, half_bandwidth, border)
     settings = alpha.Settings(spectral_radius=vehicle.spectral_radius,
                               relative_tolerance=relative_tolerance,
                               absolute_tolerance=vehicle.newton_tolerance,
@@ -152,6 +154,12 @@ class OwnHost:
         self.seconds["solve"] += time.process_time() - began
         self.solves += 1
         self.newton += self.solver.report()["iterations"]
+        if status == OUTSIDE:  # halving would not change the matrix's structure
+            report, name = self.solver.report(), self.own.system.coordinate_name
+            raise VehicleError(
+                f"the own solver stopped at t = {t_new:.4f} s: its Newton matrix has an "
+                f"entry at ({name(report['bad_row'])}, {name(report['bad_col'])}) outside "
+                f"the band and the border of its order (system.py's ordering)")
         return status
 
     def _pass_end(self, t, t_new, check):
@@ -270,5 +278,6 @@ class OwnHost:
                 "passes_per_step": self.solves / max(self.bank.steps, 1),
                 "steps": self.bank.steps, "host_steps": self.v.host_steps,
                 "refused": self.refused, "halved": self.halved,
+                "left_out": self.own.system.left_out()[0],
                 "evaluate_s": seconds[0], "jacobian_s": seconds[1],
                 "evaluations": int(calls[0]), "jacobians": int(calls[1]), **self.seconds}

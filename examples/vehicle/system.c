@@ -59,6 +59,13 @@ typedef struct {
     double **joint_arrays;
     const CoordinateSpring *spring;
     const Revolute *revolute;
+    /* the solver's band (vsystem_keep_band; NULL: every entry kept): each coordinate's
+     * position in it (-1: in the border), its half bandwidth; the entries left out of
+     * the Jacobian since, and the largest of them */
+    const int *band_position;
+    int half_bandwidth;
+    long left_out;
+    double left_out_largest;
 } VehicleSystem;
 
 enum { J_Q, J_QD, J_LINK, J_JOINT, J_LAW, J_EFFORT, J_GENERALIZED, J_DEFLECTION, J_LOADS,
@@ -152,12 +159,23 @@ SYSTEM_EXPORT void vsystem_residual(VehicleSystem *s, double t, const double *q,
     if (g != NULL) vsystem_constraints(s, q, g);
 }
 
-/* An entry, where it is not zero: the kernels' blocks hold zeros beyond where their
- * elements reach (a tyre's blend over the neighbours of the links beneath it), which a band
- * need not hold (system.py's REACH) */
-static void put(Triplets *t, int row, int column, double value)
+/* An entry, where it is not zero and falls in the solver's band or border: the kernels'
+ * blocks hold zeros beyond where their elements reach (a tyre's blend over the neighbours
+ * of the links beneath it), which a band need not hold, and where a tyre's blend reaches
+ * further (a wheel over two sharp bends in a row: system.py's REACH) the entries beyond
+ * the band are left out, counted: the Newton matrix is then inexact, the residual not */
+static void put(VehicleSystem *s, Triplets *t, int row, int column, double value)
 {
-    if (value != 0.0) triplets_put(t, row, column, value);
+    if (value == 0.0) return;
+    if (s->band_position != NULL) {
+        int i = s->band_position[row], j = s->band_position[column];
+        if (i >= 0 && j >= 0 && abs(i - j) > s->half_bandwidth) {
+            s->left_out++;
+            if (fabs(value) > s->left_out_largest) s->left_out_largest = fabs(value);
+            return;
+        }
+    }
+    triplets_put(t, row, column, value);
 }
 
 /* factor K + factor_t D (K = -df/dq, D = -df/dv) at (t, q, v) as (row, column, value)
@@ -175,12 +193,12 @@ SYSTEM_EXPORT long vsystem_jacobian(VehicleSystem *s, double t, const double *q,
                     factor, factor_t, scratch);
     for (long k = 0; k < 36L * s->links; k++) {
         const double *e = scratch + 3 * k;
-        put(&result, s->link_index[(int)e[0]], s->link_index[(int)e[1]], e[2]);
+        put(s, &result, s->link_index[(int)e[0]], s->link_index[(int)e[1]], e[2]);
     }
     long contacts = contacts_jacobian(s->contacts, factor, factor_t, scratch, capacity);
     for (long k = 0; k < contacts && k < capacity; k++) {
         const double *e = scratch + 3 * k;
-        put(&result, s->body_index[(int)e[0]], s->body_index[(int)e[1]], e[2]);
+        put(s, &result, s->body_index[(int)e[0]], s->body_index[(int)e[1]], e[2]);
     }
     if (contacts > capacity) result.count += contacts - capacity;
     for (int k = 0; k < s->springs; k++) {
@@ -190,11 +208,11 @@ SYSTEM_EXPORT long vsystem_jacobian(VehicleSystem *s, double t, const double *q,
         /* f_a = F(q_b - q_a), f_b = -F: -df/dq */
         double value = factor * by_d + factor_t * by_rate;
         if (c->a >= 0) {
-            put(&result, c->a, c->a, value);
-            put(&result, c->a, c->b, -value);
-            put(&result, c->b, c->a, -value);
+            put(s, &result, c->a, c->a, value);
+            put(s, &result, c->a, c->b, -value);
+            put(s, &result, c->b, c->a, -value);
         }
-        put(&result, c->b, c->b, value);
+        put(s, &result, c->b, c->b, value);
     }
     return result.count;
 }

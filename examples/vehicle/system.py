@@ -52,7 +52,9 @@ class _System(ctypes.Structure):
                                                      "contacts", "body_index", "joints")] + \
                [("half", ctypes.c_double)] + \
                [(name, ctypes.c_void_p) for name in ("link_index", "joint_arrays", "spring",
-                                                     "revolute")]
+                                                     "revolute", "band_position")] + \
+               [("half_bandwidth", ctypes.c_int), ("left_out", ctypes.c_long),
+                ("left_out_largest", ctypes.c_double)]
 
 
 def library():
@@ -222,6 +224,38 @@ class VehicleSystem:
                 return out[:count]
             self._triplets(2 * count)
 
+    def keep_band(self, order, half_bandwidth, border):
+        """From now on leave out of `jacobian` the entries that fall neither in the band
+        nor in the border of `ordering`'s order (the few a tyre's blend writes beyond
+        REACH), counted: left_out()."""
+        position = np.empty(len(order), dtype=np.intc)
+        position[order] = np.arange(len(order))
+        position[position >= len(order) - border] = -1
+        self._band_position = np.ascontiguousarray(position[:self.n])
+        self.system.band_position = _at(self._band_position)
+        self.system.half_bandwidth = half_bandwidth
+
+    def left_out(self):
+        """(count, largest magnitude) of the Jacobian's entries keep_band left out."""
+        return int(self.system.left_out), float(self.system.left_out_largest)
+
+    def coordinate_name(self, index):
+        """What unknown `index` is (a link's, the hull's, an arm's or the idler's crank's
+        x, y or angle, or a revolute joint's multiplier), for messages."""
+        if index >= self.n:
+            return f"revolute joint {(index - self.n) // 2}'s multiplier {(index - self.n) % 2}"
+        for indices, names in ((self.link_index, lambda k: f"link {k}"),
+                               (self.body_index, self._body_name)):
+            slots = np.flatnonzero(indices == index)
+            if len(slots):
+                return f"{names(slots[0] // 3)}'s {('x', 'y', 'angle')[slots[0] % 3]}"
+        return f"coordinate {index}"
+
+    def _body_name(self, body):  # the contacts' bodies: the hull, the arms, the crank
+        arms = len(self.v.arm_nodes)
+        return ("the hull" if body == 0 else f"arm {body}" if body <= arms
+                else "the idler's crank")
+
     def constraint_jacobian(self, q, multipliers=None):
         """(G, H): G = dg/dq as (row, column, value) rows, and where `multipliers` are
         given H = d(G^T lambda)/dq (else None)."""
@@ -240,11 +274,16 @@ class VehicleSystem:
 
 
 # The loop's reach: an element's nonzero entries couple a link with its neighbours in the
-# loop at most (a joint joins two; a tyre's blend weighs the two links of the joint nearest
-# the wheel, its windows fading over contacts.HANDOVER about each joint, less than half a
-# pitch, so a link's window depends on one neighbour's direction at a time; a pin's
-# contacts load its joint's two links). The contacts' kernel writes a pair's block over
-# the link's both neighbours, zero beyond that reach; system.c leaves zeros out.
+# loop (a joint joins two; a pin's contacts load its joint's two links; a tyre's blend
+# weighs the links beneath a wheel, each link's window fading over contacts.HANDOVER about
+# each of its joints, so that its term depends on the directions of the neighbours at the
+# ends it fades at). That reach is 1 except under a wheel over two sharp bends in a row
+# (the foot of the bump at 5 m/s: two joints bent some 21 degrees each): there the wheel
+# sits within HANDOVER / 2 of both bisectors of a link, whose term then moves with both of
+# its neighbours, two links apart. The band is kept at REACH 1 (docs/vehicle.md, The
+# vehicle on its own solver: reach 2 would widen it for entries that are rare and some
+# 1e-5 of the Newton matrix's diagonal) and the solver's Jacobian leaves entries beyond it
+# out, counted (VehicleSystem.keep_band): an inexact Newton matrix, an exact residual.
 REACH = 1
 
 
