@@ -8,10 +8,15 @@ the records; the step check; the rest Python per step).
 
     python benchmarks/vehicle_own.py [--speeds 3 5] [--end-time 0.2] [--rounds 2]
     python benchmarks/vehicle_own.py --agreement 0.1 0.001 [--speeds 3] [--end-time 0.02]
+    python benchmarks/vehicle_own.py --newton full reuse [--no-exudyn] ...
 
 Prints each run and the load (os.getloadavg) before and after. --agreement: instead, at
 each Newton absolute tolerance given, the two runs' largest difference of the histories
-(outputs.largest_difference, in % of range) and their Newton iterations per solve.
+(outputs.largest_difference, in % of range; the hull's vertical acceleration's too) and
+their Newton iterations per solve. --newton: the own solver's Newton policies
+(vehicle/own_host.py NEWTON; POLICY@RATIO: that policy at another contractivity), each
+run in every round; with two or more, --agreement compares each with the first instead
+of exudyn with own.
 """
 
 import argparse
@@ -25,23 +30,46 @@ sys.path[:0] = [str(ROOT / "examples"), str(ROOT / "src")]
 from tracked_vehicle import DEFAULT_STEP, simulate  # noqa: E402
 from vehicle.model import static_points  # noqa: E402
 from vehicle.outputs import largest_difference  # noqa: E402
+from vehicle.own_host import DEFAULT_NEWTON, NEWTON  # noqa: E402
 
 KEYS = ("hull_vertical_acceleration", "hull_pitch_acceleration",
         "seat_vertical_acceleration", "hull_y", "tyre_force", "damper_torque",
         "bush_radial_force", "bush_torque")
 
 
-def agreement(speeds, end_time, tolerances, statics):
+def policy(name):
+    """A key of own_host.NEWTON, or POLICY@RATIO (registered there); the key."""
+    base, _, ratio = name.partition("@")
+    if base not in NEWTON:
+        raise SystemExit(f"--newton {name}: one of {', '.join(NEWTON)} (@RATIO after one)")
+    if ratio:
+        NEWTON[name] = {**NEWTON[base], "reuse_contractivity": float(ratio)}
+    return name
+
+
+def run(speed, end_time, statics, solver, **given):
+    """simulate's run of `solver`: "exudyn", or an own solver's Newton policy."""
+    own = None if solver == "exudyn" else solver
+    return simulate("bump", speed, end_time, DEFAULT_STEP, statics=statics,
+                    solver="own" if own else "exudyn", own_newton=own, **given)
+
+
+def agreement(speeds, end_time, tolerances, statics, solvers):
     for speed in speeds:
         for tolerance in tolerances:
-            runs = {solver: simulate("bump", speed, end_time, DEFAULT_STEP, statics=statics,
-                                     newton_tolerance=tolerance, solver=solver)
-                    for solver in ("exudyn", "own")}
-            difference, key = largest_difference(runs["exudyn"][1], runs["own"][1], KEYS)
-            iterations = [runs[s][0].solver_statistics()["newton_per_pass"] for s in runs]
-            print(f"{speed:g} m/s, tolerance {tolerance:g}: largest difference "
-                  f"{difference:.3g} % of range ({key}); Newton iterations per solve "
-                  f"exudyn {iterations[0]:.3f}, own {iterations[1]:.3f}", flush=True)
+            runs = {solver: run(speed, end_time, statics, solver, newton_tolerance=tolerance)
+                    for solver in solvers}
+            first = solvers[0]
+            for other in solvers[1:]:
+                a, b = runs[first][1], runs[other][1]
+                difference, key = largest_difference(a, b, KEYS)
+                hull, _ = largest_difference(a, b, KEYS[:1])
+                iterations = [runs[s][0].solver_statistics()["newton_per_pass"]
+                              for s in (first, other)]
+                print(f"{speed:g} m/s, tolerance {tolerance:g}, {first} against {other}: "
+                      f"largest difference {difference:.3g} % of range ({key}), the hull's "
+                      f"vertical acceleration's {hull:.3g} %; Newton iterations per solve "
+                      f"{iterations[0]:.3f}, {iterations[1]:.3f}", flush=True)
 
 
 def split(statistics, cpu):
@@ -63,19 +91,23 @@ def main(argv=None):
     parser.add_argument("--end-time", type=float, default=0.2)
     parser.add_argument("--rounds", type=int, default=2)
     parser.add_argument("--agreement", type=float, nargs="+", metavar="TOLERANCE")
+    parser.add_argument("--newton", type=policy, nargs="+", default=[DEFAULT_NEWTON],
+                        metavar="POLICY")
+    parser.add_argument("--no-exudyn", action="store_true",
+                        help="the own solver's policies alone")
     args = parser.parse_args(argv)
     print(f"load before: {os.getloadavg()}")
     statics = static_points()
+    solvers = ([] if args.no_exudyn else ["exudyn"]) + args.newton
     if args.agreement:
-        agreement(args.speeds, args.end_time, args.agreement, statics)
+        agreement(args.speeds, args.end_time, args.agreement, statics,
+                  args.newton if len(args.newton) > 1 else ["exudyn"] + args.newton)
         print(f"load after: {os.getloadavg()}")
         return
     for speed in args.speeds:
         for round_ in range(args.rounds):
-            for solver in ("exudyn", "own"):
-                vehicle, result, wall, cpu = simulate("bump", speed, args.end_time,
-                                                      DEFAULT_STEP, statics=statics,
-                                                      solver=solver)
+            for solver in solvers:
+                vehicle, result, wall, cpu = run(speed, args.end_time, statics, solver)
                 simulated = result["time"][-1] - result["time"][0]
                 s = vehicle.solver_statistics()
                 print(f"{speed:g} m/s round {round_ + 1} {solver}: {cpu / simulated:.2f} s CPU "
@@ -83,7 +115,10 @@ def main(argv=None):
                       f"{s['newton_per_pass']:.2f} Newton iterations per solve, "
                       f"{s['passes_per_step']:.2f} solves per step, {s['steps']} steps for "
                       f"{s['host_steps']}, {s['refused']} refused", flush=True)
-                if solver == "own":
+                if solver != "exudyn":
+                    print(f"    {s['jacobians'] / s['steps']:.2f} Newton matrices (Jacobian "
+                          f"and factorization) per step; the solves "
+                          f"{s['solve'] / simulated:.2f} s CPU per simulated s", flush=True)
                     parts = split(s, cpu)
                     print("    " + ", ".join(f"{name} {seconds / simulated:.3f}"
                                              for name, seconds in parts.items())

@@ -33,7 +33,15 @@ typedef struct {
     int use_modified_newton, max_modified_newton_iterations;
     int max_modified_newton_restart_iterations;
     int adapt_initial_residual;
+    /* the reuse policy (not exudyn's; off: 0): the last factorization kept across Newton
+       iterations and the passes of a step (1), and across steps of the same h too (2);
+       a new one at the current iterate when an iteration's residual contracted by a
+       ratio worse than reuse_contractivity */
+    int reuse_jacobian;
+    double reuse_contractivity;
 } alpha_settings;
+
+#define ALPHA_TRACE 64          /* iterations of a solve traced (alpha_trace) */
 
 /* statuses */
 #define ALPHA_CONVERGED 0
@@ -63,6 +71,11 @@ typedef struct {
     /* the last step's report */
     int iterations, jacobians, total_jacobians, bad_row, bad_col;
     double residual_norm, initial_residual;
+    /* the last solve's iterations, up to ALPHA_TRACE: each one's residual norm after its
+       update, and whether it made a new Newton matrix (2: after a restart from the
+       pass's start) */
+    double trace_norm[ALPHA_TRACE];
+    int trace_factorized[ALPHA_TRACE];
 } alpha_solver;
 
 EXPORT alpha_solver *alpha_create(int nq, int nm, const double *mass, const int *order, int nb,
@@ -76,6 +89,7 @@ EXPORT int alpha_step(alpha_solver *s, double h, double t_new);
 EXPORT void alpha_restart(alpha_solver *s);
 EXPORT int alpha_repeat(alpha_solver *s, double h, double t_new, int warm);
 EXPORT void alpha_report(const alpha_solver *s, int *ints, double *reals);
+EXPORT int alpha_trace(const alpha_solver *s, double *norms, int *factorized);
 EXPORT void alpha_state(const alpha_solver *s, double *q, double *v, double *a,
                         double *lambda);
 
