@@ -13,7 +13,8 @@ the records; the step check; the rest Python per step).
 Prints each run and the load (os.getloadavg) before and after. --agreement: instead, at
 each Newton absolute tolerance given, the two runs' largest difference of the histories
 (outputs.largest_difference, in % of range; the hull's vertical acceleration's too) and
-their Newton iterations per solve. --newton: the own solver's Newton policies
+their Newton iterations per solve, and each run against the first's at the smallest
+tolerance. --newton: the own solver's Newton policies
 (vehicle/own_host.py NEWTON; POLICY@RATIO: that policy at another contractivity), each
 run in every round; with two or more, --agreement compares each with the first instead
 of exudyn with own.
@@ -55,21 +56,28 @@ def run(speed, end_time, statics, solver, **given):
 
 
 def agreement(speeds, end_time, tolerances, statics, solvers):
+    """Each pair at each tolerance, and each run against the first solver's at the smallest
+    tolerance (what stopping at the tolerance moves)."""
+    def compare(what, a, b):
+        difference, key = largest_difference(runs[a][1], runs[b][1], KEYS)
+        hull, _ = largest_difference(runs[a][1], runs[b][1], KEYS[:1])
+        iterations = [runs[r][0].solver_statistics()["newton_per_pass"] for r in (a, b)]
+        print(f"{speed:g} m/s, {what}: largest difference {difference:.3g} % of range "
+              f"({key}), the hull's vertical acceleration's {hull:.3g} %; Newton "
+              f"iterations per solve {iterations[0]:.3f}, {iterations[1]:.3f}", flush=True)
+
     for speed in speeds:
+        runs = {(solver, tolerance): run(speed, end_time, statics, solver,
+                                         newton_tolerance=tolerance)
+                for tolerance in tolerances for solver in solvers}
+        first, tightest = solvers[0], min(tolerances)
         for tolerance in tolerances:
-            runs = {solver: run(speed, end_time, statics, solver, newton_tolerance=tolerance)
-                    for solver in solvers}
-            first = solvers[0]
             for other in solvers[1:]:
-                a, b = runs[first][1], runs[other][1]
-                difference, key = largest_difference(a, b, KEYS)
-                hull, _ = largest_difference(a, b, KEYS[:1])
-                iterations = [runs[s][0].solver_statistics()["newton_per_pass"]
-                              for s in (first, other)]
-                print(f"{speed:g} m/s, tolerance {tolerance:g}, {first} against {other}: "
-                      f"largest difference {difference:.3g} % of range ({key}), the hull's "
-                      f"vertical acceleration's {hull:.3g} %; Newton iterations per solve "
-                      f"{iterations[0]:.3f}, {iterations[1]:.3f}", flush=True)
+                compare(f"tolerance {tolerance:g}, {first} against {other}",
+                        (first, tolerance), (other, tolerance))
+            for solver in solvers if tolerance != tightest else ():
+                compare(f"{solver} at {tolerance:g} against {first} at {tightest:g}",
+                        (first, tightest), (solver, tolerance))
 
 
 def split(statistics, cpu):

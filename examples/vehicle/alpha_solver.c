@@ -55,7 +55,7 @@ EXPORT void alpha_free(alpha_solver *s)
     triplets_free(&s->K); triplets_free(&s->D); triplets_free(&s->G);
     double *arrays[] = {s->mass, s->q, s->v, s->a, s->a_alg, s->lambda, s->q0, s->v0, s->a0,
                         s->a_alg0, s->lambda0, s->f, s->g, s->residual, s->delta, s->q1, s->v1,
-                        s->a1, s->lambda1};
+                        s->a1, s->lambda1, s->steps};
     for (size_t i = 0; i < sizeof arrays / sizeof *arrays; i++) free(arrays[i]);
     free(s);
 }
@@ -86,12 +86,33 @@ EXPORT alpha_solver *alpha_create(int nq, int nm, const double *mass, const int 
     for (size_t i = 0; ok && i < sizeof multipliers / sizeof *multipliers; i++)
         ok = (*multipliers[i] = calloc(nm + 1, sizeof(double))) != NULL;
     ok = ok && (s->residual = calloc(s->n, sizeof(double))) != NULL
-         && (s->delta = calloc(s->n, sizeof(double))) != NULL;
+         && (s->delta = calloc(s->n, sizeof(double))) != NULL
+         && (s->steps = calloc((size_t)s->n * (settings->max_iterations + 1),
+                               sizeof(double))) != NULL;
     if (!ok) { alpha_free(s); return NULL; }
     memcpy(s->mass, mass, sizeof(double) * nq);
     s->matrix->pivot_tolerance = settings->pivot_tolerance;
     s->jacobian_update_requested = 1;
+    s->max_steps = settings->max_iterations + 1;
     return s;
+}
+
+/* Other settings from the next step on (the spectral radius and the pivot tolerance kept;
+   max_iterations at most the first's); the Newton matrix kept. 1 if refused. */
+EXPORT int alpha_configure(alpha_solver *s, const alpha_settings *settings)
+{
+    if (settings->max_iterations + 1 > s->max_steps) return 1;
+    double rho = s->set.spectral_radius, pivot = s->set.pivot_tolerance;
+    s->set = *settings;
+    s->set.spectral_radius = rho;
+    s->set.pivot_tolerance = pivot;
+    return 0;
+}
+
+/* alpha_m, alpha_f, beta, gamma */
+EXPORT void alpha_coefficients(const alpha_solver *s, double *out)
+{
+    out[0] = s->alpha_m; out[1] = s->alpha_f; out[2] = s->beta; out[3] = s->gamma;
 }
 
 static int from_matrix(alpha_solver *s, int status)
@@ -257,6 +278,34 @@ static void update(alpha_solver *s, double sign, double scale, double beta_prime
     for (int j = 0; j < s->nm; j++) s->lambda[j] += sign * dl[j] / scale;
 }
 
+/* Broyden's step (Kelley's brsol, the full step) on the kept matrix: w = A^-1 r from
+   delta, corrected by the steps d_0 .. d_{m-1} taken since the matrix was made,
+       w += d_{j+1} (d_j . w) / |d_j|^2  (j < m - 1),   d_m = w / (1 - d_{m-1} . w / |d_{m-1}|^2),
+   into delta and kept as d_m; 1 where the update is singular (a new matrix wanted) */
+static int broyden(alpha_solver *s)
+{
+    int n = s->n, m = s->n_steps;
+    double *w = s->delta;
+    for (int j = 0; j + 1 <= m; j++) {
+        const double *d = s->steps + (size_t)j * n;
+        double dw = 0.0, dd = 0.0;
+        for (int i = 0; i < n; i++) { dw += d[i] * w[i]; dd += d[i] * d[i]; }
+        if (j + 1 < m) {
+            const double *next = d + n;
+            for (int i = 0; i < n; i++) w[i] += next[i] * (dw / dd);
+        } else {
+            double denominator = 1.0 - dw / dd;
+            if (!(fabs(denominator) > 1e-3)) return 1;
+            for (int i = 0; i < n; i++) w[i] /= denominator;
+        }
+    }
+    if (m < s->max_steps) {
+        memcpy(s->steps + (size_t)m * n, w, sizeof(double) * n);
+        s->n_steps = m + 1;
+    }
+    return 0;
+}
+
 /* A pass's Newton's start: the predictor's, warm: the last pass's solution kept in q1 .. */
 static void start_point(alpha_solver *s, double h, int warm)
 {
@@ -302,7 +351,16 @@ static int solve(alpha_solver *s, double h, double t_new, int warm)
             made = 1 + from_start;
             from_start = 0;
         }
+        if (made || s->iterations == 1) s->n_steps = 0;
         bb_solve(s->matrix, s->residual, s->delta);
+        if (reuse && set->reuse_broyden && broyden(s)) {
+            /* no Broyden step: a new matrix here, its Newton step */
+            if ((status = newton_matrix(s, t_new, h))) goto failed;
+            made = 1;
+            s->n_steps = 0;
+            bb_solve(s->matrix, s->residual, s->delta);
+            broyden(s);
+        }
         update(s, -1.0, scale, beta_prime, gamma_prime);
         if ((status = residual(s, t_new, scale, &current))) goto failed;
 

@@ -39,6 +39,7 @@ typedef struct {
        ratio worse than reuse_contractivity */
     int reuse_jacobian;
     double reuse_contractivity;
+    int reuse_broyden;   /* the kept matrix's steps corrected by Broyden's rank-one updates */
 } alpha_settings;
 
 #define ALPHA_TRACE 64          /* iterations of a solve traced (alpha_trace) */
@@ -65,6 +66,8 @@ typedef struct {
     double t0, *q0, *v0, *a0, *a_alg0, *lambda0; /* the step's start */
     double *q1, *v1, *a1, *lambda1;          /* a pass's solution, a warm repeat's start */
     double *f, *g, *residual, *delta;
+    double *steps;      /* Broyden's: the steps since the matrix was made, (max_iterations) n */
+    int n_steps, max_steps;
     int jacobian_update_requested;
     double factorized_h;
     double jacobian_h;  /* the step whose Newton matrix the jacobian callback is asked for */
@@ -89,6 +92,8 @@ EXPORT int alpha_step(alpha_solver *s, double h, double t_new);
 EXPORT void alpha_restart(alpha_solver *s);
 EXPORT int alpha_repeat(alpha_solver *s, double h, double t_new, int warm);
 EXPORT void alpha_report(const alpha_solver *s, int *ints, double *reals);
+EXPORT int alpha_configure(alpha_solver *s, const alpha_settings *settings);
+EXPORT void alpha_coefficients(const alpha_solver *s, double *out);
 EXPORT int alpha_trace(const alpha_solver *s, double *norms, int *factorized);
 EXPORT void alpha_state(const alpha_solver *s, double *q, double *v, double *a,
                         double *lambda);

@@ -60,13 +60,13 @@ class Settings(ctypes.Structure):
                 ("max_modified_newton_iterations", _int),
                 ("max_modified_newton_restart_iterations", _int),
                 ("adapt_initial_residual", _int), ("reuse_jacobian", _int),
-                ("reuse_contractivity", _real)]
+                ("reuse_contractivity", _real), ("reuse_broyden", _int)]
     DEFAULTS = dict(spectral_radius=0.9, relative_tolerance=1e-8, absolute_tolerance=1e-10,
                     maximum_solution_norm=1e38, modified_newton_contractivity=0.5,
                     pivot_tolerance=1e-12, max_iterations=25, use_modified_newton=0,
                     max_modified_newton_iterations=8,
                     max_modified_newton_restart_iterations=7, adapt_initial_residual=1,
-                    reuse_jacobian=0, reuse_contractivity=0.5)
+                    reuse_jacobian=0, reuse_contractivity=0.5, reuse_broyden=0)
 
     def __init__(self, **given):
         unknown = set(given) - set(self.DEFAULTS)
@@ -108,6 +108,8 @@ def library():
         lib.alpha_state.argtypes = [_pointer] + [_pointer] * 4
         lib.alpha_report.argtypes = [_pointer, _pointer, _pointer]
         lib.alpha_trace.argtypes = [_pointer, _pointer, _pointer]
+        lib.alpha_configure.argtypes = [_pointer, ctypes.POINTER(Settings)]
+        lib.alpha_coefficients.argtypes = [_pointer, _pointer]
     return lib
 
 
@@ -277,6 +279,22 @@ class AlphaSolver:
                     total_jacobians=int(ints[2]), bad_row=int(ints[3]),
                     bad_col=int(ints[4]), residual=float(reals[0]),
                     initial_residual=float(reals[1]))
+
+    def configure(self, **changes):
+        """Settings changed from the next step on (not the spectral radius, the pivot
+        tolerance, nor more max_iterations than the first settings'); the Newton matrix
+        kept."""
+        settings = Settings(**{**{name: getattr(self.settings, name)
+                                  for name, *_ in Settings._fields_}, **changes})
+        if self.lib.alpha_configure(self.handle, ctypes.byref(settings)):
+            raise ValueError("max_iterations above the solver's first settings'")
+        self.settings = settings
+
+    def coefficients(self):
+        """generalized-alpha's alpha_m, alpha_f, beta, gamma."""
+        out = np.zeros(4)
+        self.lib.alpha_coefficients(self.handle, out.ctypes.data)
+        return dict(zip(("alpha_m", "alpha_f", "beta", "gamma"), out))
 
     def trace(self):
         """The last solve's iterations (up to alpha_solver.h's ALPHA_TRACE): each one's

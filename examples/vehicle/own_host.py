@@ -40,13 +40,14 @@ LIBRARY = Library("vehicle_own", [HERE / "own_system.c"],
                   "the vehicle's own solver's adapter (own_system.c)", "--solver exudyn")
 CAPACITY = 65536  # triplets of the system's Jacobian
 # the solver core's Newton policies (alpha_solver.h): exudyn's full Newton (a new
-# factorization every iteration), and the reuse policy, the last factorization kept
-# across iterations, passes and steps of the same h, a new one at the present iterate
-# after an iteration that contracted the residual norm by a ratio worse than its
-# contractivity ("passes": a new one at each step's first pass)
+# factorization every iteration); "chord", the last factorization kept across
+# iterations, passes and steps of the same h, a new one at the present iterate after an
+# iteration that contracted the residual norm by a ratio worse than the contractivity;
+# "reuse", the same with the kept matrix's steps corrected by Broyden's rank-one updates
+# (docs/vehicle.md, The vehicle on its own solver)
 NEWTON = {"full": dict(reuse_jacobian=0),
-          "passes": dict(reuse_jacobian=1, reuse_contractivity=0.25),
-          "reuse": dict(reuse_jacobian=2, reuse_contractivity=0.25)}
+          "chord": dict(reuse_jacobian=2, reuse_contractivity=0.5),
+          "reuse": dict(reuse_jacobian=2, reuse_contractivity=0.25, reuse_broyden=1)}
 DEFAULT_NEWTON = "full"
 # exudyn's adaptive step: steps that converge before a halved step is doubled
 # (timeIntegration.adaptiveStepRecoverySteps) and the factor (adaptiveStepIncrease)
