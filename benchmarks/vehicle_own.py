@@ -12,18 +12,20 @@ the records; the step check; the rest Python per step).
 
 Prints each run and the load (os.getloadavg) before and after. --agreement: instead, at
 each Newton absolute tolerance given, the two runs' largest difference of the histories
-(outputs.largest_difference, in % of range; the hull's vertical acceleration's too) and
-their Newton iterations per solve, and each run against the first's at the smallest
-tolerance. --newton: the own solver's Newton policies
+(outputs.largest_difference at the times both runs have, in % of range; the hull's
+vertical acceleration's too) and their Newton iterations per solve, and each run against
+the first's at the smallest tolerance. --newton: the own solver's Newton policies
 (vehicle/own_host.py NEWTON; POLICY@RATIO: that policy at another contractivity), each
-run in every round; with two or more, --agreement compares each with the first instead
-of exudyn with own.
+run in every round (with the Newton matrices per step and the solves' CPU); with two or
+more, --agreement compares each with the first instead of exudyn with own.
 """
 
 import argparse
 import os
 import sys
 from pathlib import Path
+
+import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "examples"), str(ROOT / "src")]
@@ -55,12 +57,22 @@ def run(speed, end_time, statics, solver, **given):
                     solver="own" if own else "exudyn", own_newton=own, **given)
 
 
+def common_times(a, b):
+    """Two runs' histories of KEYS at the times both have (a step one run halved and the
+    other did not adds times to one)."""
+    ta, tb = (np.round(np.asarray(r["time"]) * 1e9).astype(np.int64) for r in (a, b))
+    keep_a, keep_b = np.isin(ta, tb), np.isin(tb, ta)
+    return ({key: np.asarray(a[key])[keep_a] for key in ("time",) + KEYS},
+            {key: np.asarray(b[key])[keep_b] for key in ("time",) + KEYS})
+
+
 def agreement(speeds, end_time, tolerances, statics, solvers):
     """Each pair at each tolerance, and each run against the first solver's at the smallest
-    tolerance (what stopping at the tolerance moves)."""
+    tolerance (what stopping at the tolerance moves), at the times both have."""
     def compare(what, a, b):
-        difference, key = largest_difference(runs[a][1], runs[b][1], KEYS)
-        hull, _ = largest_difference(runs[a][1], runs[b][1], KEYS[:1])
+        ha, hb = common_times(runs[a][1], runs[b][1])
+        difference, key = largest_difference(ha, hb, KEYS)
+        hull, _ = largest_difference(ha, hb, KEYS[:1])
         iterations = [runs[r][0].solver_statistics()["newton_per_pass"] for r in (a, b)]
         print(f"{speed:g} m/s, {what}: largest difference {difference:.3g} % of range "
               f"({key}), the hull's vertical acceleration's {hull:.3g} %; Newton "

@@ -31,6 +31,7 @@ from vehicle.course import COURSES
 from vehicle.flags import add_run_arguments
 from vehicle.model import (DEFAULT_JOINTS, JOINTS, NEWTON_TOLERANCE, SPECTRAL_RADIUS, Linear,
                            Vehicle, VehicleError, static_points)
+from vehicle.own_host import DEFAULT_NEWTON, NEWTON
 
 DEFAULT_STEP = 1e-3  # s
 
@@ -116,6 +117,9 @@ def main(argv=None):
                              "the same scheme on the vehicle's own solver in C, no exudyn in "
                              "the time loop (the compiled path only; docs/vehicle.md, The "
                              "vehicle on its own solver)")
+    parser.add_argument("--own-newton", choices=tuple(NEWTON),
+                        help=f"the own solver's Newton policy (default {DEFAULT_NEWTON}; "
+                             "docs/vehicle.md, The vehicle on its own solver)")
     parser.add_argument("--out", type=Path, default=Path("reports") / "tracked_vehicle")
     args = parser.parse_args(argv)
     if args.speed < 0 or args.end_time <= 0 or args.step <= 0:
@@ -133,7 +137,8 @@ def main(argv=None):
                                               args.settle_time, args.fmu_dir, args.path,
                                               args.contacts, args.joints,
                                               args.spectral_radius,
-                                              args.newton_tolerance, args.solver)
+                                              args.newton_tolerance, args.solver,
+                                              args.own_newton)
         runs["FMUs"] = result
         if args.linear:
             linear = Linear(statics, args.fmu_dir)

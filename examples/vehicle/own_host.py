@@ -48,7 +48,7 @@ CAPACITY = 65536  # triplets of the system's Jacobian
 NEWTON = {"full": dict(reuse_jacobian=0),
           "chord": dict(reuse_jacobian=2, reuse_contractivity=0.5),
           "reuse": dict(reuse_jacobian=2, reuse_contractivity=0.25, reuse_broyden=1)}
-DEFAULT_NEWTON = "full"
+DEFAULT_NEWTON = "reuse"
 # exudyn's adaptive step: steps that converge before a halved step is doubled
 # (timeIntegration.adaptiveStepRecoverySteps) and the factor (adaptiveStepIncrease)
 RECOVERY, INCREASE = 10, 2.0
