@@ -8,10 +8,16 @@ the records; the step check; the rest Python per step).
 
     python benchmarks/vehicle_own.py [--speeds 3 5] [--end-time 0.2] [--rounds 2]
     python benchmarks/vehicle_own.py --agreement 0.1 0.001 [--speeds 3] [--end-time 0.02]
+    python benchmarks/vehicle_own.py --newton full reuse [--no-exudyn] ...
 
 Prints each run and the load (os.getloadavg) before and after. --agreement: instead, at
 each Newton absolute tolerance given, the two runs' largest difference of the histories
-(outputs.largest_difference, in % of range) and their Newton iterations per solve.
+(outputs.largest_difference at the times both runs have, in % of range; the hull's
+vertical acceleration's too) and their Newton iterations per solve, and each run against
+the first's at the smallest tolerance. --newton: the own solver's Newton policies
+(vehicle/own_host.py NEWTON; POLICY@RATIO: that policy at another contractivity), each
+run in every round (with the Newton matrices per step and the solves' CPU); with two or
+more, --agreement compares each with the first instead of exudyn with own.
 """
 
 import argparse
@@ -19,29 +25,71 @@ import os
 import sys
 from pathlib import Path
 
+import numpy as np
+
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "examples"), str(ROOT / "src")]
 
 from tracked_vehicle import DEFAULT_STEP, simulate  # noqa: E402
 from vehicle.model import static_points  # noqa: E402
 from vehicle.outputs import largest_difference  # noqa: E402
+from vehicle.own_host import DEFAULT_NEWTON, NEWTON  # noqa: E402
 
 KEYS = ("hull_vertical_acceleration", "hull_pitch_acceleration",
         "seat_vertical_acceleration", "hull_y", "tyre_force", "damper_torque",
         "bush_radial_force", "bush_torque")
 
 
-def agreement(speeds, end_time, tolerances, statics):
+def policy(name):
+    """A key of own_host.NEWTON, or POLICY@RATIO (registered there); the key."""
+    base, _, ratio = name.partition("@")
+    if base not in NEWTON:
+        raise SystemExit(f"--newton {name}: one of {', '.join(NEWTON)} (@RATIO after one)")
+    if ratio:
+        NEWTON[name] = {**NEWTON[base], "reuse_contractivity": float(ratio)}
+    return name
+
+
+def run(speed, end_time, statics, solver, **given):
+    """simulate's run of `solver`: "exudyn", or an own solver's Newton policy."""
+    own = None if solver == "exudyn" else solver
+    return simulate("bump", speed, end_time, DEFAULT_STEP, statics=statics,
+                    solver="own" if own else "exudyn", own_newton=own, **given)
+
+
+def common_times(a, b):
+    """Two runs' histories of KEYS at the times both have (a step one run halved and the
+    other did not adds times to one)."""
+    ta, tb = (np.round(np.asarray(r["time"]) * 1e9).astype(np.int64) for r in (a, b))
+    keep_a, keep_b = np.isin(ta, tb), np.isin(tb, ta)
+    return ({key: np.asarray(a[key])[keep_a] for key in ("time",) + KEYS},
+            {key: np.asarray(b[key])[keep_b] for key in ("time",) + KEYS})
+
+
+def agreement(speeds, end_time, tolerances, statics, solvers):
+    """Each pair at each tolerance, and each run against the first solver's at the smallest
+    tolerance (what stopping at the tolerance moves), at the times both have."""
+    def compare(what, a, b):
+        ha, hb = common_times(runs[a][1], runs[b][1])
+        difference, key = largest_difference(ha, hb, KEYS)
+        hull, _ = largest_difference(ha, hb, KEYS[:1])
+        iterations = [runs[r][0].solver_statistics()["newton_per_pass"] for r in (a, b)]
+        print(f"{speed:g} m/s, {what}: largest difference {difference:.3g} % of range "
+              f"({key}), the hull's vertical acceleration's {hull:.3g} %; Newton "
+              f"iterations per solve {iterations[0]:.3f}, {iterations[1]:.3f}", flush=True)
+
     for speed in speeds:
+        runs = {(solver, tolerance): run(speed, end_time, statics, solver,
+                                         newton_tolerance=tolerance)
+                for tolerance in tolerances for solver in solvers}
+        first, tightest = solvers[0], min(tolerances)
         for tolerance in tolerances:
-            runs = {solver: simulate("bump", speed, end_time, DEFAULT_STEP, statics=statics,
-                                     newton_tolerance=tolerance, solver=solver)
-                    for solver in ("exudyn", "own")}
-            difference, key = largest_difference(runs["exudyn"][1], runs["own"][1], KEYS)
-            iterations = [runs[s][0].solver_statistics()["newton_per_pass"] for s in runs]
-            print(f"{speed:g} m/s, tolerance {tolerance:g}: largest difference "
-                  f"{difference:.3g} % of range ({key}); Newton iterations per solve "
-                  f"exudyn {iterations[0]:.3f}, own {iterations[1]:.3f}", flush=True)
+            for other in solvers[1:]:
+                compare(f"tolerance {tolerance:g}, {first} against {other}",
+                        (first, tolerance), (other, tolerance))
+            for solver in solvers if tolerance != tightest else ():
+                compare(f"{solver} at {tolerance:g} against {first} at {tightest:g}",
+                        (first, tightest), (solver, tolerance))
 
 
 def split(statistics, cpu):
@@ -63,19 +111,23 @@ def main(argv=None):
     parser.add_argument("--end-time", type=float, default=0.2)
     parser.add_argument("--rounds", type=int, default=2)
     parser.add_argument("--agreement", type=float, nargs="+", metavar="TOLERANCE")
+    parser.add_argument("--newton", type=policy, nargs="+", default=[DEFAULT_NEWTON],
+                        metavar="POLICY")
+    parser.add_argument("--no-exudyn", action="store_true",
+                        help="the own solver's policies alone")
     args = parser.parse_args(argv)
     print(f"load before: {os.getloadavg()}")
     statics = static_points()
+    solvers = ([] if args.no_exudyn else ["exudyn"]) + args.newton
     if args.agreement:
-        agreement(args.speeds, args.end_time, args.agreement, statics)
+        agreement(args.speeds, args.end_time, args.agreement, statics,
+                  args.newton if len(args.newton) > 1 else ["exudyn"] + args.newton)
         print(f"load after: {os.getloadavg()}")
         return
     for speed in args.speeds:
         for round_ in range(args.rounds):
-            for solver in ("exudyn", "own"):
-                vehicle, result, wall, cpu = simulate("bump", speed, args.end_time,
-                                                      DEFAULT_STEP, statics=statics,
-                                                      solver=solver)
+            for solver in solvers:
+                vehicle, result, wall, cpu = run(speed, args.end_time, statics, solver)
                 simulated = result["time"][-1] - result["time"][0]
                 s = vehicle.solver_statistics()
                 print(f"{speed:g} m/s round {round_ + 1} {solver}: {cpu / simulated:.2f} s CPU "
@@ -83,7 +135,10 @@ def main(argv=None):
                       f"{s['newton_per_pass']:.2f} Newton iterations per solve, "
                       f"{s['passes_per_step']:.2f} solves per step, {s['steps']} steps for "
                       f"{s['host_steps']}, {s['refused']} refused", flush=True)
-                if solver == "own":
+                if solver != "exudyn":
+                    print(f"    {s['jacobians'] / s['steps']:.2f} Newton matrices (Jacobian "
+                          f"and factorization) per step; the solves "
+                          f"{s['solve'] / simulated:.2f} s CPU per simulated s", flush=True)
                     parts = split(s, cpu)
                     print("    " + ", ".join(f"{name} {seconds / simulated:.3f}"
                                              for name, seconds in parts.items())

@@ -30,6 +30,7 @@ from vehicle.course import COURSES
 from vehicle.flags import add_run_arguments
 from vehicle.model import (COUPLING, DEFAULT_JOINTS, JOINTS, NEWTON_TOLERANCE, SPECTRAL_RADIUS,
                            Linear, Vehicle, VehicleError, static_points)
+from vehicle.own_host import DEFAULT_NEWTON, NEWTON
 
 DEFAULT_STEP = 1e-3  # s
 
@@ -37,7 +38,7 @@ DEFAULT_STEP = 1e-3  # s
 def simulate(course_name, speed, end_time, step, coupling=COUPLING, linear=None,
              statics=None, settle_time=3.0, fmu_dir=None, path=bank_path.DEFAULT_PATH,
              contacts=None, joints=DEFAULT_JOINTS, spectral_radius=SPECTRAL_RADIUS,
-             newton_tolerance=NEWTON_TOLERANCE, solver="exudyn"):
+             newton_tolerance=NEWTON_TOLERANCE, solver="exudyn", own_newton=None):
     """One run; returns (vehicle, histories, wall seconds, CPU seconds) of the run proper
     (the settling to the static point, stored after the first run, and the set-up,
     Vehicle.prepare, excluded). contacts: the contacts' kernel, "compiled" or "numpy"
@@ -46,12 +47,14 @@ def simulate(course_name, speed, end_time, step, coupling=COUPLING, linear=None,
     exudyn connectors each ("connectors"). spectral_radius: generalized-alpha's, at
     infinite frequency (model.SPECTRAL_RADIUS). newton_tolerance: exudyn's Newton's
     absolute tolerance (model.NEWTON_TOLERANCE). solver: "exudyn", or "own" (the compiled
-    path on the vehicle's own solver, no exudyn in the time loop: vehicle/own_host.py)."""
+    path on the vehicle's own solver, no exudyn in the time loop: vehicle/own_host.py).
+    own_newton: the own solver's Newton policy (own_host.NEWTON; None: its default)."""
     statics = statics or static_points(fmu_dir)
     vehicle = Vehicle(None, speed, fmu_dir, linear, coupling, statics, path, joints)
     vehicle.spectral_radius = spectral_radius
     vehicle.newton_tolerance = newton_tolerance
     vehicle.solver = solver
+    vehicle.own_newton = own_newton
     if contacts:
         vehicle.contacts.use(contacts)
     vehicle.course = COURSES[course_name](vehicle.layout.sprocket[0] + 0.3)
@@ -114,6 +117,9 @@ def main(argv=None):
                              "the same scheme on the vehicle's own solver in C, no exudyn in "
                              "the time loop (the compiled path only; docs/vehicle.md, The "
                              "vehicle on its own solver)")
+    parser.add_argument("--own-newton", choices=tuple(NEWTON),
+                        help=f"the own solver's Newton policy (default {DEFAULT_NEWTON}; "
+                             "docs/vehicle.md, The vehicle on its own solver)")
     parser.add_argument("--out", type=Path, default=Path("reports") / "tracked_vehicle")
     args = parser.parse_args(argv)
     if args.speed < 0 or args.end_time <= 0 or args.step <= 0:
@@ -131,7 +137,8 @@ def main(argv=None):
                                               args.settle_time, args.fmu_dir, args.path,
                                               args.contacts, args.joints,
                                               args.spectral_radius,
-                                              args.newton_tolerance, args.solver)
+                                              args.newton_tolerance, args.solver,
+                                              args.own_newton)
         runs["FMUs"] = result
         if args.linear:
             linear = Linear(statics, args.fmu_dir)

@@ -453,3 +453,136 @@ def test_a_failing_callback_returns_its_status_and_keeps_the_start():
     assert alpha.STATUS[solver.step(2e-3, 4e-3)] == "callback failed"
     for before, after in zip(start, solver.state()):
         np.testing.assert_array_equal(after, before)
+
+
+# --- the reuse policy: the Newton matrix kept -------------------------------------------------
+
+REUSE = dict(reuse_jacobian=2, reuse_contractivity=0.1)
+
+
+def exact_jacobian(chain, coefficients, h, t, q, v, lam, epsilon=1e-6):
+    """d(scaled residual)/d(Newton's unknowns) at a step's solution, by central differences
+    of the model's own functions (all its terms, the multipliers' d(G^T lambda)/dq among
+    them): v and a move with q as Newton moves them (gamma', beta'), the multipliers'
+    unknown is lambda beta h^2, the coordinate rows scaled by beta h^2."""
+    c = coefficients
+    scale = c["beta"] * h * h
+    beta_prime = (1 - c["alpha_m"]) / (scale * (1 - c["alpha_f"]))
+    gamma_prime = c["gamma"] / (h * c["beta"])
+
+    def coordinate_rows(dq):
+        g, (rows, cols, values) = chain.constraint(q + dq)
+        G = np.zeros((chain.nm, chain.nq))
+        np.add.at(G, (rows, cols), values)
+        return (chain.masses * beta_prime * dq - chain.forces(t, q + dq, v + gamma_prime * dq)
+                + G.T @ lam), G
+
+    e = epsilon * np.eye(chain.nq)
+    dR = np.array([coordinate_rows(e[i])[0] - coordinate_rows(-e[i])[0]
+                   for i in range(chain.nq)]).T / (2 * epsilon)
+    G = coordinate_rows(np.zeros(chain.nq))[1]
+    J = np.block([[scale * dR, G.T], [G, np.zeros((chain.nm, chain.nm))]])
+    return J, np.r_[np.full(chain.nq, scale), np.ones(chain.nm)]
+
+
+@pytest.mark.parametrize("broyden", [0, 1])
+def test_the_kept_matrix_converges_to_full_newtons_solution_within_the_tolerance(broyden):
+    """The same step from the same start, on a matrix kept from the step before and with
+    full Newton: each stops with a residual r, |r| <= tol = max(absolute, relative x first
+    residual); linearized, J du = S (r_kept - r_full) (J the exact derivative of the scaled
+    residual S r in Newton's unknowns u), so each coordinate's difference is at most
+    |row_i of J^-1 S| (|r_kept| + |r_full|) <= |row_i of J^-1 S| (tol_kept + tol_full)
+    (the rows' constraint part, about 3 here, makes the tolerance's bound loose: the
+    constraints' residual is a length)."""
+    chain = Chain()
+    h, tolerance = 2e-3, 1e-8
+    solver = chain_solver(chain, relative_tolerance=tolerance, reuse_broyden=broyden,
+                          **REUSE)
+    q, v = chain.initial()
+    solver.initialize(0.0, q, v)
+    for k in range(1, 21):
+        assert solver.step(h, k * h) == 0
+    assert solver.step(h, 21 * h) == 0
+    kept, made = solver.state(), solver.trace()[1]
+    assert made[0] == 0  # the step began on the last step's matrix
+    report = solver.report()
+    residuals = [report["residual"]]
+    assert residuals[0] <= max(solver.settings.absolute_tolerance,
+                               tolerance * report["initial_residual"])
+    solver.restart()
+    solver.configure(reuse_jacobian=0)
+    assert solver.step(h, 21 * h) == 0
+    full, report = solver.state(), solver.report()
+    assert np.all(solver.trace()[1] == 1)  # full Newton: a new matrix every iteration
+    residuals.append(report["residual"])
+    J, S = exact_jacobian(chain, solver.coefficients(), h, 21 * h, *full[:2], full[3])
+    rows = np.linalg.norm((np.linalg.inv(J) * S)[:chain.nq], axis=1)
+    bound = rows * sum(residuals)
+    difference = np.abs(kept[0] - full[0])
+    assert 0.0 < difference.max() and np.all(difference <= bound), difference / bound
+    solver.restart()  # the bound is far below the step's motion
+    assert bound.max() < 1e-2 * np.abs(full[0] - solver.state()[0]).max()
+
+
+@pytest.mark.parametrize("broyden", [0, 1])
+def test_an_iteration_that_contracts_slowly_makes_a_new_matrix(broyden):
+    """Over 40 steps on a kept matrix (the contractivity set so that both happen): after
+    every iteration whose residual fell by a ratio worse than the contractivity (or rose:
+    that iterate undone), the next iteration makes a new matrix; after one that fell
+    faster, it keeps the matrix unless that pace would not converge within the
+    iterations left."""
+    chain = Chain()
+    h = 2e-3
+    solver = chain_solver(chain, relative_tolerance=1e-10, reuse_broyden=broyden, **REUSE)
+    q, v = chain.initial()
+    solver.initialize(0.0, q, v)
+    slow = kept = 0
+    for k in range(1, 41):
+        assert solver.step(h, k * h) == 0
+        norms, made = solver.trace()
+        report = solver.report()
+        target = max(solver.settings.absolute_tolerance, 1e-10 * report["initial_residual"])
+        last = report["initial_residual"]
+        for i in range(len(norms) - 1):
+            ratio = norms[i] / last
+            if ratio > 1.0 and not made[i]:  # undone: the next from the iterate before
+                assert made[i + 1]
+                slow += 1
+                continue
+            if ratio > REUSE["reuse_contractivity"]:
+                assert made[i + 1], (k, i, ratio)
+                slow += 1
+            else:
+                needed = np.log(target / norms[i]) / np.log(ratio)
+                left = solver.settings.max_iterations - (i + 1)
+                assert made[i + 1] == (needed > left), (k, i, ratio)
+                kept += not made[i + 1]
+            last = norms[i]
+    assert slow > 0 and kept > 0
+
+
+def test_another_step_or_a_restart_makes_a_new_matrix():
+    """A kept matrix serves the steps of its own h only; a restart (a retry) or a step
+    of another h makes a new one at its first iteration, as does every step's first pass
+    when the matrix is kept over a step's passes alone (reuse_jacobian 1)."""
+    chain = Chain()
+    h = 2e-3
+    solver = chain_solver(chain, **REUSE)
+    q, v = chain.initial()
+    solver.initialize(0.0, q, v)
+    first = []
+    for t, step in ((h, h), (2 * h, h), (2.5 * h, h / 2), (3 * h, h / 2), (4 * h, h)):
+        assert solver.step(step, t) == 0
+        first.append(solver.trace()[1][0])
+    assert first == [1, 0, 1, 0, 1]
+    assert solver.repeat(h, 4 * h, warm=True) == 0
+    assert solver.trace()[1][0] == 0
+    solver.restart()
+    assert solver.step(h, 4 * h) == 0
+    assert solver.trace()[1][0] == 1
+    solver.configure(reuse_jacobian=1, reuse_contractivity=REUSE["reuse_contractivity"])
+    for k in (5, 6):
+        assert solver.step(h, k * h) == 0
+        assert solver.trace()[1][0] == 1
+        assert solver.repeat(h, k * h, warm=True) == 0
+        assert solver.trace()[1][0] == 0

@@ -17,6 +17,15 @@
  * Newton; modified Newton keeps its Jacobian from step to step as exudyn's does, except
  * that a step of another h (or after a failed step) starts with a new one. The Newton
  * matrix is a bordered band (bordered_band.c).
+ * The reuse policy (reuse_jacobian, not exudyn's): the last factorization kept across
+ * iterations, the passes of a step (1) and its steps of the same h (2); a new one at the
+ * present iterate (no restart) after an iteration whose residual norm contracted by a
+ * ratio worse than reuse_contractivity, or too slowly for the iterations left; an
+ * iterate whose residual grew on a kept matrix undone and a new matrix made at the one
+ * before; an iterate beyond maximum_solution_norm
+ * or not a number: the pass again from its start with a new matrix, or, where the
+ * iteration's matrix was new, the step not converged. A step of another h, a restart or
+ * a failed step start with a new one. Convergence is tested as exudyn's.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -46,7 +55,7 @@ EXPORT void alpha_free(alpha_solver *s)
     triplets_free(&s->K); triplets_free(&s->D); triplets_free(&s->G);
     double *arrays[] = {s->mass, s->q, s->v, s->a, s->a_alg, s->lambda, s->q0, s->v0, s->a0,
                         s->a_alg0, s->lambda0, s->f, s->g, s->residual, s->delta, s->q1, s->v1,
-                        s->a1, s->lambda1};
+                        s->a1, s->lambda1, s->steps};
     for (size_t i = 0; i < sizeof arrays / sizeof *arrays; i++) free(arrays[i]);
     free(s);
 }
@@ -77,12 +86,33 @@ EXPORT alpha_solver *alpha_create(int nq, int nm, const double *mass, const int 
     for (size_t i = 0; ok && i < sizeof multipliers / sizeof *multipliers; i++)
         ok = (*multipliers[i] = calloc(nm + 1, sizeof(double))) != NULL;
     ok = ok && (s->residual = calloc(s->n, sizeof(double))) != NULL
-         && (s->delta = calloc(s->n, sizeof(double))) != NULL;
+         && (s->delta = calloc(s->n, sizeof(double))) != NULL
+         && (s->steps = calloc((size_t)s->n * (settings->max_iterations + 1),
+                               sizeof(double))) != NULL;
     if (!ok) { alpha_free(s); return NULL; }
     memcpy(s->mass, mass, sizeof(double) * nq);
     s->matrix->pivot_tolerance = settings->pivot_tolerance;
     s->jacobian_update_requested = 1;
+    s->max_steps = settings->max_iterations + 1;
     return s;
+}
+
+/* Other settings from the next step on (the spectral radius and the pivot tolerance kept;
+   max_iterations at most the first's); the Newton matrix kept. 1 if refused. */
+EXPORT int alpha_configure(alpha_solver *s, const alpha_settings *settings)
+{
+    if (settings->max_iterations + 1 > s->max_steps) return 1;
+    double rho = s->set.spectral_radius, pivot = s->set.pivot_tolerance;
+    s->set = *settings;
+    s->set.spectral_radius = rho;
+    s->set.pivot_tolerance = pivot;
+    return 0;
+}
+
+/* alpha_m, alpha_f, beta, gamma */
+EXPORT void alpha_coefficients(const alpha_solver *s, double *out)
+{
+    out[0] = s->alpha_m; out[1] = s->alpha_f; out[2] = s->beta; out[3] = s->gamma;
 }
 
 static int from_matrix(alpha_solver *s, int status)
@@ -203,6 +233,7 @@ static int solve(alpha_solver *s, double h, double t_new, int warm);
 EXPORT int alpha_step(alpha_solver *s, double h, double t_new)
 {
     copy_start(s, 1);
+    if (s->set.reuse_jacobian == 1) s->jacobian_update_requested = 1;
     return solve(s, h, t_new, 0);
 }
 
@@ -233,6 +264,60 @@ EXPORT int alpha_repeat(alpha_solver *s, double h, double t_new, int warm)
     return solve(s, h, t_new, warm);
 }
 
+/* Newton's update q -= dq, v -= gamma' dq, a -= beta' dq, lambda -= dlambda / scale by
+   the solution in delta (sign -1), or that update undone (sign 1) */
+static void update(alpha_solver *s, double sign, double scale, double beta_prime,
+                   double gamma_prime)
+{
+    const double *dq = s->delta, *dl = s->delta + s->nq;
+    for (int i = 0; i < s->nq; i++) {
+        s->q[i] += sign * dq[i];
+        s->v[i] += sign * gamma_prime * dq[i];
+        s->a[i] += sign * beta_prime * dq[i];
+    }
+    for (int j = 0; j < s->nm; j++) s->lambda[j] += sign * dl[j] / scale;
+}
+
+/* Broyden's step (Kelley's brsol, the full step) on the kept matrix: w = A^-1 r from
+   delta, corrected by the steps d_0 .. d_{m-1} taken since the matrix was made,
+       w += d_{j+1} (d_j . w) / |d_j|^2  (j < m - 1),   d_m = w / (1 - d_{m-1} . w / |d_{m-1}|^2),
+   into delta and kept as d_m; 1 where the update is singular (a new matrix wanted) */
+static int broyden(alpha_solver *s)
+{
+    int n = s->n, m = s->n_steps;
+    double *w = s->delta;
+    for (int j = 0; j + 1 <= m; j++) {
+        const double *d = s->steps + (size_t)j * n;
+        double dw = 0.0, dd = 0.0;
+        for (int i = 0; i < n; i++) { dw += d[i] * w[i]; dd += d[i] * d[i]; }
+        if (j + 1 < m) {
+            const double *next = d + n;
+            for (int i = 0; i < n; i++) w[i] += next[i] * (dw / dd);
+        } else {
+            double denominator = 1.0 - dw / dd;
+            if (!(fabs(denominator) > 1e-3)) return 1;
+            for (int i = 0; i < n; i++) w[i] /= denominator;
+        }
+    }
+    if (m < s->max_steps) {
+        memcpy(s->steps + (size_t)m * n, w, sizeof(double) * n);
+        s->n_steps = m + 1;
+    }
+    return 0;
+}
+
+/* A pass's Newton's start: the predictor's, warm: the last pass's solution kept in q1 .. */
+static void start_point(alpha_solver *s, double h, int warm)
+{
+    predict(s, h);
+    if (warm) {
+        memcpy(s->q, s->q1, sizeof(double) * s->nq);
+        memcpy(s->v, s->v1, sizeof(double) * s->nq);
+        memcpy(s->a, s->a1, sizeof(double) * s->nq);
+        memcpy(s->lambda, s->lambda1, sizeof(double) * s->nm);
+    }
+}
+
 /* A step's Newton from the start kept in q0 .. lambda0 */
 static int solve(alpha_solver *s, double h, double t_new, int warm)
 {
@@ -248,36 +333,44 @@ static int solve(alpha_solver *s, double h, double t_new, int warm)
     double gamma_prime = s->gamma / (h * s->beta);
     double initial, current, last, contractivity;
 
-    predict(s, h);
-    if (warm) {
-        memcpy(s->q, s->q1, sizeof(double) * nq);
-        memcpy(s->v, s->v1, sizeof(double) * nq);
-        memcpy(s->a, s->a1, sizeof(double) * nq);
-        memcpy(s->lambda, s->lambda1, sizeof(double) * s->nm);
-    }
+    start_point(s, h, warm);
     if ((status = residual(s, t_new, scale, &initial))) goto failed;
     if (initial <= set->absolute_tolerance) initial = 2. * set->absolute_tolerance;
     current = last = initial;
     int converged = 0, stop = 0, restarted = 0, add_restart_step = 0;
-    int full = !set->use_modified_newton;
+    int reuse = set->reuse_jacobian > 0;
+    int full = !set->use_modified_newton && !reuse;
+    int from_start = 0;  /* the reuse policy's restart from the pass's start */
 
     while (!converged && !stop && s->iterations < set->max_iterations) {
         s->iterations++;
+        int made = 0;  /* a new Newton matrix at this iterate */
         if (s->jacobian_update_requested || full) {
             if ((status = newton_matrix(s, t_new, h))) goto failed;
             s->jacobian_update_requested = 0;
+            made = 1 + from_start;
+            from_start = 0;
         }
+        if (made || s->iterations == 1) s->n_steps = 0;
         bb_solve(s->matrix, s->residual, s->delta);
-        const double *dq = s->delta, *dl = s->delta + nq;
-        for (int i = 0; i < nq; i++) {
-            s->q[i] -= dq[i];
-            s->v[i] -= gamma_prime * dq[i];
-            s->a[i] -= beta_prime * dq[i];
+        if (reuse && set->reuse_broyden && broyden(s)) {
+            /* no Broyden step: a new matrix here, its Newton step */
+            if ((status = newton_matrix(s, t_new, h))) goto failed;
+            made = 1;
+            s->n_steps = 0;
+            bb_solve(s->matrix, s->residual, s->delta);
+            broyden(s);
         }
-        for (int j = 0; j < s->nm; j++) s->lambda[j] -= dl[j] / scale;
+        update(s, -1.0, scale, beta_prime, gamma_prime);
         if ((status = residual(s, t_new, scale, &current))) goto failed;
 
-        if (set->adapt_initial_residual && current > initial && s->iterations <= 1)
+        if (s->iterations <= ALPHA_TRACE) {
+            s->trace_norm[s->iterations - 1] = current;
+            s->trace_factorized[s->iterations - 1] = made;
+        }
+        /* (a kept matrix's growth is its own fault, not the start's: no adaption) */
+        if (set->adapt_initial_residual && current > initial && s->iterations <= 1
+            && (made || !reuse))
             initial = last = current;
         if (current / initial <= set->relative_tolerance || current <= set->absolute_tolerance)
             converged = 1;
@@ -295,6 +388,33 @@ static int solve(alpha_solver *s, double h, double t_new, int warm)
                 || isnan(nu) || isnan(nv) || isnan(nl)) {
                 if (full) stop = 1;
                 else diverged = 1;
+            }
+            if (reuse) {
+                contractivity = current / last;
+                /* the iterations the present contraction would still take */
+                double target = fmax(set->absolute_tolerance,
+                                     set->relative_tolerance * initial);
+                double needed = log(target / current) / log(contractivity);
+                if (diverged && made) {
+                    stop = 1;  /* as full Newton's */
+                } else if (diverged) {  /* the pass again from its start, a new matrix */
+                    s->jacobian_update_requested = from_start = 1;
+                    current = last = initial;
+                    start_point(s, h, warm);
+                    double ignored;
+                    if ((status = residual(s, t_new, scale, &ignored))) goto failed;
+                } else if (!made && !(contractivity <= 1.0)) {
+                    /* grown on a kept matrix: the iterate undone, a new matrix there */
+                    update(s, 1.0, scale, beta_prime, gamma_prime);
+                    if ((status = residual(s, t_new, scale, &current))) goto failed;
+                    s->jacobian_update_requested = 1;
+                } else {
+                    if (!(contractivity <= set->reuse_contractivity)
+                        || !(needed <= set->max_iterations - s->iterations))
+                        s->jacobian_update_requested = 1;
+                    last = current;
+                }
+                continue;
             }
             if (!full && s->iterations > set->max_modified_newton_iterations)
                 s->jacobian_update_requested = 1;
@@ -381,6 +501,15 @@ EXPORT int alpha_initialize(alpha_solver *s, double t, const double *q, const do
     }
     memcpy(s->a_alg, s->a, sizeof(double) * nq);
     return ALPHA_CONVERGED;
+}
+
+/* the last solve's trace (alpha_solver.h): its iterations traced */
+EXPORT int alpha_trace(const alpha_solver *s, double *norms, int *factorized)
+{
+    int n = s->iterations < ALPHA_TRACE ? s->iterations : ALPHA_TRACE;
+    memcpy(norms, s->trace_norm, sizeof(double) * n);
+    memcpy(factorized, s->trace_factorized, sizeof(int) * n);
+    return n;
 }
 
 EXPORT void alpha_state(const alpha_solver *s, double *q, double *v, double *a, double *lambda)

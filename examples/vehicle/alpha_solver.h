@@ -33,7 +33,16 @@ typedef struct {
     int use_modified_newton, max_modified_newton_iterations;
     int max_modified_newton_restart_iterations;
     int adapt_initial_residual;
+    /* the reuse policy (not exudyn's; off: 0): the last factorization kept across Newton
+       iterations and the passes of a step (1), and across steps of the same h too (2);
+       a new one at the current iterate when an iteration's residual contracted by a
+       ratio worse than reuse_contractivity */
+    int reuse_jacobian;
+    double reuse_contractivity;
+    int reuse_broyden;   /* the kept matrix's steps corrected by Broyden's rank-one updates */
 } alpha_settings;
+
+#define ALPHA_TRACE 64          /* iterations of a solve traced (alpha_trace) */
 
 /* statuses */
 #define ALPHA_CONVERGED 0
@@ -57,12 +66,19 @@ typedef struct {
     double t0, *q0, *v0, *a0, *a_alg0, *lambda0; /* the step's start */
     double *q1, *v1, *a1, *lambda1;          /* a pass's solution, a warm repeat's start */
     double *f, *g, *residual, *delta;
+    double *steps;      /* Broyden's: the steps since the matrix was made, (max_iterations) n */
+    int n_steps, max_steps;
     int jacobian_update_requested;
     double factorized_h;
     double jacobian_h;  /* the step whose Newton matrix the jacobian callback is asked for */
     /* the last step's report */
     int iterations, jacobians, total_jacobians, bad_row, bad_col;
     double residual_norm, initial_residual;
+    /* the last solve's iterations, up to ALPHA_TRACE: each one's residual norm after its
+       update, and whether it made a new Newton matrix (2: after a restart from the
+       pass's start) */
+    double trace_norm[ALPHA_TRACE];
+    int trace_factorized[ALPHA_TRACE];
 } alpha_solver;
 
 EXPORT alpha_solver *alpha_create(int nq, int nm, const double *mass, const int *order, int nb,
@@ -76,6 +92,9 @@ EXPORT int alpha_step(alpha_solver *s, double h, double t_new);
 EXPORT void alpha_restart(alpha_solver *s);
 EXPORT int alpha_repeat(alpha_solver *s, double h, double t_new, int warm);
 EXPORT void alpha_report(const alpha_solver *s, int *ints, double *reals);
+EXPORT int alpha_configure(alpha_solver *s, const alpha_settings *settings);
+EXPORT void alpha_coefficients(const alpha_solver *s, double *out);
+EXPORT int alpha_trace(const alpha_solver *s, double *norms, int *factorized);
 EXPORT void alpha_state(const alpha_solver *s, double *q, double *v, double *a,
                         double *lambda);
 

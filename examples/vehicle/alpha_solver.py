@@ -29,6 +29,7 @@ STATUS = {0: "converged", 1: "not converged", 2: "band pivot not positive",
           3: "entry outside the band and the border", 4: "border singular",
           5: "callback failed"}
 BB_OUTSIDE, BB_PIVOT, BB_SINGULAR = 1, 2, 3
+TRACE = 64  # alpha_solver.h's ALPHA_TRACE: iterations of a solve traced
 
 _pointer, _int, _real = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
 
@@ -47,19 +48,25 @@ JACOBIAN = ctypes.CFUNCTYPE(_int, _pointer, _real, _REALS, _REALS, ctypes.POINTE
 
 class Settings(ctypes.Structure):
     """exudyn's generalizedAlpha.spectralRadius and newton settings of the same names, their
-    defaults exudyn's (1.13.6), full Newton unless use_modified_newton (exudyn's default)."""
+    defaults exudyn's (1.13.6), full Newton unless use_modified_newton (exudyn's default)
+    or reuse_jacobian (the reuse policy, alpha_solver.h: 1 the factorization kept across
+    a step's iterations and passes, 2 across its steps of the same h too; a new one after
+    an iteration that contracted the residual norm by a ratio worse than
+    reuse_contractivity)."""
     _fields_ = [("spectral_radius", _real), ("relative_tolerance", _real),
                 ("absolute_tolerance", _real), ("maximum_solution_norm", _real),
                 ("modified_newton_contractivity", _real), ("pivot_tolerance", _real),
                 ("max_iterations", _int), ("use_modified_newton", _int),
                 ("max_modified_newton_iterations", _int),
                 ("max_modified_newton_restart_iterations", _int),
-                ("adapt_initial_residual", _int)]
+                ("adapt_initial_residual", _int), ("reuse_jacobian", _int),
+                ("reuse_contractivity", _real), ("reuse_broyden", _int)]
     DEFAULTS = dict(spectral_radius=0.9, relative_tolerance=1e-8, absolute_tolerance=1e-10,
                     maximum_solution_norm=1e38, modified_newton_contractivity=0.5,
                     pivot_tolerance=1e-12, max_iterations=25, use_modified_newton=0,
                     max_modified_newton_iterations=8,
-                    max_modified_newton_restart_iterations=7, adapt_initial_residual=1)
+                    max_modified_newton_restart_iterations=7, adapt_initial_residual=1,
+                    reuse_jacobian=0, reuse_contractivity=0.5, reuse_broyden=0)
 
     def __init__(self, **given):
         unknown = set(given) - set(self.DEFAULTS)
@@ -100,6 +107,9 @@ def library():
         lib.alpha_repeat.argtypes = [_pointer, _real, _real, _int]
         lib.alpha_state.argtypes = [_pointer] + [_pointer] * 4
         lib.alpha_report.argtypes = [_pointer, _pointer, _pointer]
+        lib.alpha_trace.argtypes = [_pointer, _pointer, _pointer]
+        lib.alpha_configure.argtypes = [_pointer, ctypes.POINTER(Settings)]
+        lib.alpha_coefficients.argtypes = [_pointer, _pointer]
     return lib
 
 
@@ -269,3 +279,27 @@ class AlphaSolver:
                     total_jacobians=int(ints[2]), bad_row=int(ints[3]),
                     bad_col=int(ints[4]), residual=float(reals[0]),
                     initial_residual=float(reals[1]))
+
+    def configure(self, **changes):
+        """Settings changed from the next step on (not the spectral radius, the pivot
+        tolerance, nor more max_iterations than the first settings'); the Newton matrix
+        kept."""
+        settings = Settings(**{**{name: getattr(self.settings, name)
+                                  for name, *_ in Settings._fields_}, **changes})
+        if self.lib.alpha_configure(self.handle, ctypes.byref(settings)):
+            raise ValueError("max_iterations above the solver's first settings'")
+        self.settings = settings
+
+    def coefficients(self):
+        """generalized-alpha's alpha_m, alpha_f, beta, gamma."""
+        out = np.zeros(4)
+        self.lib.alpha_coefficients(self.handle, out.ctypes.data)
+        return dict(zip(("alpha_m", "alpha_f", "beta", "gamma"), out))
+
+    def trace(self):
+        """The last solve's iterations (up to alpha_solver.h's ALPHA_TRACE): each one's
+        residual norm after its update, and whether it made a new Newton matrix (2: at
+        the pass's start again, after an iterate that diverged)."""
+        norms, made = np.zeros(TRACE), np.zeros(TRACE, dtype=np.intc)
+        n = self.lib.alpha_trace(self.handle, norms.ctypes.data, made.ctypes.data)
+        return norms[:n], made[:n]

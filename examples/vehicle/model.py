@@ -227,6 +227,7 @@ class Vehicle:
         self.spectral_radius = SPECTRAL_RADIUS
         self.newton_tolerance = NEWTON_TOLERANCE
         self.solver = "exudyn"  # or "own": no exudyn in the time loop (own_host.py)
+        self.own_newton = None  # the own solver's Newton policy (own_host.NEWTON)
         self.course, self.speed = course, speed
         self.compiled = linear is None and bank_path.compiled(path, coupling)
         self.bank = None  # the compiled path's, while it runs

@@ -39,6 +39,16 @@ LIBRARY = Library("vehicle_own", [HERE / "own_system.c"],
                   [HERE / "alpha_solver.h", HERE / "bordered_band.h"],
                   "the vehicle's own solver's adapter (own_system.c)", "--solver exudyn")
 CAPACITY = 65536  # triplets of the system's Jacobian
+# the solver core's Newton policies (alpha_solver.h): exudyn's full Newton (a new
+# factorization every iteration); "chord", the last factorization kept across
+# iterations, passes and steps of the same h, a new one at the present iterate after an
+# iteration that contracted the residual norm by a ratio worse than the contractivity;
+# "reuse", the same with the kept matrix's steps corrected by Broyden's rank-one updates
+# (docs/vehicle.md, The vehicle on its own solver)
+NEWTON = {"full": dict(reuse_jacobian=0),
+          "chord": dict(reuse_jacobian=2, reuse_contractivity=0.5),
+          "reuse": dict(reuse_jacobian=2, reuse_contractivity=0.25, reuse_broyden=1)}
+DEFAULT_NEWTON = "reuse"
 # exudyn's adaptive step: steps that converge before a halved step is doubled
 # (timeIntegration.adaptiveStepRecoverySteps) and the factor (adaptiveStepIncrease)
 RECOVERY, INCREASE = 10, 2.0
@@ -97,7 +107,8 @@ class OwnSystem:
 def solver_for(vehicle, laws, relative_tolerance=1e-8):
     """(OwnSystem, AlphaSolver) for `vehicle` with the laws of `laws` (a bank or a
     LawTable), with the run's settings: the vehicle's spectral radius and Newton absolute
-    tolerance, full Newton. (exudyn's documentation of newton.absoluteTolerance divides the
+    tolerance, its Newton policy (vehicle.own_newton, a key of NEWTON; None:
+    DEFAULT_NEWTON). (exudyn's documentation of newton.absoluteTolerance divides the
     residual's norm by the number of coordinates; its runs of the vehicle take the
     core's iterations with the norm itself, to round-off: tests/test_vehicle_own.py.)"""
     system = VehicleSystem(vehicle, laws)
@@ -107,7 +118,8 @@ def solver_for(vehicle, laws, relative_tolerance=1e-8):
     settings = alpha.Settings(spectral_radius=vehicle.spectral_radius,
                               relative_tolerance=relative_tolerance,
                               absolute_tolerance=vehicle.newton_tolerance,
-                              use_modified_newton=0)
+                              use_modified_newton=0,
+                              **NEWTON[vehicle.own_newton or DEFAULT_NEWTON])
     solver = alpha.AlphaSolver(own, system.mass_diagonal(), system.m, order,
                                len(order) - border, half_bandwidth, settings, CAPACITY)
     own.bind(solver)
