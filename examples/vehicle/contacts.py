@@ -125,23 +125,27 @@ class Contacts(KernelResults):
 
     # --- one evaluation per state ---------------------------------------------------------
 
-    def evaluate(self, t, q=None, qd=None):
+    def evaluate(self, t, q=None, qd=None, laws=True):
         """The contacts at the host's current state (for the coupling's readers and the
-        records), or at the system's coordinates q and velocities qd where given."""
+        records), or at the system's coordinates q and velocities qd where given. laws
+        False: for a reader of nothing the tyres' load laws decide (the kinematics, the
+        tyres' compressions, the ground's and the sprocket's forces: the records), whom the
+        last evaluation at the same state serves, whatever laws it had."""
         data = self.v.mbs.systemData
         if q is None:
             q = np.asarray(data.GetODE2Coordinates(exu.ConfigurationType.Current))
         if qd is None:
             qd = np.asarray(data.GetODE2Coordinates_t(exu.ConfigurationType.Current))
-        self._update(t, q[self.system_index], qd[self.system_index])
+        self._update(t, q[self.system_index], qd[self.system_index], laws)
 
-    def _update(self, t, q, qd):
+    def _update(self, t, q, qd, laws=True):
         q, qd = as_vector(q), as_vector(qd)
         # the tyres' load laws change between the coupling's passes at the same state
-        key = (t, q.tobytes(), qd.tobytes(), self.v.settling, self.v.tyre_laws_key(), self.kernel)
-        if key == self._key:
+        state = (t, q.tobytes(), qd.tobytes(), self.v.settling, self.kernel)
+        if self._key is not None and state == self._key[0] and (
+                not laws or self._key[1] == self.v.tyre_laws_key()):
             return
-        self._key = key
+        self._key = (state, self.v.tyre_laws_key())
         self._by_compiled = self.kernel == "compiled" and self.audit is None
         if self._by_compiled:  # the audit reads the numpy kernel's steps
             return self._compiled.update(q, qd)
@@ -554,12 +558,14 @@ class Contacts(KernelResults):
 
     def check(self, t, q=None, qd=None):
         """Stop with the part and the time where the model no longer holds (at the
-        host's current state, or at q, qd: evaluate's)."""
-        self.evaluate(t, q, qd)
-        # each wheel in turn only where one is out of bounds (the first named)
-        beyond = (self.compression > lay.TYRE_RUBBER) | (self.compression < -HORN_HEIGHT)
-        for w in np.flatnonzero(beyond)[:1]:
-            compression = self.compression[w]
+        host's current state, or at q, qd: evaluate's; the kinematics alone are read)."""
+        self.evaluate(t, q, qd, laws=False)
+        compression = self.compression
+        # the wheels one by one only where one is out of bounds (the first named)
+        if compression.max() > lay.TYRE_RUBBER or compression.min() < -HORN_HEIGHT:
+            w = np.flatnonzero((compression > lay.TYRE_RUBBER)
+                               | (compression < -HORN_HEIGHT))[0]
+            compression = compression[w]
             if compression > lay.TYRE_RUBBER:
                 raise VehicleError(
                     f"road wheel {w + 1}: a track link has passed through its tyre (compressed "
@@ -571,16 +577,20 @@ class Contacts(KernelResults):
                     f"road wheel {w + 1} has left the track (more than {HORN_HEIGHT * 1e3:g} mm "
                     f"above the link beneath, the guide horns' height) at t = {t:.4f} s; "
                     f"lower --speed or choose a gentler course")
-        if np.max(self.tooth_gap) > 0.3 * lay.LINK_PITCH:
+        if self.tooth_gap.max() > 0.3 * lay.LINK_PITCH:
             j = int(np.argmax(self.tooth_gap))
             raise VehicleError(f"the track jumped a sprocket tooth at joint {j} at "
                                f"t = {t:.4f} s; lower --speed or choose a gentler course")
 
-    def tension_joints(self):
-        """The joints nearest the points where the tensions are read."""
-        hull_pos, hull_theta = self.hull[:2], self.hull[2]
-        joints = []
-        for local in self.tension_points:
-            point = hull_pos + rotate(hull_theta, local)
-            joints.append(int(np.argmin(np.hypot(*(self.pins - point).T))))
+    def tension_joints(self, hulls=None, pins=None):
+        """The joints nearest the points where the tensions are read: at the last
+        evaluation, or at each of the states whose hulls (n x 3) and pins (n x links x 2)
+        are given (n x 2, the records' after a run)."""
+        if hulls is None:
+            return [int(j) for j in self.tension_joints(self.hull[None], self.pins[None])[0]]
+        joints = np.empty((len(hulls), len(self.tension_points)), dtype=int)
+        for k, local in enumerate(self.tension_points):
+            points = np.array([hull[:2] + rotate(hull[2], local) for hull in hulls])
+            joints[:, k] = np.argmin(np.hypot(*(pins - points[:, None]).transpose(2, 0, 1)),
+                                     axis=1)
         return joints

@@ -9,10 +9,10 @@ one C call: the kernel calls the bank's laws itself (Bank.law_loads_entry; the o
 of Vehicle.tyre_loads) and evaluates course.py's courses (contacts_course.c); otherwise
 Python gives the loads (Vehicle.tyre_loads) and the heights of a course of another class
 between two calls. The kernel's memory is allocated once. Its results stay there while
-exudyn's Newton iterates; they are handed on as the numpy kernel's attributes (copies, as
-the numpy kernel's are new arrays each time) only when a reader first asks for one after
+exudyn's Newton iterates; each is handed on as the numpy kernel's attribute (a copy, as
+the numpy kernel's are new arrays each time) only when a reader first asks for it after
 an evaluation (`publish`, Contacts.__getattr__): the coupling's readers, the step check
-and the records, a few times a step, not at every iterate.
+and the records, a few times a step, not at every iterate, each what it reads.
 """
 
 import ctypes
@@ -112,14 +112,13 @@ def as_vector(values):
 class KernelResults:
     """What Contacts reads of the C kernel: where its last evaluation was the kernel's
     (`_by_compiled`), an attribute of PUBLISHED not set yet is read from the kernel's
-    memory on first use (`CompiledContacts.publish`, all of them at once)."""
+    memory on first use (`CompiledContacts.publish`, that attribute alone)."""
 
     _published = frozenset(PUBLISHED)
 
     def __getattr__(self, name):  # only for attributes not set
         if self.__dict__.get("_by_compiled") and name in self._published:
-            self._compiled.publish()
-            return self.__dict__[name]
+            return self._compiled.publish(name)
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
 
@@ -152,6 +151,7 @@ class CompiledContacts:
         self._course = None  # (the course, its attributes, its kind) the kernel has
         self._bank = None  # the bank whose laws the kernel calls
         self._triplets_buffer(4096)
+        self._make_readers()
         self.set_parameters()
 
     def set_parameters(self):
@@ -178,9 +178,9 @@ class CompiledContacts:
         memory (the last evaluation's attributes of `contacts` dropped: `publish` makes
         them again where they are read)."""
         c, v, views = self.contacts, self.contacts.v, self.views
-        if "generalized" in c.__dict__:  # published, or the numpy kernel's
-            for name in PUBLISHED:
-                c.__dict__.pop(name, None)
+        attributes = c.__dict__
+        for name in self._stale(attributes.keys()):  # published, or the numpy kernel's
+            del attributes[name]
         np.add(self.reference, q, out=self.state)
         self.rates[:] = qd
         given = self._set_course(v.course)
@@ -227,25 +227,37 @@ class CompiledContacts:
         """The generalized forces of the last evaluation (a copy)."""
         return self.views["generalized"].copy()
 
-    def publish(self):
-        """The last evaluation's results as the numpy kernel's attributes of `contacts`
-        (PUBLISHED): copies, as the numpy kernel's are new arrays each time (a reader may
-        keep them across evaluations)."""
-        c, views = self.contacts, self.views
-        state, rates = views["state"].copy(), views["rates"].copy()
-        link0 = c.link0
-        c.__dict__.update(
-            (name, views[name].copy()) for name in (
-                "u", "n", "seats", "seats_v", "pins", "pins_v", "wheels", "wheels_v",
-                "compression", "compression_rate", "tyre_force", "ground_load", "tooth_gap",
-                "generalized"))
-        c.qd, c.rates, c.body_pos = rates.reshape(-1), rates, state[:, :2]
-        c.hull, c.hull_v = state[0], rates[0]
-        c.link_pos, c.link_angle = state[link0:, :2], state[link0:, 2]
-        c.link_v, c.link_omega = rates[link0:, :2], rates[link0:, 2]
-        c.idler, c.idler_v = state[link0 - 1, :2], rates[link0 - 1, :2]
-        c.in_contact = c.compression > -np.inf
-        c.drive_torque = float(views["drive_torque"][0])
+    def publish(self, name):
+        """The last evaluation's result `name` (of PUBLISHED) as the numpy kernel's
+        attribute of `contacts`: a copy, as the numpy kernel's are new arrays each time (a
+        reader may keep it across evaluations); returns it."""
+        value = self._readers[name]()
+        self.contacts.__dict__[name] = value
+        return value
+
+    def _make_readers(self):
+        """Each PUBLISHED attribute's reader of the kernel's memory (publish)."""
+        views, link0 = self.views, self.contacts.link0
+        state, rates = views["state"], views["rates"]
+
+        def copy(array):
+            return array.copy
+
+        readers = {name: copy(views[name]) for name in (
+            "u", "n", "seats", "seats_v", "pins", "pins_v", "wheels", "wheels_v",
+            "compression", "compression_rate", "tyre_force", "ground_load", "tooth_gap",
+            "generalized")}
+        readers.update(
+            qd=copy(rates.reshape(-1)), rates=copy(rates), body_pos=copy(state[:, :2]),
+            hull=copy(state[0]), hull_v=copy(rates[0]), link_pos=copy(state[link0:, :2]),
+            link_angle=copy(state[link0:, 2]), link_v=copy(rates[link0:, :2]),
+            link_omega=copy(rates[link0:, 2]), idler=copy(state[link0 - 1, :2]),
+            idler_v=copy(rates[link0 - 1, :2]),
+            in_contact=lambda: views["compression"] > -np.inf,
+            drive_torque=lambda: float(views["drive_torque"][0]))
+        assert readers.keys() == set(PUBLISHED)
+        self._readers = readers
+        self._stale = frozenset(PUBLISHED).intersection
 
     def _triplets_buffer(self, rows):
         self.triplets_out = np.zeros((rows, 3))

@@ -73,8 +73,9 @@ class StepCheck:
         beyond = (q1[links] - q0[links] - h * v0[links]).reshape(self.link_count, 3)
         moved = np.hypot(beyond[:, 0], beyond[:, 1])
         turned = np.abs(beyond[:, 2])
-        # not all within (rather than max above): a NaN takes the full comparison
-        if not ((moved <= LINK_JUMP).all() and (turned <= LINK_TURN).all()):
+        # not all within (rather than the largest above): a NaN (the largest too) takes the
+        # full comparison
+        if not (moved.max() <= LINK_JUMP and turned.max() <= LINK_TURN):
             k = int(np.argmax(np.maximum(moved / LINK_JUMP, turned / LINK_TURN)))
             if moved[k] > LINK_JUMP or turned[k] > LINK_TURN:
                 return (f"link {k}{self._where(k, q1[links][3 * k:3 * k + 3])} moved "
@@ -87,7 +88,7 @@ class StepCheck:
         contacts.evaluate(t, q1, v1)  # the coupling's deflections use this evaluation
         jump = np.abs(contacts.compression - compression0 - h * rate0)
         # a wheel out of contact has compression -inf at both ends: NaN here
-        if not (jump <= TYRE_JUMP).all():
+        if not jump.max() <= TYRE_JUMP:
             jump = np.where(contact0 & contacts.in_contact, jump, 0.0)
             w = int(np.argmax(jump))
             if jump[w] > TYRE_JUMP:
@@ -96,7 +97,7 @@ class StepCheck:
                         f"{contacts.compression[w] * 1e3:.1f} mm)")
         gap = contacts.tooth_gap
         skip = np.abs(gap - gap0)
-        if not (skip <= TOOTH_JUMP).all():
+        if not skip.max() <= TOOTH_JUMP:
             skip = np.where((gap0 > 0.0) & (gap > 0.0), skip, 0.0)
             j = int(np.argmax(skip))
             if skip[j] > TOOTH_JUMP:
