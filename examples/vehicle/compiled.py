@@ -15,6 +15,7 @@ import numpy as np
 
 import bank_path
 
+from .contacts_kernel import index_or_slice
 from .joints import Joints
 from .model import HORN_HEIGHT, radial_fade, radial_pull
 
@@ -31,7 +32,9 @@ class CompiledPath:
         self.damper_rows, self.radial_rows, self.torsion_rows = (
             np.array(rows[kind]) for kind in ("damper", "radial", "torsion"))
         links = v.link_nodes
-        self.link_index = np.array([mbs.GetNodeODE2Index(n) for n in links])[:, None] + [0, 1, 2]
+        link_index = np.array([mbs.GetNodeODE2Index(n) for n in links])[:, None] + [0, 1, 2]
+        self.link_index, self.link_shape = index_or_slice(link_index), link_index.shape
+        self.still = np.zeros(link_index.shape)  # the joints' rates, unread here
         self.hull_rotation = mbs.GetNodeODE2Index(v.hull_node) + 2
         self.arm_rotation = np.array([mbs.GetNodeODE2Index(v.arm_nodes[i - 1]) + 2
                                       for i in v.dampers])
@@ -96,7 +99,8 @@ class CompiledPath:
         deflection[self.damper_rows] = q[self.hull_rotation] - q[self.arm_rotation]
         # the joints' seat distances and relative angles, as the joints' object computes
         # them (joints.py; model._seat_deflection has the same distance)
-        joint = self.joints.kinematics(q[self.link_index], np.zeros(self.link_index.shape))[1]
+        joint = self.joints.kinematics(q[self.link_index].reshape(self.link_shape),
+                                       self.still)[1]
         deflection[self.radial_rows] = joint[:, 2]
         deflection[self.torsion_rows] = joint[:, 6]
         return deflection

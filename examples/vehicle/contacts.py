@@ -24,7 +24,8 @@ from exudyn.itemInterface import ObjectGenericODE2
 
 from . import layout as lay
 from .contact_math import cross, rotate, smoothstep, smoothstep_derivatives
-from .contacts_kernel import CompiledContacts, KernelResults, as_vector, library
+from .contacts_kernel import (CompiledContacts, KernelResults, as_vector, index_or_slice,
+                              library)
 from .model import (ENGAGEMENT_RAMP, GROUND_DAMPING, GROUND_STIFFNESS, HORN_HEIGHT,
                     SPROCKET_DAMPING, SPROCKET_STIFFNESS, VehicleError, WHEEL_DAMPING,
                     WHEEL_STIFFNESS)
@@ -112,6 +113,7 @@ class Contacts(KernelResults):
         mbs = self.v.mbs
         self.system_index = np.concatenate([mbs.GetNodeODE2Index(n) + np.arange(3)
                                             for n in self.nodes])
+        self._coordinates = index_or_slice(self.system_index)  # evaluate's
 
     def rebase(self, settled):
         """The settled state becomes the start: the sprocket's tooth spaces stay where the
@@ -136,7 +138,8 @@ class Contacts(KernelResults):
             q = np.asarray(data.GetODE2Coordinates(exu.ConfigurationType.Current))
         if qd is None:
             qd = np.asarray(data.GetODE2Coordinates_t(exu.ConfigurationType.Current))
-        self._update(t, q[self.system_index], qd[self.system_index], laws)
+        index = self._coordinates
+        self._update(t, q[index], qd[index], laws)
 
     def _update(self, t, q, qd, laws=True):
         q, qd = as_vector(q), as_vector(qd)
@@ -149,7 +152,7 @@ class Contacts(KernelResults):
         self._by_compiled = self.kernel == "compiled" and self.audit is None
         if self._by_compiled:  # the audit reads the numpy kernel's steps
             return self._compiled.update(q, qd)
-        self.qd = qd
+        self.qd = qd = qd.copy()  # kept: evaluate may give a view of the caller's
         self._kinematics(self.reference + q.reshape(-1, 3), qd.reshape(-1, 3))
         self._forces(t)
 

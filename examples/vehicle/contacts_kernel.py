@@ -109,6 +109,16 @@ def as_vector(values):
     return np.asarray(values)
 
 
+def index_or_slice(index):
+    """`index` (integers) as a slice where it is one run (numpy reads a slice as a view,
+    without a copy), else as it is (flat)."""
+    index = np.ravel(index)
+    first = int(index[0])
+    if np.array_equal(index, np.arange(first, first + len(index))):
+        return slice(first, first + len(index))
+    return index
+
+
 class KernelResults:
     """What Contacts reads of the C kernel: where its last evaluation was the kernel's
     (`_by_compiled`), an attribute of PUBLISHED not set yet is read from the kernel's

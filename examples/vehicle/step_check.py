@@ -27,6 +27,7 @@ import numpy as np
 import exudyn as exu
 
 from . import layout as lay
+from .contacts_kernel import index_or_slice
 
 LINK_JUMP = 0.01  # m
 LINK_TURN = math.radians(5.0)
@@ -41,9 +42,7 @@ class StepCheck:
         links = np.array([mbs.GetNodeODE2Index(n) for n in vehicle.link_nodes])[:, None] \
             + [0, 1, 2]
         # the links' coordinates: a slice (a view) where they are one run, as exudyn has them
-        first = links[0, 0]
-        contiguous = np.array_equal(links.ravel(), np.arange(first, first + links.size))
-        self.links = (slice(first, first + links.size) if contiguous else links.ravel())
+        self.links = index_or_slice(links)
         self.link_count = len(links)
         self.reference = np.array([mbs.GetNodeParameter(n, "referenceCoordinates")
                                    for n in vehicle.link_nodes], dtype=float)
