@@ -133,22 +133,25 @@ class Contacts(KernelResults):
         False: for a reader of nothing the tyres' load laws decide (the kinematics, the
         tyres' compressions, the ground's and the sprocket's forces: the records), whom the
         last evaluation at the same state serves, whatever laws it had."""
-        data = self.v.mbs.systemData
         if q is None:
-            q = np.asarray(data.GetODE2Coordinates(exu.ConfigurationType.Current))
+            q = np.asarray(self.v.mbs.systemData.GetODE2Coordinates(
+                exu.ConfigurationType.Current))
         if qd is None:
-            qd = np.asarray(data.GetODE2Coordinates_t(exu.ConfigurationType.Current))
+            qd = np.asarray(self.v.mbs.systemData.GetODE2Coordinates_t(
+                exu.ConfigurationType.Current))
         index = self._coordinates
         self._update(t, q[index], qd[index], laws)
 
     def _update(self, t, q, qd, laws=True):
         q, qd = as_vector(q), as_vector(qd)
         # the tyres' load laws change between the coupling's passes at the same state
-        state = (t, q.tobytes(), qd.tobytes(), self.v.settling, self.kernel)
-        if self._key is not None and state == self._key[0] and (
-                not laws or self._key[1] == self.v.tyre_laws_key()):
+        state, key = (t, q.tobytes(), qd.tobytes(), self.v.settling, self.kernel), self._key
+        if key is not None and state == key[0] and not laws:
             return
-        self._key = (state, self.v.tyre_laws_key())
+        tyre_laws = self.v.tyre_laws_key()
+        if key is not None and state == key[0] and tyre_laws == key[1]:
+            return
+        self._key = (state, tyre_laws)
         self._by_compiled = self.kernel == "compiled" and self.audit is None
         if self._by_compiled:  # the audit reads the numpy kernel's steps
             return self._compiled.update(q, qd)

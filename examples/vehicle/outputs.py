@@ -32,7 +32,8 @@ def record(vehicle, t):
 
 def snapshot(vehicle, t, q, qd, a):
     """What is kept after an accepted step at the state (q, qd, a): the system's values as
-    they are (copies), the histories picked out of them after the run (histories), so
+    they are (the contacts' arrays as they are: new at each evaluation; the loads and
+    deflections copies), the histories picked out of them after the run (histories), so
     that a step's record costs little."""
     contacts = vehicle.contacts
     contacts.evaluate(t, q, qd, laws=False)  # nothing here the tyres' laws decide
@@ -52,13 +53,11 @@ def snapshot(vehicle, t, q, qd, a):
         "hull_x": contacts.hull[0], "hull_y": contacts.hull[1], "hull_pitch": theta,
         "hull_surge_velocity": contacts.hull_v[0],
         "loads": loads, "deflections": deflections,
-        "tyre_compression": contacts.compression.copy(),
+        "tyre_compression": contacts.compression,
         "drive_torque": contacts.drive_torque,
         "ground_load": contacts.ground_load.sum(),
-        "pins": contacts.pins.copy(),
-        "wheels": contacts.wheels.copy(),
-        "idler": contacts.idler.copy(),
-        "seats": contacts.seats.copy(), "directions": contacts.u.copy(),
+        "pins": contacts.pins, "wheels": contacts.wheels, "idler": contacts.idler,
+        "seats": contacts.seats, "directions": contacts.u,
     }
 
 

@@ -49,10 +49,10 @@ class StepCheck:
         self.start = None  # the contacts' values at the last accepted step
 
     def accepted(self):
-        """Keep the contacts' values at the accepted state (the records evaluated them)."""
+        """Keep the contacts' values at the accepted state (the records evaluated them;
+        the contacts' arrays are new at each evaluation: kept as they are)."""
         c = self.v.contacts
-        self.start = (c.compression.copy(), c.compression_rate.copy(), c.in_contact.copy(),
-                      c.tooth_gap.copy())
+        self.start = (c.compression, c.compression_rate, c.in_contact, c.tooth_gap)
 
     def __call__(self, mbs, t):
         """None where the solution in exudyn's data (the exudyn run's, at t) is one the
