@@ -74,7 +74,7 @@ class Contacts(KernelResults):
         # the sprocket (the tight side driving forward) and the top run meets the idler
         self.tension_points = (geo.arc(2).point(0.0) - geo.cg,
                                geo.arc(4).point(0.0) - geo.cg)
-        self._key = None
+        self._key, self._adopted, self._adopt_index = None, False, None
         self.audit = None  # an energy.Audit: the power of each class of contact
         # "compiled" (contacts_kernel.py, C) where it builds, else "numpy" (this file's)
         self.kernel, self._compiled, self._by_compiled = "numpy", None, False
@@ -151,13 +151,34 @@ class Contacts(KernelResults):
         tyre_laws = self.v.tyre_laws_key()
         if key is not None and state == key[0] and tyre_laws == key[1]:
             return
-        self._key = (state, tyre_laws)
+        self._key, self._adopted = (state, tyre_laws), False
         self._by_compiled = self.kernel == "compiled" and self.audit is None
         if self._by_compiled:  # the audit reads the numpy kernel's steps
             return self._compiled.update(q, qd)
         self.qd = qd = qd.copy()  # kept: evaluate may give a view of the caller's
         self._kinematics(self.reference + q.reshape(-1, 3), qd.reshape(-1, 3))
         self._forces(t)
+
+    def adopt(self, t, q, qd, kernel):
+        """The last evaluation of `kernel` (a CompiledContacts over these contacts: the own
+        solver's system's, whose Newton evaluates it last at the step's solution) as this
+        one's at (t, q, qd), the system's coordinates and velocities, where it was made at
+        that state (to the bit; the bank's laws have not changed since): `evaluate` there
+        has nothing left to do. Its results only: exudyn's Jacobian would evaluate again.
+        True where it was taken."""
+        if self.kernel != "compiled" or self.audit is not None or self.v.settling:
+            return False
+        if self._adopt_index is None:
+            self._adopt_index = np.ascontiguousarray(self.system_index, dtype=np.intc)
+        q = np.ascontiguousarray(q, dtype=float)
+        qd = np.ascontiguousarray(qd, dtype=float)
+        if not self._compiled.adopt(kernel, q, qd, self._adopt_index):
+            return False
+        index = self._coordinates
+        self._key = ((t, q[index].tobytes(), qd[index].tobytes(), self.v.settling,
+                      self.kernel), self.v.tyre_laws_key())
+        self._by_compiled, self._adopted = True, True
+        return True
 
     def _generalized(self, t, q, qd):
         self._update(t, q, qd)
@@ -166,7 +187,7 @@ class Contacts(KernelResults):
     def _sparse_jacobian(self, t, q, qd, factor, factor_t):
         """The Jacobian as exudyn takes it from this object: (row, column, value)
         triplets, repeated entries summed."""
-        self._update(t, q, qd)
+        self._evaluated(t, q, qd)
         size = 3 * len(self.nodes)
         matrix = exu.MatrixContainer()
         matrix.SetWithSparseMatrix(self._triplet_rows(factor, factor_t), size, size)
@@ -174,11 +195,18 @@ class Contacts(KernelResults):
 
     def _jacobian(self, t, q, qd, factor, factor_t):
         """The Jacobian as a dense matrix (for checks)."""
-        self._update(t, q, qd)
+        self._evaluated(t, q, qd)
         size = 3 * len(self.nodes)
         rows, columns, values = self._triplet_rows(factor, factor_t).T
         return np.bincount((rows * size + columns).astype(int), values,
                            minlength=size * size).reshape(size, size)
+
+    def _evaluated(self, t, q, qd):
+        """Evaluated at (t, q, qd) for the Jacobian: by this kernel (an adopted evaluation
+        has the results alone)."""
+        if self._adopted:
+            self._key = None
+        self._update(t, q, qd)
 
     def _triplet_rows(self, factor, factor_t):
         """The triplets as rows (row, column, value), from the kernel that evaluated."""

@@ -93,6 +93,7 @@ def declare(lib):
     lib.contacts_set_tyre_laws.argtypes = [handle, handle, handle, ctypes.c_int,
                                            ctypes.POINTER(ctypes.c_int)]
     lib.contacts_evaluate.argtypes = [handle, ctypes.c_int]
+    lib.contacts_adopt.argtypes = [handle] * 5
     counts = (ctypes.c_int(), ctypes.c_int())
     lib.contacts_layout(*map(ctypes.byref, counts))
     if (counts[0].value, counts[1].value) != (len(PARAMETERS), len(ARRAYS)):
@@ -188,9 +189,7 @@ class CompiledContacts:
         memory (the last evaluation's attributes of `contacts` dropped: `publish` makes
         them again where they are read)."""
         c, v, views = self.contacts, self.contacts.v, self.views
-        attributes = c.__dict__
-        for name in self._stale(attributes.keys()):  # published, or the numpy kernel's
-            del attributes[name]
+        self._drop_published()
         np.add(self.reference, q, out=self.state)
         self.rates[:] = qd
         given = self._set_course(v.course)
@@ -205,6 +204,24 @@ class CompiledContacts:
         if given:
             views["ground"][:] = v.course.height(views["pins"][:, 0])
         self.lib.contacts_forces(self.handle, bool(v.settling))
+
+    def _drop_published(self):
+        """The last evaluation's attributes of `contacts` (published, or the numpy
+        kernel's) dropped."""
+        attributes = self.contacts.__dict__
+        for name in self._stale(attributes.keys()):
+            del attributes[name]
+
+    def adopt(self, other, q, qd, index):
+        """`other`'s last evaluation (a kernel over the same contacts: the own solver's
+        system's) as this kernel's, where it was made at the system's coordinates q and
+        velocities qd (float arrays; `index`: the contacts' coordinates among them, C
+        ints) to the bit: contacts_adopt. True where it was."""
+        if not self.lib.contacts_adopt(self.handle, other.handle, q.ctypes.data,
+                                       qd.ctypes.data, index.ctypes.data):
+            return False
+        self._drop_published()
+        return True
 
     def _set_tyre_laws(self, bank):
         """Let the kernel call the bank's laws for the tyres' loads (Vehicle.tyre_loads,

@@ -183,6 +183,9 @@ class OwnHost:
         Its parts' clocks: each part's end the next one's start."""
         self._solved = q, v, _ = self.reader.state()
         seconds, began = self.seconds, time.process_time()
+        # the contacts at the solution, as the system's Newton evaluated them last (for the
+        # step check, the deflections and the record: Contacts.adopt)
+        self.v.contacts.adopt(t_new, q, v, self.own.system.contacts)
         if check is not None:
             jumped = check.judge(t_new, t_new - t, q, v, *self._start)
             ended = time.process_time()
