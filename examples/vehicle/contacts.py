@@ -145,7 +145,7 @@ class Contacts(KernelResults):
     def _update(self, t, q, qd, laws=True):
         q, qd = as_vector(q), as_vector(qd)
         # the tyres' load laws change between the coupling's passes at the same state
-        state, key = (t, q.tobytes(), qd.tobytes(), self.v.settling, self.kernel), self._key
+        state, key = self._state(t, q, qd), self._key
         if key is not None and state == key[0] and not laws:
             return
         tyre_laws = self.v.tyre_laws_key()
@@ -158,27 +158,6 @@ class Contacts(KernelResults):
         self.qd = qd = qd.copy()  # kept: evaluate may give a view of the caller's
         self._kinematics(self.reference + q.reshape(-1, 3), qd.reshape(-1, 3))
         self._forces(t)
-
-    def adopt(self, t, q, qd, kernel):
-        """The last evaluation of `kernel` (a CompiledContacts over these contacts: the own
-        solver's system's, whose Newton evaluates it last at the step's solution) as this
-        one's at (t, q, qd), the system's coordinates and velocities, where it was made at
-        that state (to the bit; the bank's laws have not changed since): `evaluate` there
-        has nothing left to do. Its results only: exudyn's Jacobian would evaluate again.
-        True where it was taken."""
-        if self.kernel != "compiled" or self.audit is not None or self.v.settling:
-            return False
-        if self._adopt_index is None:
-            self._adopt_index = np.ascontiguousarray(self.system_index, dtype=np.intc)
-        q = np.ascontiguousarray(q, dtype=float)
-        qd = np.ascontiguousarray(qd, dtype=float)
-        if not self._compiled.adopt(kernel, q, qd, self._adopt_index):
-            return False
-        index = self._coordinates
-        self._key = ((t, q[index].tobytes(), qd[index].tobytes(), self.v.settling,
-                      self.kernel), self.v.tyre_laws_key())
-        self._by_compiled, self._adopted = True, True
-        return True
 
     def _generalized(self, t, q, qd):
         self._update(t, q, qd)
@@ -200,13 +179,6 @@ class Contacts(KernelResults):
         rows, columns, values = self._triplet_rows(factor, factor_t).T
         return np.bincount((rows * size + columns).astype(int), values,
                            minlength=size * size).reshape(size, size)
-
-    def _evaluated(self, t, q, qd):
-        """Evaluated at (t, q, qd) for the Jacobian: by this kernel (an adopted evaluation
-        has the results alone)."""
-        if self._adopted:
-            self._key = None
-        self._update(t, q, qd)
 
     def _triplet_rows(self, factor, factor_t):
         """The triplets as rows (row, column, value), from the kernel that evaluated."""
@@ -617,14 +589,11 @@ class Contacts(KernelResults):
                                f"t = {t:.4f} s; lower --speed or choose a gentler course")
 
     def tension_joints(self, hulls=None, pins=None):
-        """The joints nearest the points where the tensions are read: at the last
-        evaluation, or at each of the states whose hulls (n x 3) and pins (n x links x 2)
-        are given (n x 2, the records' after a run)."""
+        """The joints nearest the points where the tensions are read, at the last
+        evaluation, or (n x 2) at each state whose hulls (n x 3) and pins are given."""
         if hulls is None:
             return [int(j) for j in self.tension_joints(self.hull[None], self.pins[None])[0]]
-        joints = np.empty((len(hulls), len(self.tension_points)), dtype=int)
-        for k, local in enumerate(self.tension_points):
-            points = np.array([hull[:2] + rotate(hull[2], local) for hull in hulls])
-            joints[:, k] = np.argmin(np.hypot(*(pins - points[:, None]).transpose(2, 0, 1)),
-                                     axis=1)
-        return joints
+        points = np.array([[hull[:2] + rotate(hull[2], local) for local in self.tension_points]
+                           for hull in hulls])  # n x 2 x 2
+        return np.argmin(np.hypot(*(pins[:, None] - points[:, :, None]).transpose(3, 0, 1, 2)),
+                         axis=2)

@@ -132,6 +132,39 @@ class KernelResults:
             return self._compiled.publish(name)
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
+    def adopt(self, t, q, qd, kernel):
+        """The last evaluation of `kernel` (a CompiledContacts over these contacts: the own
+        solver's system's, whose Newton evaluates it last at the step's solution) as this
+        one's at (t, q, qd), the system's coordinates and velocities, where it was made at
+        that state (to the bit; the bank's laws have not changed since): `evaluate` there
+        has nothing left to do. Its results only: exudyn's Jacobian would evaluate again.
+        True where it was taken."""
+        if self.kernel != "compiled" or self.audit is not None or self.v.settling:
+            return False
+        if self._adopt_index is None:
+            self._adopt_index = np.ascontiguousarray(self.system_index, dtype=np.intc)
+        q = np.ascontiguousarray(q, dtype=float)
+        qd = np.ascontiguousarray(qd, dtype=float)
+        if not self._compiled.adopt(kernel, q, qd, self._adopt_index):
+            return False
+        index = self._coordinates
+        self._key = (self._state(t, q[index], qd[index]), self.v.tyre_laws_key())
+        self._by_compiled, self._adopted = True, True
+        return True
+
+    def _state(self, t, q, qd):
+        """What an evaluation's results depend on besides the tyres' laws (its key's
+        first part): the time, the state (the contacts' coordinates), the settling, the
+        kernel."""
+        return (t, q.tobytes(), qd.tobytes(), self.v.settling, self.kernel)
+
+    def _evaluated(self, t, q, qd):
+        """Evaluated at (t, q, qd) for the Jacobian: by this kernel (an adopted evaluation
+        has the results alone)."""
+        if self._adopted:
+            self._key = None
+        self._update(t, q, qd)
+
 
 class CompiledContacts:
     """The C kernel for one Contacts object: its memory, its parameters, its views."""

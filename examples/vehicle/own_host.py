@@ -147,6 +147,9 @@ class OwnHost:
         self.bank = self.path.bank
         self.own, self.solver = solver_for(vehicle, self.bank, relative_tolerance)
         self.reader = _Reader(self.solver)
+        # the contacts at a pass's solution: the system's Newton evaluated them last there
+        contacts, evaluated = vehicle.contacts, self.own.system.contacts
+        self.adopt = lambda t, q, v: contacts.adopt(t, q, v, evaluated)
         self.refused = 0  # solutions the step check refused
         self.halved = 0  # steps whose Newton failed
         self.solves = self.newton = 0
@@ -183,9 +186,7 @@ class OwnHost:
         Its parts' clocks: each part's end the next one's start."""
         self._solved = q, v, _ = self.reader.state()
         seconds, began = self.seconds, time.process_time()
-        # the contacts at the solution, as the system's Newton evaluated them last (for the
-        # step check, the deflections and the record: Contacts.adopt)
-        self.v.contacts.adopt(t_new, q, v, self.own.system.contacts)
+        self.adopt(t_new, q, v)  # for the step check, the deflections and the record
         if check is not None:
             jumped = check.judge(t_new, t_new - t, q, v, *self._start)
             ended = time.process_time()
