@@ -5,8 +5,10 @@ Python runs per Newton iterate), coupled to the FMUs by the coupling's compiled 
 bank, as compiled.py's run in exudyn).
 
 Per host step what bank_exudyn.py and exudyn_host.py do in exudyn's hooks:
-Bank.begin_step(t); a solve of the step; the step check (StepCheck.judge on the solver's
-q and v); the deflections from the solution (CompiledPath.deflections at q);
+Bank.begin_step(t); a solve of the step; the contacts at its solution taken from the
+system's evaluation there, its Newton's last (Contacts.adopt); the step check
+(StepCheck.judge on the solver's q and v); the deflections from the solution
+(CompiledPath.deflections at q);
 Bank.end_pass(t, deflections): on REPEAT the step solved again from its start with the
 new laws, Newton from the last pass's solution (exudyn's warm start of the next pass,
 where Newton has an absolute tolerance); a verdict to retry, or a solution the step check
