@@ -40,13 +40,38 @@ def runs(native_fmus):
             ("exudyn", "exudyn", None, NEWTON_TOLERANCE), ("own", "own", "full", NEWTON_TOLERANCE),
             ("reuse", "own", "reuse", NEWTON_TOLERANCE), ("full tight", "own", "full", TIGHT),
             ("reuse tight", "own", "reuse", TIGHT)):
-        vehicle, histories, _, _ = simulate("bump", SPEED, END, STEP, statics=statics,
-                                            fmu_dir=fmu_dir, solver=solver, own_newton=newton,
-                                            newton_tolerance=tolerance)
+        with pytest.MonkeyPatch.context() as patch:
+            if name == "own":  # the adoptions of one run (test_every_pass_takes_...)
+                result["adopted"] = _watch_adoptions(patch)
+            vehicle, histories, _, _ = simulate("bump", SPEED, END, STEP, statics=statics,
+                                                fmu_dir=fmu_dir, solver=solver,
+                                                own_newton=newton, newton_tolerance=tolerance)
         result[name] = histories, vehicle.solver_statistics()
         if name == "own":
             result["own vehicle"] = vehicle
     return result
+
+
+def _watch_adoptions(patch):
+    """Each Contacts.adopt of the run (the own host's, at each pass's solution): whether
+    it took the system's evaluation, and whether every array it took equals the contacts'
+    own kernel's evaluation at that state, made afterwards."""
+    from vehicle.contacts import Contacts
+
+    adopted, adopt = [], Contacts.adopt
+
+    def watched(self, t, q, qd, kernel):
+        taken = adopt(self, t, q, qd, kernel)
+        views = self._compiled.views
+        took = {name: view.copy() for name, view in views.items()}
+        self._key = None
+        self.evaluate(t, q, qd)  # the kernel's own evaluation, the same laws
+        adopted.append((taken, all(took[name].tobytes() == views[name].tobytes()
+                                   for name in views)))
+        return taken
+
+    patch.setattr(Contacts, "adopt", watched)
+    return adopted
 
 
 def test_the_own_solver_takes_exudyns_steps_and_iterations(runs):
@@ -57,6 +82,15 @@ def test_the_own_solver_takes_exudyns_steps_and_iterations(runs):
         assert statistics["refused"] == 0
     assert own["passes_per_step"] == exudyn["passes_per_step"] >= 1.0
     assert own["newton_per_pass"] == exudyn["newton_per_pass"]
+
+
+def test_each_pass_takes_the_contacts_the_systems_newton_evaluated_last(runs):
+    """The own host's contacts at a pass's solution are the system's last evaluation
+    (Contacts.adopt: Newton evaluates last at its solution), equal to the bit to the
+    contacts' own evaluation there."""
+    adopted, own = runs["adopted"], runs["own"][1]
+    assert len(adopted) == round(own["passes_per_step"] * own["steps"])
+    assert all(taken and equal for taken, equal in adopted)
 
 
 def test_the_own_solver_agrees_with_exudyn_below_newtons_tolerance(runs):
@@ -111,7 +145,8 @@ def test_the_step_check_judges_the_solvers_arrays_as_exudyns_data(runs):
 
 
 class _Solver:
-    """A solver core whose Newton converges only on steps up to `longest`."""
+    """A solver core whose Newton converges only on steps up to `longest` (and its
+    reader, OwnHost's _Reader)."""
 
     def __init__(self, longest):
         self.longest, self.restarts = longest, 0
@@ -122,11 +157,11 @@ class _Solver:
     def restart(self):
         self.restarts += 1
 
-    def report(self):
-        return {"iterations": 1}
+    def iterations(self):
+        return 1
 
     def state(self):
-        return (np.zeros(3),) * 4
+        return (np.zeros(3),) * 3
 
 
 class _Bank:
@@ -153,6 +188,7 @@ def _host(longest):
 
     host = OwnHost.__new__(OwnHost)
     host.solver, host.bank = _Solver(longest), _Bank()
+    host.reader, host.adopt = host.solver, lambda t, q, v: False
     host.path = type("Path", (), {"deflections": lambda self, q, v, t: q})()
     host.refused = host.halved = host.solves = host.newton = 0
     host._start = None

@@ -9,14 +9,28 @@ Installed after the settling to the static point, which runs on the relaxed comp
 Python functions (model.RelaxedTable).
 """
 
+import ctypes
 from contextlib import contextmanager
 
 import numpy as np
 
 import bank_path
 
+from . import joints as joints_kernel
+from . import layout as lay
 from .joints import Joints
 from .model import HORN_HEIGHT, radial_fade, radial_pull
+
+
+class _Deflections(ctypes.Structure):
+    """deflections.c's Deflections."""
+    _fields_ = [(name, ctypes.c_int) for name in ("links", "wheels", "tyres_per_wheel",
+                                                  "dampers")] + \
+               [("half", ctypes.c_double), ("out_of_contact", ctypes.c_double),
+                ("hull_rotation", ctypes.c_int)] + \
+               [(name, ctypes.c_void_p) for name in (
+                   "link_index", "tyre_rows", "arm_rotation", "damper_rows", "radial_rows",
+                   "torsion_rows", "reference", "offset", "still", "q_links", "link", "joint")]
 
 
 class CompiledPath:
@@ -35,8 +49,34 @@ class CompiledPath:
         self.hull_rotation = mbs.GetNodeODE2Index(v.hull_node) + 2
         self.arm_rotation = np.array([mbs.GetNodeODE2Index(v.arm_nodes[i - 1]) + 2
                                       for i in v.dampers])
-        self.joints = v.joints or Joints(v)  # its kinematics, for the deflections
+        self.joints = v.joints or Joints(v)  # its reference and offsets, for the deflections
+        self._deflections_kernel()
         self._compile_forces()
+
+    def _deflections_kernel(self):
+        """deflections.c over this path's rows and the joints' layout (arrays made once)."""
+        lib = joints_kernel.library()
+        if lib is None:
+            raise RuntimeError("the compiled path's deflections need a C compiler (gcc)")
+        if lib.deflections_layout() != ctypes.sizeof(_Deflections):
+            raise RuntimeError("deflections.c and compiled.py disagree on the layout")
+        lib.deflections.argtypes = [ctypes.c_void_p] * 4
+        links = len(self.link_index)
+
+        def ints(rows):
+            return np.ascontiguousarray(rows, dtype=np.intc)
+
+        self._arrays = arrays = [ints(self.link_index), ints(self.tyre_rows),
+                                 ints(self.arm_rotation), ints(self.damper_rows),
+                                 ints(self.radial_rows), ints(self.torsion_rows),
+                                 np.ascontiguousarray(self.joints.reference, dtype=float),
+                                 np.ascontiguousarray(self.joints.offset, dtype=float),
+                                 np.zeros((links, 3)), np.zeros((links, 3)),
+                                 np.zeros((links, 2)), np.zeros((links, 8))]
+        self._layout = _Deflections(links, *self.tyre_rows.shape, len(self.damper_rows),
+                                    0.5 * lay.LINK_PITCH, HORN_HEIGHT, self.hull_rotation,
+                                    *(a.ctypes.data for a in arrays))
+        self._lib, self._layout_at = lib, ctypes.addressof(self._layout)
 
     def _compile_forces(self):
         """Each connector's force the symbolic law of its instance (the Python path's
@@ -91,14 +131,12 @@ class CompiledPath:
             q, t = np.asarray(data.GetODE2Coordinates()), data.GetTime()
         deflection = np.empty(self.bank.n)
         v.contacts.evaluate(t, q, qd)
-        compression = np.where(v.contacts.in_contact, v.contacts.compression, -HORN_HEIGHT)
-        deflection[self.tyre_rows] = compression[:, None]
-        deflection[self.damper_rows] = q[self.hull_rotation] - q[self.arm_rotation]
-        # the joints' seat distances and relative angles, as the joints' object computes
-        # them (joints.py; model._seat_deflection has the same distance)
-        joint = self.joints.kinematics(q[self.link_index], np.zeros(self.link_index.shape))[1]
-        deflection[self.radial_rows] = joint[:, 2]
-        deflection[self.torsion_rows] = joint[:, 6]
+        compression = np.ascontiguousarray(v.contacts.compression, dtype=float)
+        q = np.ascontiguousarray(q, dtype=float)
+        # deflections.c: the joints' seat distances and relative angles as the joints'
+        # kernel computes them (model._seat_deflection has the same distance)
+        self._lib.deflections(self._layout_at, q.ctypes.data, compression.ctypes.data,
+                              deflection.ctypes.data)
         return deflection
 
 

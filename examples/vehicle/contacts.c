@@ -12,6 +12,7 @@
 
 #define P(name) (c->parameter[P_##name])
 #define ARRAY(name) (c->array[A_##name])
+#define ARRAY_OF(kernel, name) ((kernel)->array[A_##name])
 
 static int array_size(const Contacts *c, int index)
 {
@@ -33,6 +34,26 @@ CONTACTS_EXPORT int contacts_layout(int *parameters, int *arrays)
     *parameters = P_COUNT;
     *arrays = A_COUNT;
     return (int)sizeof(Spring);
+}
+
+/* The own solver's system (system.c) evaluates its kernel `src` at every Newton iterate,
+ * the last at the step's solution. Where src's last state is (q, v) to the bit (its
+ * reference plus q at `index`, v at `index`, as system.c and contacts_kernel.py set it)
+ * and its parameters are dst's, its results (every array) are copied into dst, a kernel
+ * over the same contacts: 1; else 0, nothing copied. */
+CONTACTS_EXPORT int contacts_adopt(Contacts *dst, const Contacts *src, const double *q,
+                                   const double *v, const int *index)
+{
+    if (dst->bodies != src->bodies || dst->wheels != src->wheels || dst->links != src->links
+        || memcmp(dst->parameter, src->parameter, sizeof dst->parameter) != 0)
+        return 0;
+    for (int i = 0; i < 3 * src->bodies; i++)
+        if (!(ARRAY_OF(src, STATE)[i] == src->reference[i] + q[index[i]])
+            || !(ARRAY_OF(src, RATES)[i] == v[index[i]]))
+            return 0;
+    for (int a = 0; a < A_COUNT; a++)
+        memcpy(dst->array[a], src->array[a], sizeof(double) * (size_t)array_size(src, a));
+    return 1;
 }
 
 CONTACTS_EXPORT void contacts_free(Contacts *c)

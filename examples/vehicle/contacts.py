@@ -24,7 +24,8 @@ from exudyn.itemInterface import ObjectGenericODE2
 
 from . import layout as lay
 from .contact_math import cross, rotate, smoothstep, smoothstep_derivatives
-from .contacts_kernel import CompiledContacts, KernelResults, as_vector, library
+from .contacts_kernel import (CompiledContacts, KernelResults, as_vector, index_or_slice,
+                              library)
 from .model import (ENGAGEMENT_RAMP, GROUND_DAMPING, GROUND_STIFFNESS, HORN_HEIGHT,
                     SPROCKET_DAMPING, SPROCKET_STIFFNESS, VehicleError, WHEEL_DAMPING,
                     WHEEL_STIFFNESS)
@@ -73,7 +74,7 @@ class Contacts(KernelResults):
         # the sprocket (the tight side driving forward) and the top run meets the idler
         self.tension_points = (geo.arc(2).point(0.0) - geo.cg,
                                geo.arc(4).point(0.0) - geo.cg)
-        self._key = None
+        self._key, self._adopted, self._adopt_index = None, False, None
         self.audit = None  # an energy.Audit: the power of each class of contact
         # "compiled" (contacts_kernel.py, C) where it builds, else "numpy" (this file's)
         self.kernel, self._compiled, self._by_compiled = "numpy", None, False
@@ -112,6 +113,7 @@ class Contacts(KernelResults):
         mbs = self.v.mbs
         self.system_index = np.concatenate([mbs.GetNodeODE2Index(n) + np.arange(3)
                                             for n in self.nodes])
+        self._coordinates = index_or_slice(self.system_index)  # evaluate's
 
     def rebase(self, settled):
         """The settled state becomes the start: the sprocket's tooth spaces stay where the
@@ -125,27 +127,35 @@ class Contacts(KernelResults):
 
     # --- one evaluation per state ---------------------------------------------------------
 
-    def evaluate(self, t, q=None, qd=None):
+    def evaluate(self, t, q=None, qd=None, laws=True):
         """The contacts at the host's current state (for the coupling's readers and the
-        records), or at the system's coordinates q and velocities qd where given."""
-        data = self.v.mbs.systemData
+        records), or at the system's coordinates q and velocities qd where given. laws
+        False: for a reader of nothing the tyres' load laws decide (the kinematics, the
+        tyres' compressions, the ground's and the sprocket's forces: the records), whom the
+        last evaluation at the same state serves, whatever laws it had."""
         if q is None:
-            q = np.asarray(data.GetODE2Coordinates(exu.ConfigurationType.Current))
+            q = np.asarray(self.v.mbs.systemData.GetODE2Coordinates(
+                exu.ConfigurationType.Current))
         if qd is None:
-            qd = np.asarray(data.GetODE2Coordinates_t(exu.ConfigurationType.Current))
-        self._update(t, q[self.system_index], qd[self.system_index])
+            qd = np.asarray(self.v.mbs.systemData.GetODE2Coordinates_t(
+                exu.ConfigurationType.Current))
+        index = self._coordinates
+        self._update(t, q[index], qd[index], laws)
 
-    def _update(self, t, q, qd):
+    def _update(self, t, q, qd, laws=True):
         q, qd = as_vector(q), as_vector(qd)
         # the tyres' load laws change between the coupling's passes at the same state
-        key = (t, q.tobytes(), qd.tobytes(), self.v.settling, self.v.tyre_laws_key(), self.kernel)
-        if key == self._key:
+        state, key = self._state(t, q, qd), self._key
+        if key is not None and state == key[0] and not laws:
             return
-        self._key = key
+        tyre_laws = self.v.tyre_laws_key()
+        if key is not None and state == key[0] and tyre_laws == key[1]:
+            return
+        self._key, self._adopted = (state, tyre_laws), False
         self._by_compiled = self.kernel == "compiled" and self.audit is None
         if self._by_compiled:  # the audit reads the numpy kernel's steps
             return self._compiled.update(q, qd)
-        self.qd = qd
+        self.qd = qd = qd.copy()  # kept: evaluate may give a view of the caller's
         self._kinematics(self.reference + q.reshape(-1, 3), qd.reshape(-1, 3))
         self._forces(t)
 
@@ -156,7 +166,7 @@ class Contacts(KernelResults):
     def _sparse_jacobian(self, t, q, qd, factor, factor_t):
         """The Jacobian as exudyn takes it from this object: (row, column, value)
         triplets, repeated entries summed."""
-        self._update(t, q, qd)
+        self._evaluated(t, q, qd)
         size = 3 * len(self.nodes)
         matrix = exu.MatrixContainer()
         matrix.SetWithSparseMatrix(self._triplet_rows(factor, factor_t), size, size)
@@ -164,7 +174,7 @@ class Contacts(KernelResults):
 
     def _jacobian(self, t, q, qd, factor, factor_t):
         """The Jacobian as a dense matrix (for checks)."""
-        self._update(t, q, qd)
+        self._evaluated(t, q, qd)
         size = 3 * len(self.nodes)
         rows, columns, values = self._triplet_rows(factor, factor_t).T
         return np.bincount((rows * size + columns).astype(int), values,
@@ -554,12 +564,14 @@ class Contacts(KernelResults):
 
     def check(self, t, q=None, qd=None):
         """Stop with the part and the time where the model no longer holds (at the
-        host's current state, or at q, qd: evaluate's)."""
-        self.evaluate(t, q, qd)
-        # each wheel in turn only where one is out of bounds (the first named)
-        beyond = (self.compression > lay.TYRE_RUBBER) | (self.compression < -HORN_HEIGHT)
-        for w in np.flatnonzero(beyond)[:1]:
-            compression = self.compression[w]
+        host's current state, or at q, qd: evaluate's; the kinematics alone are read)."""
+        self.evaluate(t, q, qd, laws=False)
+        compression = self.compression
+        # the wheels one by one only where one is out of bounds (the first named)
+        if compression.max() > lay.TYRE_RUBBER or compression.min() < -HORN_HEIGHT:
+            w = np.flatnonzero((compression > lay.TYRE_RUBBER)
+                               | (compression < -HORN_HEIGHT))[0]
+            compression = compression[w]
             if compression > lay.TYRE_RUBBER:
                 raise VehicleError(
                     f"road wheel {w + 1}: a track link has passed through its tyre (compressed "
@@ -571,16 +583,17 @@ class Contacts(KernelResults):
                     f"road wheel {w + 1} has left the track (more than {HORN_HEIGHT * 1e3:g} mm "
                     f"above the link beneath, the guide horns' height) at t = {t:.4f} s; "
                     f"lower --speed or choose a gentler course")
-        if np.max(self.tooth_gap) > 0.3 * lay.LINK_PITCH:
+        if self.tooth_gap.max() > 0.3 * lay.LINK_PITCH:
             j = int(np.argmax(self.tooth_gap))
             raise VehicleError(f"the track jumped a sprocket tooth at joint {j} at "
                                f"t = {t:.4f} s; lower --speed or choose a gentler course")
 
-    def tension_joints(self):
-        """The joints nearest the points where the tensions are read."""
-        hull_pos, hull_theta = self.hull[:2], self.hull[2]
-        joints = []
-        for local in self.tension_points:
-            point = hull_pos + rotate(hull_theta, local)
-            joints.append(int(np.argmin(np.hypot(*(self.pins - point).T))))
-        return joints
+    def tension_joints(self, hulls=None, pins=None):
+        """The joints nearest the points where the tensions are read, at the last
+        evaluation, or (n x 2) at each state whose hulls (n x 3) and pins are given."""
+        if hulls is None:
+            return [int(j) for j in self.tension_joints(self.hull[None], self.pins[None])[0]]
+        points = np.array([[hull[:2] + rotate(hull[2], local) for local in self.tension_points]
+                           for hull in hulls])  # n x 2 x 2
+        return np.argmin(np.hypot(*(pins[:, None] - points[:, :, None]).transpose(3, 0, 1, 2)),
+                         axis=2)

@@ -9,10 +9,10 @@ one C call: the kernel calls the bank's laws itself (Bank.law_loads_entry; the o
 of Vehicle.tyre_loads) and evaluates course.py's courses (contacts_course.c); otherwise
 Python gives the loads (Vehicle.tyre_loads) and the heights of a course of another class
 between two calls. The kernel's memory is allocated once. Its results stay there while
-exudyn's Newton iterates; they are handed on as the numpy kernel's attributes (copies, as
-the numpy kernel's are new arrays each time) only when a reader first asks for one after
+exudyn's Newton iterates; each is handed on as the numpy kernel's attribute (a copy, as
+the numpy kernel's are new arrays each time) only when a reader first asks for it after
 an evaluation (`publish`, Contacts.__getattr__): the coupling's readers, the step check
-and the records, a few times a step, not at every iterate.
+and the records, a few times a step, not at every iterate, each what it reads.
 """
 
 import ctypes
@@ -93,6 +93,7 @@ def declare(lib):
     lib.contacts_set_tyre_laws.argtypes = [handle, handle, handle, ctypes.c_int,
                                            ctypes.POINTER(ctypes.c_int)]
     lib.contacts_evaluate.argtypes = [handle, ctypes.c_int]
+    lib.contacts_adopt.argtypes = [handle] * 5
     counts = (ctypes.c_int(), ctypes.c_int())
     lib.contacts_layout(*map(ctypes.byref, counts))
     if (counts[0].value, counts[1].value) != (len(PARAMETERS), len(ARRAYS)):
@@ -109,18 +110,60 @@ def as_vector(values):
     return np.asarray(values)
 
 
+def index_or_slice(index):
+    """`index` (integers) as a slice where it is one run (numpy reads a slice as a view,
+    without a copy), else as it is (flat)."""
+    index = np.ravel(index)
+    first = int(index[0])
+    if np.array_equal(index, np.arange(first, first + len(index))):
+        return slice(first, first + len(index))
+    return index
+
+
 class KernelResults:
     """What Contacts reads of the C kernel: where its last evaluation was the kernel's
     (`_by_compiled`), an attribute of PUBLISHED not set yet is read from the kernel's
-    memory on first use (`CompiledContacts.publish`, all of them at once)."""
+    memory on first use (`CompiledContacts.publish`, that attribute alone)."""
 
     _published = frozenset(PUBLISHED)
 
     def __getattr__(self, name):  # only for attributes not set
         if self.__dict__.get("_by_compiled") and name in self._published:
-            self._compiled.publish()
-            return self.__dict__[name]
+            return self._compiled.publish(name)
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
+    def adopt(self, t, q, qd, kernel):
+        """The last evaluation of `kernel` (a CompiledContacts over these contacts: the own
+        solver's system's, whose Newton evaluates it last at the step's solution) as this
+        one's at (t, q, qd), the system's coordinates and velocities, where it was made at
+        that state (to the bit; the bank's laws have not changed since): `evaluate` there
+        has nothing left to do. Its results only: exudyn's Jacobian would evaluate again.
+        True where it was taken."""
+        if self.kernel != "compiled" or self.audit is not None or self.v.settling:
+            return False
+        if self._adopt_index is None:
+            self._adopt_index = np.ascontiguousarray(self.system_index, dtype=np.intc)
+        q = np.ascontiguousarray(q, dtype=float)
+        qd = np.ascontiguousarray(qd, dtype=float)
+        if not self._compiled.adopt(kernel, q, qd, self._adopt_index):
+            return False
+        index = self._coordinates
+        self._key = (self._state(t, q[index], qd[index]), self.v.tyre_laws_key())
+        self._by_compiled, self._adopted = True, True
+        return True
+
+    def _state(self, t, q, qd):
+        """What an evaluation's results depend on besides the tyres' laws (its key's
+        first part): the time, the state (the contacts' coordinates), the settling, the
+        kernel."""
+        return (t, q.tobytes(), qd.tobytes(), self.v.settling, self.kernel)
+
+    def _evaluated(self, t, q, qd):
+        """Evaluated at (t, q, qd) for the Jacobian: by this kernel (an adopted evaluation
+        has the results alone)."""
+        if self._adopted:
+            self._key = None
+        self._update(t, q, qd)
 
 
 class CompiledContacts:
@@ -152,6 +195,7 @@ class CompiledContacts:
         self._course = None  # (the course, its attributes, its kind) the kernel has
         self._bank = None  # the bank whose laws the kernel calls
         self._triplets_buffer(4096)
+        self._make_readers()
         self.set_parameters()
 
     def set_parameters(self):
@@ -178,9 +222,7 @@ class CompiledContacts:
         memory (the last evaluation's attributes of `contacts` dropped: `publish` makes
         them again where they are read)."""
         c, v, views = self.contacts, self.contacts.v, self.views
-        if "generalized" in c.__dict__:  # published, or the numpy kernel's
-            for name in PUBLISHED:
-                c.__dict__.pop(name, None)
+        self._drop_published()
         np.add(self.reference, q, out=self.state)
         self.rates[:] = qd
         given = self._set_course(v.course)
@@ -195,6 +237,24 @@ class CompiledContacts:
         if given:
             views["ground"][:] = v.course.height(views["pins"][:, 0])
         self.lib.contacts_forces(self.handle, bool(v.settling))
+
+    def _drop_published(self):
+        """The last evaluation's attributes of `contacts` (published, or the numpy
+        kernel's) dropped."""
+        attributes = self.contacts.__dict__
+        for name in self._stale(attributes.keys()):
+            del attributes[name]
+
+    def adopt(self, other, q, qd, index):
+        """`other`'s last evaluation (a kernel over the same contacts: the own solver's
+        system's) as this kernel's, where it was made at the system's coordinates q and
+        velocities qd (float arrays; `index`: the contacts' coordinates among them, C
+        ints) to the bit: contacts_adopt. True where it was."""
+        if not self.lib.contacts_adopt(self.handle, other.handle, q.ctypes.data,
+                                       qd.ctypes.data, index.ctypes.data):
+            return False
+        self._drop_published()
+        return True
 
     def _set_tyre_laws(self, bank):
         """Let the kernel call the bank's laws for the tyres' loads (Vehicle.tyre_loads,
@@ -227,25 +287,37 @@ class CompiledContacts:
         """The generalized forces of the last evaluation (a copy)."""
         return self.views["generalized"].copy()
 
-    def publish(self):
-        """The last evaluation's results as the numpy kernel's attributes of `contacts`
-        (PUBLISHED): copies, as the numpy kernel's are new arrays each time (a reader may
-        keep them across evaluations)."""
-        c, views = self.contacts, self.views
-        state, rates = views["state"].copy(), views["rates"].copy()
-        link0 = c.link0
-        c.__dict__.update(
-            (name, views[name].copy()) for name in (
-                "u", "n", "seats", "seats_v", "pins", "pins_v", "wheels", "wheels_v",
-                "compression", "compression_rate", "tyre_force", "ground_load", "tooth_gap",
-                "generalized"))
-        c.qd, c.rates, c.body_pos = rates.reshape(-1), rates, state[:, :2]
-        c.hull, c.hull_v = state[0], rates[0]
-        c.link_pos, c.link_angle = state[link0:, :2], state[link0:, 2]
-        c.link_v, c.link_omega = rates[link0:, :2], rates[link0:, 2]
-        c.idler, c.idler_v = state[link0 - 1, :2], rates[link0 - 1, :2]
-        c.in_contact = c.compression > -np.inf
-        c.drive_torque = float(views["drive_torque"][0])
+    def publish(self, name):
+        """The last evaluation's result `name` (of PUBLISHED) as the numpy kernel's
+        attribute of `contacts`: a copy, as the numpy kernel's are new arrays each time (a
+        reader may keep it across evaluations); returns it."""
+        value = self._readers[name]()
+        self.contacts.__dict__[name] = value
+        return value
+
+    def _make_readers(self):
+        """Each PUBLISHED attribute's reader of the kernel's memory (publish)."""
+        views, link0 = self.views, self.contacts.link0
+        state, rates = views["state"], views["rates"]
+
+        def copy(array):
+            return array.copy
+
+        readers = {name: copy(views[name]) for name in (
+            "u", "n", "seats", "seats_v", "pins", "pins_v", "wheels", "wheels_v",
+            "compression", "compression_rate", "tyre_force", "ground_load", "tooth_gap",
+            "generalized")}
+        readers.update(
+            qd=copy(rates.reshape(-1)), rates=copy(rates), body_pos=copy(state[:, :2]),
+            hull=copy(state[0]), hull_v=copy(rates[0]), link_pos=copy(state[link0:, :2]),
+            link_angle=copy(state[link0:, 2]), link_v=copy(rates[link0:, :2]),
+            link_omega=copy(rates[link0:, 2]), idler=copy(state[link0 - 1, :2]),
+            idler_v=copy(rates[link0 - 1, :2]),
+            in_contact=lambda: views["compression"] > -np.inf,
+            drive_torque=lambda: float(views["drive_torque"][0]))
+        assert readers.keys() == set(PUBLISHED)
+        self._readers = readers
+        self._stale = frozenset(PUBLISHED).intersection
 
     def _triplets_buffer(self, rows):
         self.triplets_out = np.zeros((rows, 3))

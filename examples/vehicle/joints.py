@@ -33,8 +33,9 @@ from .law_slopes import load_and_slopes
 from .model import RADIAL_FADE, radial_fade
 
 HERE = Path(__file__).resolve().parent
-LIBRARY = Library("vehicle_joints", [HERE / "joints.c"], [], "the track joints' kernel "
-                  "(joints.c)", "the joints take their numpy kernel")
+# with the coupling's deflections on the compiled path (deflections.c: compiled.py)
+LIBRARY = Library("vehicle_joints", [HERE / "joints.c", HERE / "deflections.c"], [],
+                  "the track joints' kernel (joints.c)", "the joints take their numpy kernel")
 KERNELS = ("compiled", "numpy")
 
 

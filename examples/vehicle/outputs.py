@@ -32,10 +32,11 @@ def record(vehicle, t):
 
 def snapshot(vehicle, t, q, qd, a):
     """What is kept after an accepted step at the state (q, qd, a): the system's values as
-    they are (copies), the histories picked out of them after the run (histories), so
+    they are (the contacts' arrays as they are: new at each evaluation; the loads and
+    deflections copies), the histories picked out of them after the run (histories), so
     that a step's record costs little."""
     contacts = vehicle.contacts
-    contacts.evaluate(t, q, qd)
+    contacts.evaluate(t, q, qd, laws=False)  # nothing here the tyres' laws decide
     hull = vehicle.mbs.GetNodeODE2Index(vehicle.hull_node)
     acceleration, angular = a[hull:hull + 2], a[hull + 2]
     omega = contacts.hull_v[2]
@@ -51,15 +52,12 @@ def snapshot(vehicle, t, q, qd, a):
         "seat_vertical_acceleration": acceleration[1] + angular * seat[0] - omega ** 2 * seat[1],
         "hull_x": contacts.hull[0], "hull_y": contacts.hull[1], "hull_pitch": theta,
         "hull_surge_velocity": contacts.hull_v[0],
-        "tension_joints": contacts.tension_joints(),
         "loads": loads, "deflections": deflections,
-        "tyre_compression": contacts.compression.copy(),
+        "tyre_compression": contacts.compression,
         "drive_torque": contacts.drive_torque,
         "ground_load": contacts.ground_load.sum(),
-        "pins": contacts.pins.copy(),
-        "wheels": contacts.wheels.copy(),
-        "idler": contacts.idler.copy(),
-        "seats": contacts.seats.copy(), "directions": contacts.u.copy(),
+        "pins": contacts.pins, "wheels": contacts.wheels, "idler": contacts.idler,
+        "seats": contacts.seats, "directions": contacts.u,
     }
 
 
@@ -68,7 +66,9 @@ def histories(vehicle):
     records = vehicle.records
     stacked = {key: np.array([r[key] for r in records]) for key in records[0]}
     loads, deflections = stacked.pop("loads"), stacked.pop("deflections")
-    sprocket_joint, idler_joint = stacked.pop("tension_joints").T
+    sprocket_joint, idler_joint = vehicle.contacts.tension_joints(
+        np.stack([stacked[key] for key in ("hull_x", "hull_y", "hull_pitch")], axis=1),
+        stacked["pins"]).T
     rows = {kind: np.array(rows) for kind, rows in vehicle.rows.items()}
     radial = loads[:, rows["radial"]]
     steps = np.arange(len(records))

@@ -5,8 +5,10 @@ Python runs per Newton iterate), coupled to the FMUs by the coupling's compiled 
 bank, as compiled.py's run in exudyn).
 
 Per host step what bank_exudyn.py and exudyn_host.py do in exudyn's hooks:
-Bank.begin_step(t); a solve of the step; the step check (StepCheck.judge on the solver's
-q and v); the deflections from the solution (CompiledPath.deflections at q);
+Bank.begin_step(t); a solve of the step; the contacts at its solution taken from the
+system's evaluation there, its Newton's last (Contacts.adopt); the step check
+(StepCheck.judge on the solver's q and v); the deflections from the solution
+(CompiledPath.deflections at q);
 Bank.end_pass(t, deflections): on REPEAT the step solved again from its start with the
 new laws, Newton from the last pass's solution (exudyn's warm start of the next pass,
 where Newton has an absolute tolerance); a verdict to retry, or a solution the step check
@@ -126,6 +128,29 @@ def solver_for(vehicle, laws, relative_tolerance=1e-8):
     return own, solver
 
 
+class _Reader:
+    """The solver core's state (q, v, a) and its last step's Newton iterations as
+    AlphaSolver.state and .report read them (alpha_state, alpha_report), with the least
+    Python per call: one block of three rows per state (the host keeps states across
+    steps), the multipliers and the report into arrays made once."""
+
+    def __init__(self, solver):
+        self.lib, self.handle, self.n = solver.lib, solver.handle, solver.nq
+        self.lam = np.empty(max(solver.nm, 1))
+        self.ints, self.reals = np.zeros(5, dtype=np.intc), np.zeros(2)
+        self.at = (self.lam.ctypes.data, self.ints.ctypes.data, self.reals.ctypes.data)
+
+    def state(self):
+        block = np.empty((3, self.n))
+        at, row = block.ctypes.data, 8 * self.n
+        self.lib.alpha_state(self.handle, at, at + row, at + 2 * row, self.at[0])
+        return block[0], block[1], block[2]
+
+    def iterations(self):
+        self.lib.alpha_report(self.handle, *self.at[1:])
+        return int(self.ints[0])
+
+
 class OwnHost:
     """The run of `vehicle` (prepared on the compiled path: Vehicle.prepare) on the own
     solver; run() as exudyn_host.solve. Its counts: statistics()."""
@@ -137,6 +162,10 @@ class OwnHost:
         self.path = vehicle.compiled_path
         self.bank = self.path.bank
         self.own, self.solver = solver_for(vehicle, self.bank, relative_tolerance)
+        self.reader = _Reader(self.solver)
+        # the contacts at a pass's solution: the system's Newton evaluated them last there
+        contacts, evaluated = vehicle.contacts, self.own.system.contacts
+        self.adopt = lambda t, q, v: contacts.adopt(t, q, v, evaluated)
         self.refused = 0  # solutions the step check refused
         self.halved = 0  # steps whose Newton failed
         self.solves = self.newton = 0
@@ -165,7 +194,7 @@ class OwnHost:
                   else self.solver.repeat(h, t_new, warm))
         self.seconds["solve"] += time.process_time() - began
         self.solves += 1
-        self.newton += self.solver.report()["iterations"]
+        self.newton += self.reader.iterations()
         if status == OUTSIDE:  # halving would not change the matrix's structure
             report, name = self.solver.report(), self.own.system.coordinate_name
             raise VehicleError(
@@ -175,20 +204,23 @@ class OwnHost:
         return status
 
     def _pass_end(self, t, t_new, check):
-        """The step check's and the bank's verdict on a solved pass: (refused, verdict)."""
-        self._solved = q, v, _ = self.solver.state()[:3]
+        """The step check's and the bank's verdict on a solved pass: (refused, verdict).
+        Its parts' clocks: each part's end the next one's start."""
+        self._solved = q, v, _ = self.reader.state()
+        seconds, began = self.seconds, time.process_time()
+        self.adopt(t_new, q, v)  # for the step check, the deflections and the record
         if check is not None:
-            began = time.process_time()
             jumped = check.judge(t_new, t_new - t, q, v, *self._start)
-            self.seconds["check"] += time.process_time() - began
+            ended = time.process_time()
+            seconds["check"] += ended - began
+            began = ended
             if jumped is not None:
                 return jumped, None
-        began = time.process_time()
         deflections = self.path.deflections(q, v, t_new)
-        self.seconds["deflections"] += time.process_time() - began
-        began = time.process_time()
+        ended = time.process_time()
+        seconds["deflections"] += ended - began
         verdict = self.bank.end_pass(t_new, deflections)
-        self.seconds["bank"] += time.process_time() - began
+        seconds["bank"] += time.process_time() - ended
         return None, verdict
 
     def _step(self, t, h, check):
@@ -235,7 +267,7 @@ class OwnHost:
         solver's state, or another that reads exudyn's data, where it is written)."""
         began = time.process_time()
         # the last pass's solution, or the initial state
-        state = self._accepted = self._solved or self.solver.state()[:3]
+        state = self._accepted = self._solved or self.reader.state()
         if self.bank.record == self.v._record:
             self.v.given_state = state
         else:

@@ -27,6 +27,7 @@ import numpy as np
 import exudyn as exu
 
 from . import layout as lay
+from .contacts_kernel import index_or_slice
 
 LINK_JUMP = 0.01  # m
 LINK_TURN = math.radians(5.0)
@@ -41,19 +42,17 @@ class StepCheck:
         links = np.array([mbs.GetNodeODE2Index(n) for n in vehicle.link_nodes])[:, None] \
             + [0, 1, 2]
         # the links' coordinates: a slice (a view) where they are one run, as exudyn has them
-        first = links[0, 0]
-        contiguous = np.array_equal(links.ravel(), np.arange(first, first + links.size))
-        self.links = (slice(first, first + links.size) if contiguous else links.ravel())
+        self.links = index_or_slice(links)
         self.link_count = len(links)
         self.reference = np.array([mbs.GetNodeParameter(n, "referenceCoordinates")
                                    for n in vehicle.link_nodes], dtype=float)
         self.start = None  # the contacts' values at the last accepted step
 
     def accepted(self):
-        """Keep the contacts' values at the accepted state (the records evaluated them)."""
+        """Keep the contacts' values at the accepted state (the records evaluated them;
+        the contacts' arrays are new at each evaluation: kept as they are)."""
         c = self.v.contacts
-        self.start = (c.compression.copy(), c.compression_rate.copy(), c.in_contact.copy(),
-                      c.tooth_gap.copy())
+        self.start = (c.compression, c.compression_rate, c.in_contact, c.tooth_gap)
 
     def __call__(self, mbs, t):
         """None where the solution in exudyn's data (the exudyn run's, at t) is one the
@@ -73,8 +72,9 @@ class StepCheck:
         beyond = (q1[links] - q0[links] - h * v0[links]).reshape(self.link_count, 3)
         moved = np.hypot(beyond[:, 0], beyond[:, 1])
         turned = np.abs(beyond[:, 2])
-        # not all within (rather than max above): a NaN takes the full comparison
-        if not ((moved <= LINK_JUMP).all() and (turned <= LINK_TURN).all()):
+        # not all within (rather than the largest above): a NaN (the largest too) takes the
+        # full comparison
+        if not (moved.max() <= LINK_JUMP and turned.max() <= LINK_TURN):
             k = int(np.argmax(np.maximum(moved / LINK_JUMP, turned / LINK_TURN)))
             if moved[k] > LINK_JUMP or turned[k] > LINK_TURN:
                 return (f"link {k}{self._where(k, q1[links][3 * k:3 * k + 3])} moved "
@@ -87,7 +87,7 @@ class StepCheck:
         contacts.evaluate(t, q1, v1)  # the coupling's deflections use this evaluation
         jump = np.abs(contacts.compression - compression0 - h * rate0)
         # a wheel out of contact has compression -inf at both ends: NaN here
-        if not (jump <= TYRE_JUMP).all():
+        if not jump.max() <= TYRE_JUMP:
             jump = np.where(contact0 & contacts.in_contact, jump, 0.0)
             w = int(np.argmax(jump))
             if jump[w] > TYRE_JUMP:
@@ -96,7 +96,7 @@ class StepCheck:
                         f"{contacts.compression[w] * 1e3:.1f} mm)")
         gap = contacts.tooth_gap
         skip = np.abs(gap - gap0)
-        if not (skip <= TOOTH_JUMP).all():
+        if not skip.max() <= TOOTH_JUMP:
             skip = np.where((gap0 > 0.0) & (gap > 0.0), skip, 0.0)
             j = int(np.argmax(skip))
             if skip[j] > TOOTH_JUMP:
