@@ -9,6 +9,7 @@ the records; the step check; the rest Python per step).
     python benchmarks/vehicle_own.py [--speeds 3 5] [--end-time 0.2] [--rounds 2]
     python benchmarks/vehicle_own.py --agreement 0.1 0.001 [--speeds 3] [--end-time 0.02]
     python benchmarks/vehicle_own.py --newton full reuse [--no-exudyn] ...
+    python benchmarks/vehicle_own.py --couplings corrected iterated ...
 
 Prints each run and the load (os.getloadavg) before and after. --agreement: instead, at
 each Newton absolute tolerance given, the two runs' largest difference of the histories
@@ -17,10 +18,13 @@ vertical acceleration's too) and their Newton iterations per solve, and each run
 the first's at the smallest tolerance. --newton: the own solver's Newton policies
 (vehicle/own_host.py NEWTON; POLICY@RATIO: that policy at another contractivity), each
 run in every round (with the Newton matrices per step and the solves' CPU); with two or
-more, --agreement compares each with the first instead of exudyn with own.
+more, --agreement compares each with the first instead of exudyn with own. --couplings:
+each solver's run with each of these coupling schemes in every round (default the
+vehicle's, model.COUPLING).
 """
 
 import argparse
+import itertools
 import os
 import sys
 from pathlib import Path
@@ -31,7 +35,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "examples"), str(ROOT / "src")]
 
 from tracked_vehicle import DEFAULT_STEP, simulate  # noqa: E402
-from vehicle.model import static_points  # noqa: E402
+from vehicle.model import COUPLING, static_points  # noqa: E402
 from vehicle.outputs import largest_difference  # noqa: E402
 from vehicle.own_host import DEFAULT_NEWTON, NEWTON  # noqa: E402
 
@@ -115,6 +119,8 @@ def main(argv=None):
                         metavar="POLICY")
     parser.add_argument("--no-exudyn", action="store_true",
                         help="the own solver's policies alone")
+    parser.add_argument("--couplings", nargs="+", default=[COUPLING], metavar="SCHEME",
+                        help=f"coupling schemes (default {COUPLING})")
     args = parser.parse_args(argv)
     print(f"load before: {os.getloadavg()}")
     statics = static_points()
@@ -126,11 +132,13 @@ def main(argv=None):
         return
     for speed in args.speeds:
         for round_ in range(args.rounds):
-            for solver in solvers:
-                vehicle, result, wall, cpu = run(speed, args.end_time, statics, solver)
+            for solver, coupling in itertools.product(solvers, args.couplings):
+                vehicle, result, wall, cpu = run(speed, args.end_time, statics, solver,
+                                                 coupling=coupling)
                 simulated = result["time"][-1] - result["time"][0]
                 s = vehicle.solver_statistics()
-                print(f"{speed:g} m/s round {round_ + 1} {solver}: {cpu / simulated:.2f} s CPU "
+                print(f"{speed:g} m/s round {round_ + 1} {solver} {coupling}: "
+                      f"{cpu / simulated:.2f} s CPU "
                       f"per simulated s ({wall / simulated:.2f} wall); "
                       f"{s['newton_per_pass']:.2f} Newton iterations per solve, "
                       f"{s['passes_per_step']:.2f} solves per step, {s['steps']} steps for "
