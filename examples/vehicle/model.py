@@ -68,9 +68,8 @@ NEWTON_TOLERANCE = 0.1
 # of ringing into loads across the track (docs/vehicle.md, Loads across the track); 0.6 is
 # HHT's alpha = -0.25, within the usual [-1/3, 0]
 SPECTRAL_RADIUS = 0.6
-# The coupling's scheme: `iterated` (solves until the loads agree to 1e-4), where
-# `corrected`'s two solves leave up to 1.7 % of range in the hull's acceleration on the
-# courses (docs/vehicle.md, The coupling's own error on the courses)
+# The coupling: `iterated`; `corrected`'s two solves leave up to 1.7 % of range in the
+# hull's acceleration on the courses (docs/vehicle.md, The coupling's own error ...)
 COUPLING = "iterated"
 # The radial bush's force is its law's load along the line between the pin seats; that
 # line is undefined where the seats meet, and the law (two-sided, with memory: spec
