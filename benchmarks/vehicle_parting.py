@@ -1,15 +1,17 @@
 """Where the tracked vehicle's run on its own solver parts from exudyn's (docs/vehicle.md,
 "The vehicle on its own solver"): the same run (examples/tracked_vehicle.py's simulate,
-the vehicle's coupling, 1 ms) in exudyn and on the own solver with exudyn's full Newton.
+the vehicle's coupling, 1 ms) in exudyn and on the own solver with exudyn's full Newton
+(--newton: another policy, own_host.NEWTON).
 
     python benchmarks/vehicle_parting.py [--course bump] [--speed 3] [--end-time 2]
     python benchmarks/vehicle_parting.py ... --exudyn-retry
+    python benchmarks/vehicle_parting.py ... --newton reuse
 
 Prints each run's steps and the steps begun again at a shorter length (their start, the
 length and, on the own solver, the pass whose Newton failed), whether the two runs
-recorded the same times, the first recorded time where the histories (every array
-simulate returns) part by more than --threshold % of their range and the largest
-differences before it and over the run (outputs.largest_difference, the hull's vertical
+recorded the same times (else the histories compared at the times both did), the first
+recorded time where the histories (every array simulate returns) part by more than
+--threshold % of their range and the largest differences before it and over the run (outputs.largest_difference, the hull's vertical
 acceleration, and it with the tyre and bush forces and the pitch acceleration). In the
 exudyn run its pre-step function reads the solver's algorithmic accelerations against
 their start-of-step copy (GetAAlgorithmic, GetStartOfStepStateAAlgorithmic): apart only
@@ -138,7 +140,7 @@ def exudyn_retry():
     return undo
 
 
-def own_run(course, speed, end):
+def own_run(course, speed, end, newton="full"):
     """(histories, statistics, steps begun again after a Newton failure)."""
     failed = []
     solve = own_host.OwnHost._solve
@@ -153,7 +155,7 @@ def own_run(course, speed, end):
     own_host.OwnHost._solve = logged
     try:
         vehicle, result, _, _ = simulate(course, speed, end, DEFAULT_STEP, solver="own",
-                                         own_newton="full")
+                                         own_newton=newton)
     finally:
         own_host.OwnHost._solve = solve
     return result, vehicle.solver_statistics(), failed
@@ -178,14 +180,23 @@ def parting(a, b, threshold):
             largest_difference(a, b, KEYS[:1]), largest_difference(a, b, KEYS))
 
 
+def _common(run, other):
+    """The run's histories at the times the other recorded too."""
+    times = [np.round(np.asarray(r["time"]) * 1e9).astype(np.int64) for r in (run, other)]
+    kept = np.isin(times[0], times[1])
+    return {k: np.asarray(v)[kept] for k, v in run.items()
+            if np.ndim(v) > 0 and len(v) == len(run["time"])}
+
+
 def compare(name, a, b, threshold):
-    if not np.array_equal(a["time"], b["time"]):
-        print(f"  {name}: the runs recorded different times "
-              f"({len(a['time'])} and {len(b['time'])} records)")
-        return
+    same = np.array_equal(a["time"], b["time"])
+    if not same:
+        print(f"  {name}: the runs recorded different times ({len(a['time'])} and "
+              f"{len(b['time'])} records), compared where both did")
+        a, b = _common(a, b), _common(b, a)
     at, before, hull, every = parting(a, b, threshold)
-    print(f"  {name}: the same {len(a['time'])} recorded times; parting above "
-          f"{threshold:g} % at t = {at} s; before it {before}; over the run: {hull}, {every}")
+    print(f"  {name}: {len(a['time'])} recorded times; parting above {threshold:g} % at "
+          f"t = {at} s; before it {before}; over the run: {hull}, {every}")
 
 
 def main():
@@ -195,6 +206,8 @@ def main():
     parser.add_argument("--end-time", type=float, default=2.0)
     parser.add_argument("--threshold", type=float, default=1e-3, help="%% of range")
     parser.add_argument("--exudyn-retry", action="store_true")
+    parser.add_argument("--newton", default="full", choices=sorted(own_host.NEWTON),
+                        help="the own solver's Newton policy (default full: exudyn's)")
     args = parser.parse_args()
     run = (args.course, args.speed, args.end_time)
     print(f"{args.course} at {args.speed:g} m/s, {args.end_time:g} s; load "
@@ -203,14 +216,14 @@ def main():
     print(f"exudyn: {ex_stats}\n  steps begun again (start, length): {again}\n"
           f"  a_alg apart from its start-of-step copy at pre-step (start, largest): "
           f"{stale}", flush=True)
-    own, own_stats, failed = own_run(*run)
-    print(f"own, full Newton: steps {own_stats['steps']}, halved {own_stats['halved']}\n"
+    own, own_stats, failed = own_run(*run, args.newton)
+    print(f"own, {args.newton} Newton: steps {own_stats['steps']}, halved {own_stats['halved']}\n"
           f"  Newton failed (start, length, pass, residual): {failed}", flush=True)
     compare("exudyn vs own", ex, own, args.threshold)
     if args.exudyn_retry:
         undo = exudyn_retry()
         try:
-            retried, _, _ = own_run(*run)
+            retried, _, _ = own_run(*run, args.newton)
         finally:
             undo()
         compare("exudyn vs own with exudyn's retry", ex, retried, args.threshold)
