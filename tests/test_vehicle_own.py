@@ -317,3 +317,74 @@ def test_the_largest_difference_of_equal_histories_is_zero():
     assert largest_difference(run, dict(run), ("a", "b")) == (0.0, "a")
     other = {**run, "b": run["b"] + [[0.0, 0.0], [0.0, 0.5], [0.0, 0.0]]}
     assert largest_difference(run, other, ("a", "b")) == (0.5 / 5.0 * 100, "b")
+
+
+def _exudyns_step_lengths():
+    """exudyn's own adaptive step on a spring-mass of one coordinate, its post-Newton
+    function shortening some steps (a recommended half step, as the step check's and the
+    coupling's retries) and solving others in 6 passes: per accepted step, the length its
+    first try asked, the length taken, and its newtonSteps + discontinuousIteration."""
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from exudyn.itemInterface import NodeGenericODE2, ObjectGenericODE2
+
+    mbs = exu.SystemContainer().AddSystem()
+    node = mbs.AddNode(NodeGenericODE2(referenceCoordinates=[0.0], initialCoordinates=[0.01],
+                                       initialCoordinates_t=[0.0], numberOfODE2Coordinates=1))
+    mbs.AddObject(ObjectGenericODE2(nodeNumbers=[node], massMatrix=np.eye(1),
+                                    stiffnessMatrix=np.eye(1) * 1e4))
+    mbs.Assemble()
+    shorten, repeat = {4, 7, 29, 32, 33, 49}, {57, 58, 59}  # accepted steps before
+    steps, state = [], dict(passes=0, asked=None, shortened=set())
+
+    def it():
+        return mbs.sys["dynamicSolver"].it
+
+    def pre_step(mbs, t):
+        state["passes"] = 0
+        if state["asked"] is None:
+            state["asked"] = it().currentStepSize
+        return True
+
+    def post_newton(mbs, t):
+        state["passes"] += 1
+        k = len(steps)
+        if k in shorten and k not in state["shortened"]:
+            state["shortened"].add(k)
+            return [1.0, 0.5 * it().currentStepSize]
+        return [1.0 if k in repeat and state["passes"] < 6 else 0.0, -1.0]
+
+    def post_step(mbs, t):
+        if state["asked"] is not None:  # not the initial state's
+            now = it()
+            steps.append((state["asked"], now.currentStepSize,
+                          now.newtonSteps + now.discontinuousIteration))
+            state["asked"] = None
+        return True
+
+    mbs.SetPreStepUserFunction(pre_step)
+    mbs.SetPostNewtonUserFunction(post_newton)
+    mbs.SetPostStepUserFunction(post_step)
+    settings = exu.SimulationSettings()
+    settings.timeIntegration.numberOfSteps, settings.timeIntegration.endTime = 90, 90 * STEP
+    settings.timeIntegration.verboseMode = 0
+    settings.solution.file.write = False
+    settings.timeIntegration.adaptiveStep = True
+    discontinuous = settings.timeIntegration.discontinuous
+    discontinuous.iterationTolerance, discontinuous.maxIterations = 0.5, 8
+    discontinuous.ignoreMaxIterations = True
+    mbs.SolveDynamic(settings, solverType=exu.DynamicSolverType.GeneralizedAlpha)
+    return steps
+
+
+def test_the_step_lengths_are_exudyns_adaptive_steps():
+    """StepLength, given each of exudyn's accepted steps, asks the length exudyn's next
+    step asked first; the run shortens a recovering step again, and solves recovered steps
+    with more than RECOVERY_ITERATIONS."""
+    from vehicle.own_host import RECOVERY_ITERATIONS, StepLength
+
+    steps = _exudyns_step_lengths()
+    assert min(taken for _, taken, _ in steps) == STEP / 8
+    assert max(effort for *_, effort in steps) > RECOVERY_ITERATIONS
+    length = StepLength(STEP)
+    for (asked, taken, effort), (following, _, _) in zip(steps[:-2], steps[1:-1]):
+        assert length.next(asked, taken, effort) == pytest.approx(following, rel=1e-12)
