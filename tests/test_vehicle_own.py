@@ -154,6 +154,9 @@ class _Solver:
     def step(self, h, t_new):
         return 0 if h <= self.longest * (1 + 1e-12) else 1
 
+    def repeat(self, h, t_new, warm):
+        return self.step(h, t_new)
+
     def restart(self):
         self.restarts += 1
 
@@ -240,3 +243,148 @@ def test_an_entry_outside_the_band_stops_the_run_naming_it_not_halved():
         host._step(0.01, STEP, None)
     assert host.halved == 0 and host.solver.restarts == 0
     assert host.bank.begun == [0.01 + STEP]
+
+
+class _Repeating(_Bank):
+    """A bank of two passes whose first pass asks for the step again."""
+
+    class scheme:
+        passes = 2
+
+    def end_pass(self, time, deflections):
+        from fmu_components.coupling.master import Verdict
+        self.passes = getattr(self, "passes", 0) + 1
+        return Verdict(repeat=self.passes % 2 == 1)
+
+
+def test_a_steps_effort_is_its_last_solves_iterations_and_its_solves():
+    """exudyn's adaptiveStepRecoveryIterations weighs newtonSteps (the last solve's) plus
+    discontinuousIteration (the solves of the step taken)."""
+    host = _host(longest=STEP)
+    host.bank = _Repeating()
+    host._step(0.01, STEP, None)
+    assert host.effort == 1 + 2  # the stand-in's one iteration per solve, two solves
+    host.bank = _Bank()
+    host._step(0.011, STEP, None)
+    assert host.effort == 1 + 1
+
+
+def _lengths(length, asked, steps):
+    """The lengths StepLength gives over `steps`: (taken or None for `asked`, effort)."""
+    out = []
+    for taken, effort in steps:
+        asked = length.next(asked, asked if taken is None else taken, effort)
+        out.append(asked)
+    return out
+
+
+def test_a_step_halved_again_while_it_recovers_counts_its_steps_afresh():
+    """exudyn sets stepsSinceLastStepSizeReduction to 0 at every shortening: a step halved
+    from a recovering half step waits RECOVERY steps at its quarter."""
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle.own_host import RECOVERY, StepLength
+
+    length = StepLength(STEP)
+    assert _lengths(length, STEP, [(STEP / 2, 2)] + [(None, 2)] * 5) == [STEP / 2] * 6
+    lengths = _lengths(length, STEP / 2, [(STEP / 4, 2)] + [(None, 2)] * (RECOVERY - 1))
+    assert lengths == [STEP / 4] * (RECOVERY - 1) + [STEP / 2]
+    lengths = _lengths(length, STEP / 2, [(None, 2)] * RECOVERY)
+    assert lengths == [STEP / 2] * (RECOVERY - 1) + [STEP]
+    assert _lengths(length, STEP, [(None, 2)] * 3) == [STEP] * 3
+
+
+def test_a_recovering_step_of_many_iterations_is_not_doubled():
+    """exudyn doubles only after a step of at most adaptiveStepRecoveryIterations (its
+    last solve's Newton iterations plus its solves); the count goes on until one."""
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle.own_host import RECOVERY, RECOVERY_ITERATIONS, StepLength
+
+    length = StepLength(STEP)
+    many, few = RECOVERY_ITERATIONS + 1, RECOVERY_ITERATIONS
+    steps = ([(STEP / 2, few)] + [(None, few)] * (RECOVERY - 2) + [(None, many)] * 2
+             + [(None, few)])
+    assert _lengths(length, STEP, steps) == [STEP / 2] * (RECOVERY + 1) + [STEP]
+
+
+def test_the_largest_difference_of_equal_histories_is_zero():
+    """Two runs the same bits (a comparison's window before they part) give 0; else the
+    key with the largest share of its range."""
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle.outputs import largest_difference
+
+    run = {"time": np.arange(3.0), "a": np.array([0.0, 2.0, 4.0]),
+           "b": np.array([[1.0, 0.0], [3.0, 0.0], [5.0, 0.0]])}
+    assert largest_difference(run, dict(run), ("a", "b")) == (0.0, "a")
+    other = {**run, "b": run["b"] + [[0.0, 0.0], [0.0, 0.5], [0.0, 0.0]]}
+    assert largest_difference(run, other, ("a", "b")) == (0.5 / 5.0 * 100, "b")
+
+
+def _exudyns_step_lengths():
+    """exudyn's own adaptive step on a spring-mass of one coordinate, its post-Newton
+    function shortening some steps (a recommended half step, as the step check's and the
+    coupling's retries) and solving others in 6 passes: per accepted step, the length its
+    first try asked, the length taken, and its newtonSteps + discontinuousIteration."""
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from exudyn.itemInterface import NodeGenericODE2, ObjectGenericODE2
+
+    mbs = exu.SystemContainer().AddSystem()
+    node = mbs.AddNode(NodeGenericODE2(referenceCoordinates=[0.0], initialCoordinates=[0.01],
+                                       initialCoordinates_t=[0.0], numberOfODE2Coordinates=1))
+    mbs.AddObject(ObjectGenericODE2(nodeNumbers=[node], massMatrix=np.eye(1),
+                                    stiffnessMatrix=np.eye(1) * 1e4))
+    mbs.Assemble()
+    shorten, repeat = {4, 7, 29, 32, 33, 49}, {57, 58, 59}  # accepted steps before
+    steps, state = [], dict(passes=0, asked=None, shortened=set())
+
+    def it():
+        return mbs.sys["dynamicSolver"].it
+
+    def pre_step(mbs, t):
+        state["passes"] = 0
+        if state["asked"] is None:
+            state["asked"] = it().currentStepSize
+        return True
+
+    def post_newton(mbs, t):
+        state["passes"] += 1
+        k = len(steps)
+        if k in shorten and k not in state["shortened"]:
+            state["shortened"].add(k)
+            return [1.0, 0.5 * it().currentStepSize]
+        return [1.0 if k in repeat and state["passes"] < 6 else 0.0, -1.0]
+
+    def post_step(mbs, t):
+        if state["asked"] is not None:  # not the initial state's
+            now = it()
+            steps.append((state["asked"], now.currentStepSize,
+                          now.newtonSteps + now.discontinuousIteration))
+            state["asked"] = None
+        return True
+
+    mbs.SetPreStepUserFunction(pre_step)
+    mbs.SetPostNewtonUserFunction(post_newton)
+    mbs.SetPostStepUserFunction(post_step)
+    settings = exu.SimulationSettings()
+    settings.timeIntegration.numberOfSteps, settings.timeIntegration.endTime = 90, 90 * STEP
+    settings.timeIntegration.verboseMode = 0
+    settings.solution.file.write = False
+    settings.timeIntegration.adaptiveStep = True
+    discontinuous = settings.timeIntegration.discontinuous
+    discontinuous.iterationTolerance, discontinuous.maxIterations = 0.5, 8
+    discontinuous.ignoreMaxIterations = True
+    mbs.SolveDynamic(settings, solverType=exu.DynamicSolverType.GeneralizedAlpha)
+    return steps
+
+
+def test_the_step_lengths_are_exudyns_adaptive_steps():
+    """StepLength, given each of exudyn's accepted steps, asks the length exudyn's next
+    step asked first; the run shortens a recovering step again, and solves recovered steps
+    with more than RECOVERY_ITERATIONS."""
+    from vehicle.own_host import RECOVERY_ITERATIONS, StepLength
+
+    steps = _exudyns_step_lengths()
+    assert min(taken for _, taken, _ in steps) == STEP / 8
+    assert max(effort for *_, effort in steps) > RECOVERY_ITERATIONS
+    length = StepLength(STEP)
+    for (asked, taken, effort), (following, _, _) in zip(steps[:-2], steps[1:-1]):
+        assert length.next(asked, taken, effort) == pytest.approx(following, rel=1e-12)

@@ -117,7 +117,9 @@ def largest_difference(result, other, keys):
         span = np.ptp(a)
         if not span > 0:
             raise ValueError(f"{key}: nothing to compare (no range)")
-        worst = max(worst, (float(np.max(np.abs(a - b))) / span * 100, key))
+        difference = float(np.max(np.abs(a - b))) / span * 100
+        if worst[1] is None or difference > worst[0]:  # the first key's of equal ones
+            worst = (difference, key)
     return worst
 
 

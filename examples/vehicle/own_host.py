@@ -15,7 +15,8 @@ where Newton has an absolute tolerance); a verdict to retry, or a solution the s
 refuses: the step again at half its length; then Bank.accept(t, next_time), which records
 the step (outputs.record) from the last pass's q, v and a (Vehicle.given_state). A step whose Newton fails is
 halved, as exudyn's adaptive step does, down to SHORTEST_STEP of the host step, then the
-run stops naming the time; after RECOVERY good steps the step is doubled again.
+run stops naming the time; after RECOVERY good steps the step is doubled again, by
+exudyn's rules (StepLength).
 
 exudyn's model (model.Vehicle) stays the description of the vehicle: the system is read
 from it (system.py); its data get the run's last state at the end.
@@ -52,8 +53,10 @@ NEWTON = {"full": dict(reuse_jacobian=0),
           "reuse": dict(reuse_jacobian=2, reuse_contractivity=0.25, reuse_broyden=1)}
 DEFAULT_NEWTON = "reuse"
 # exudyn's adaptive step: steps that converge before a halved step is doubled
-# (timeIntegration.adaptiveStepRecoverySteps) and the factor (adaptiveStepIncrease)
-RECOVERY, INCREASE = 10, 2.0
+# (timeIntegration.adaptiveStepRecoverySteps), the factor (adaptiveStepIncrease), and the
+# most Newton iterations of a step's last solve plus its solves (discontinuous iterations)
+# with which the step may be doubled (adaptiveStepRecoveryIterations)
+RECOVERY, INCREASE, RECOVERY_ITERATIONS = 10, 2.0, 7
 OUTSIDE = 3  # alpha_solver.h's ALPHA_OUTSIDE: the Newton matrix's structure, not Newton
 
 
@@ -151,6 +154,28 @@ class _Reader:
         return int(self.ints[0])
 
 
+class StepLength:
+    """The host step's length as exudyn's adaptive step sets it (CSolverBase::SolveSteps):
+    the steps converged since the last shortening counted from every shortening (a step
+    halved again while it recovers counts from there); a shortened step doubled, up to
+    the host step, after RECOVERY of them, where the last one's effort (its last solve's
+    Newton iterations plus its solves) is at most RECOVERY_ITERATIONS (else at the next
+    step within it)."""
+
+    def __init__(self, step):
+        self.step, self.good = step, 0
+
+    def next(self, asked, taken, effort):
+        """The next step's length after a step asked at `asked` was taken at `taken`
+        (shorter: halved) with `effort`."""
+        self.good = 1 if taken < asked else self.good + 1
+        if (taken < self.step and self.good >= RECOVERY
+                and effort <= RECOVERY_ITERATIONS):
+            self.good = 0
+            return min(INCREASE * taken, self.step)
+        return taken
+
+
 class OwnHost:
     """The run of `vehicle` (prepared on the compiled path: Vehicle.prepare) on the own
     solver; run() as exudyn_host.solve. Its counts: statistics()."""
@@ -169,6 +194,7 @@ class OwnHost:
         self.refused = 0  # solutions the step check refused
         self.halved = 0  # steps whose Newton failed
         self.solves = self.newton = 0
+        self.iterations = self.effort = 0  # the last solve's Newton iterations; _step's
         self._start = None  # (q, v) at the step's start, where the step check compares
         # the solver's state (q, v, a) after the last pass, and at the last accepted step
         self._solved = self._accepted = None
@@ -194,7 +220,8 @@ class OwnHost:
                   else self.solver.repeat(h, t_new, warm))
         self.seconds["solve"] += time.process_time() - began
         self.solves += 1
-        self.newton += self.reader.iterations()
+        self.iterations = self.reader.iterations()
+        self.newton += self.iterations
         if status == OUTSIDE:  # halving would not change the matrix's structure
             report, name = self.solver.report(), self.own.system.coordinate_name
             raise VehicleError(
@@ -225,7 +252,8 @@ class OwnHost:
 
     def _step(self, t, h, check):
         """Solve the step from t to t + h with the bank's passes; the step taken (h, or
-        shorter where a verdict or the step check asked) and its end."""
+        shorter where a verdict or the step check asked) and its end. Its effort (the
+        last solve's Newton iterations plus the solves of the step taken): .effort."""
         passes = self.bank.scheme.passes + 1  # exudyn's discontinuous.maxIterations
         if check is not None:  # what the step check compares with
             self._start = self._accepted[:2]
@@ -250,8 +278,10 @@ class OwnHost:
                     retry = "the coupling"
                     break
                 if not verdict.repeat:
+                    self.effort = self.iterations + number + 1
                     return h, t_new
             else:  # the passes spent: accepted (exudyn's discontinuous.ignoreMaxIterations)
+                self.effort = self.iterations + passes
                 return h, t_new
             self.solver.restart()  # the step's start (the bank's: begin_step)
             if retry == "Newton":
@@ -300,14 +330,11 @@ class OwnHost:
                                    f"{alpha.STATUS[status]}")
             self._accept(start_time, None)  # the initial state's record, as exudyn's
             began = time.process_time()
-            t, h, good = start_time, step, 0
+            t, h, length = start_time, step, StepLength(step)
             while end - t > 1e-9 * step:
-                h = min(h, end - t)
-                taken, t = self._step(t, h, check)
-                good = good + 1 if taken < step else 0
-                h = taken
-                if taken < step and good >= RECOVERY:
-                    h, good = min(INCREASE * taken, step), 0
+                asked = min(h, end - t)
+                taken, t = self._step(t, asked, check)
+                h = length.next(asked, taken, self.effort)
                 self._accept(t, min(t + h, end) if end - t > 1e-9 * step else None)
             self.solve_cpu = time.process_time() - began
             self._put(t, self._accepted)  # the run's last state in exudyn's data
