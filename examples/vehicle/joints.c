@@ -210,10 +210,10 @@ JOINTS_EXPORT void *joints_bind(int n, double half, double fade, LawLoads law_lo
 
 JOINTS_EXPORT void joints_unbind(void *bound) { free(bound); }
 
-/* joints_kinematics, the bank's laws at the joints' deflections (joints.py's Joints.laws:
- * loads and slopes by deflection; the bank's laws are rate-free), joints_forces: the
- * three calls of the three-call path, the same operations. */
-JOINTS_EXPORT void joints_evaluate(void *bound)
+/* joints_evaluate in three parts, for a caller that calls the bank's laws once for more
+ * than the joints (system.c): joints_kinematics and the joints' deflections into the
+ * bank's rows (the other rows' stay the caller's)... */
+JOINTS_EXPORT void joints_deflections(void *bound)
 {
     Bound *b = bound;
     int n = b->n;
@@ -222,8 +222,21 @@ JOINTS_EXPORT void joints_evaluate(void *bound)
         b->deflection[b->radial_rows[j]] = b->joint[8 * j + 2];
         b->deflection[b->torsion_rows[j]] = b->joint[8 * j + 6];
     }
+}
+
+/* ...the bank's laws at every row's deflection (loads and slopes by deflection; the
+ * bank's laws are rate-free)... */
+JOINTS_EXPORT void joints_laws(void *bound)
+{
+    Bound *b = bound;
     b->law_loads(b->bank, b->deflection, b->loads, b->slopes);
-    for (int j = 0; j < n; j++) {
+}
+
+/* ...and the joints' laws read from them, joints_forces. */
+JOINTS_EXPORT void joints_apply_laws(void *bound)
+{
+    Bound *b = bound;
+    for (int j = 0; j < b->n; j++) {
         double *l = b->law + 6 * j;
         l[0] = b->loads[b->radial_rows[j]];
         l[1] = b->slopes[b->radial_rows[j]];
@@ -232,7 +245,17 @@ JOINTS_EXPORT void joints_evaluate(void *bound)
         l[4] = b->slopes[b->torsion_rows[j]];
         l[5] = 0.0;
     }
-    joints_forces(n, b->half, b->fade, b->link, b->joint, b->law, b->effort, b->generalized);
+    joints_forces(b->n, b->half, b->fade, b->link, b->joint, b->law, b->effort,
+                  b->generalized);
+}
+
+/* joints_kinematics, the bank's laws at the joints' deflections (joints.py's Joints.laws),
+ * joints_forces: the three calls of the three-call path, the same operations. */
+JOINTS_EXPORT void joints_evaluate(void *bound)
+{
+    joints_deflections(bound);
+    joints_laws(bound);
+    joints_apply_laws(bound);
 }
 
 /* The Jacobian at the bound q, qd with the bank's current laws: evaluated again there

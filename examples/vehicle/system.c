@@ -6,9 +6,9 @@
  * constant mass diagonal, for a solver of M a = f - G^T lambda, g = 0.
  *
  * The forces are the model's own kernels, compiled into this library with it: the
- * contacts (contacts.c: contacts_evaluate, contacts_jacobian) and the track's joints
- * (joints.c: joints_evaluate, joints_jacobian), each calling the coupling bank's laws
- * (bank.c's bank_law_loads, or law_table_loads) as the compiled path does; the dampers'
+ * contacts (contacts.c: contacts_evaluate's parts, contacts_jacobian) and the track's
+ * joints (joints.c: joints_evaluate's parts, joints_jacobian), the coupling bank's laws
+ * (bank.c's bank_law_loads, or law_table_loads) called once for both; the dampers'
  * laws are read from the joints' call of the same laws (their deflections written into
  * its array first). Here only what exudyn's own elements compute: the coordinate
  * spring-dampers (the speed hold, the torsion bars, the dampers' connectors, the
@@ -22,10 +22,14 @@
 #define SYSTEM_EXPORT CONTACTS_EXPORT
 
 /* contacts.c's and contacts_jacobian.c's, and joints.c's, called here */
-int contacts_evaluate(Contacts *c, int settling);
 long contacts_jacobian(Contacts *c, double factor, double factor_t, double *out,
                        long capacity);
-void joints_evaluate(void *bound);
+void joints_deflections(void *bound);
+void joints_laws(void *bound);
+void joints_apply_laws(void *bound);
+void contacts_kinematics(Contacts *c);
+void contacts_tyre_deflections(const Contacts *c, double *deflection);
+void contacts_tyre_loads(Contacts *c, const double *load, const double *slope);
 void joints_jacobian(int n, double half, const double *link, const double *joint,
                      const double *qd, const double *law, const double *effort, double factor,
                      double factor_t, double *triplets);
@@ -89,8 +93,10 @@ static double spring_force(const VehicleSystem *s, const CoordinateSpring *c, do
     return c->stiffness * (d - c->offset - c->drift * t) + c->damping * (rate - c->drift);
 }
 
-/* The contacts and the joints at (q, v) (their kernels' memory), the dampers' laws with
- * the joints' (their deflections written first) */
+/* The contacts and the joints at (q, v) (their kernels' memory): the bank's laws called
+ * once for the tyres, the joints and the dampers (each row's law is its own, so that
+ * this gives contacts_evaluate's and joints_evaluate's numbers), the dampers' deflections
+ * written with the joints' and the tyres', into the joints' array */
 static void evaluate_kernels(VehicleSystem *s, const double *q, const double *v)
 {
     Contacts *c = s->contacts;
@@ -98,7 +104,7 @@ static void evaluate_kernels(VehicleSystem *s, const double *q, const double *v)
         c->array[A_STATE][i] = c->reference[i] + q[s->body_index[i]];
         c->array[A_RATES][i] = v[s->body_index[i]];
     }
-    contacts_evaluate(c, 0);
+    contacts_kinematics(c);
     double **j = s->joint_arrays;
     for (int i = 0; i < 3 * s->links; i++) {
         j[J_Q][i] = q[s->link_index[i]];
@@ -109,7 +115,12 @@ static void evaluate_kernels(VehicleSystem *s, const double *q, const double *v)
         if (spring->row >= 0)
             j[J_DEFLECTION][spring->row] = q[spring->b] - (spring->a >= 0 ? q[spring->a] : 0.0);
     }
-    joints_evaluate(s->joints);
+    joints_deflections(s->joints);
+    contacts_tyre_deflections(c, j[J_DEFLECTION]);
+    joints_laws(s->joints);
+    contacts_tyre_loads(c, j[J_LOADS], j[J_SLOPES]);
+    contacts_forces(c, 0);
+    joints_apply_laws(s->joints);
 }
 
 /* A revolute joint's node i: its position's arm (rotation times local) */
