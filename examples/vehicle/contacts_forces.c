@@ -103,7 +103,7 @@ static void ground(Contacts *c)
                                     P(GROUND_DAMPING), &k, &damping);
         c->pin[2 * j + 1] += load;
         ARRAY(GROUND_LOAD)[j] = load;
-        if (load > 0.0) {
+        if (load > 0.0 && !c->forces_only) {
             normal_matrices(k, damping, up, stiffness_m, damping_m);
             pin_spring(c, j, stiffness_m, damping_m);
         }
@@ -225,6 +225,7 @@ static void sprocket(Contacts *c)
             moment[on++] = r0 * t->tooth_force[1] - r1 * t->tooth_force[0];
         }
     ARRAY(DRIVE_TORQUE)[0] = -numpy_sum(moment, on);
+    if (c->forces_only) return; /* below: the springs */
     double slot_g[2][3], motion_g[2][3], pin_g[2][3];
     for (int j = 0; j < c->links; j++) {
         const Tooth *t = &teeth[j];
@@ -299,6 +300,7 @@ static void wheel_contact(Contacts *c, const double centre[2], const double cent
             forces[2 * on + i] = -pushed;
         }
         on++;
+        if (c->forces_only) continue;
         normal_matrices(k, damping, normal, k_m, c_m);
         add_member(pin_spring(c, j, k_m, c_m), body, centre_g, centre_g, -1.0);
     }

@@ -97,9 +97,11 @@ static double spring_force(const VehicleSystem *s, const CoordinateSpring *c, do
  * once for the tyres, the joints and the dampers (each row's law is its own, so that
  * this gives contacts_evaluate's and joints_evaluate's numbers), the dampers' deflections
  * written with the joints' and the tyres', into the joints' array */
-static void evaluate_kernels(VehicleSystem *s, const double *q, const double *v)
+static void evaluate_kernels(VehicleSystem *s, const double *q, const double *v,
+                             int forces_only)
 {
     Contacts *c = s->contacts;
+    c->forces_only = forces_only; /* the residual's: the contacts' springs left out */
     for (int i = 0; i < 3 * s->bodies; i++) {
         c->array[A_STATE][i] = c->reference[i] + q[s->body_index[i]];
         c->array[A_RATES][i] = v[s->body_index[i]];
@@ -155,7 +157,7 @@ SYSTEM_EXPORT void vsystem_constraints(const VehicleSystem *s, const double *q, 
 SYSTEM_EXPORT void vsystem_residual(VehicleSystem *s, double t, const double *q,
                                     const double *v, double *f, double *g)
 {
-    evaluate_kernels(s, q, v);
+    evaluate_kernels(s, q, v, 1);
     memcpy(f, s->gravity, sizeof(double) * s->n);
     const double *contact = s->contacts->array[A_GENERALIZED];
     for (int i = 0; i < 3 * s->bodies; i++) f[s->body_index[i]] += contact[i];
@@ -197,7 +199,7 @@ SYSTEM_EXPORT long vsystem_jacobian(VehicleSystem *s, double t, const double *q,
                                     const double *v, double factor, double factor_t,
                                     double *out, long capacity, double *scratch)
 {
-    evaluate_kernels(s, q, v);
+    evaluate_kernels(s, q, v, 0);
     Triplets result = {out, 0, capacity};
     double **j = s->joint_arrays;
     joints_jacobian(s->links, s->half, j[J_LINK], j[J_JOINT], j[J_QD], j[J_LAW], j[J_EFFORT],
