@@ -24,7 +24,7 @@
 /* contacts.c's and contacts_jacobian.c's, and joints.c's, called here */
 long contacts_jacobian(Contacts *c, double factor, double factor_t, double *out,
                        long capacity);
-void joints_deflections(void *bound);
+void joints_deflections(void *bound, const double *state, const double *direction);
 void joints_laws(void *bound);
 void joints_apply_laws(void *bound);
 void contacts_kinematics(Contacts *c);
@@ -117,7 +117,15 @@ static void evaluate_kernels(VehicleSystem *s, const double *q, const double *v,
         if (spring->row >= 0)
             j[J_DEFLECTION][spring->row] = q[spring->b] - (spring->a >= 0 ? q[spring->a] : 0.0);
     }
-    joints_deflections(s->joints);
+    /* the links' cos and sin: the contacts' where their angles are the same bits (the
+     * links in the same order there) */
+    int same = s->links == c->links;
+    for (int i = 0; same && i < 3 * s->links; i++)
+        same = s->link_index[i] == s->body_index[3 * c->link0 + i];
+    if (same)
+        joints_deflections(s->joints, c->array[A_STATE] + 3 * c->link0, c->array[A_U]);
+    else
+        joints_deflections(s->joints, NULL, NULL);
     contacts_tyre_deflections(c, j[J_DEFLECTION]);
     joints_laws(s->joints);
     contacts_tyre_loads(c, j[J_LOADS], j[J_SLOPES]);
