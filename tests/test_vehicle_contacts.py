@@ -389,3 +389,61 @@ def test_without_a_compiler_the_contacts_say_so_and_use_numpy(native_fmus, monke
             vehicle.contacts.use("compiled")
     finally:
         vehicle.coupling.free()
+
+
+def _moved_to_reach(contacts, q, body, centre, reach, beyond):
+    """q with `body` (the hull, or the idler's crank) shifted straight away from the pin
+    nearest `centre(contacts)` (evaluated at q by the numpy kernel), so that this pin
+    lies `beyond` past `reach` of the centre (inside it where negative); the pin, and its
+    distance from the centre there."""
+    contacts.use("numpy")
+    contacts._update(0.0, q, np.zeros_like(q))
+    rel = contacts.pins - centre(contacts)
+    j = np.argmin(np.hypot(*rel.T))
+    distance = math.hypot(*rel[j])
+    moved = q.reshape(-1, 3).copy()
+    moved[body, :2] -= rel[j] / distance * (reach + beyond - distance)
+    moved = moved.ravel()
+    contacts._update(0.0, moved, np.zeros_like(q))
+    return moved, j, math.hypot(*(contacts.pins[j] - centre(contacts)))
+
+
+def test_the_c_kernels_reach_bounds_skip_no_pin_in_reach(native_fmus):
+    """The C kernel leaves out the sprocket's teeth, the idler's and the roller's contact
+    for pins surely beyond their reach (a cheap bound on the squared distance, 1e-9 of
+    it to spare): with a pin put just inside a reach (1e-6 m), just beyond it within the
+    bound's margin (1e-11 m: the full computation) and past it (1e-9 m: left out), its
+    forces, records and Jacobian equal the numpy kernel's (which computes every pin) to
+    1e-12 of their largest magnitude, and the pin's distance is where it was put; just
+    inside the sprocket's reach the teeth hold the pin (the wrap's middle)."""
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle import layout as lay
+
+    vehicle = _vehicle(native_fmus)
+    try:
+        contacts = vehicle.contacts
+        vehicle.coupling.start(0.0)
+        q0 = np.array(vehicle.mbs.systemData.GetODE2Coordinates(
+            exu.ConfigurationType.Current))[contacts.system_index]
+
+        def turned(r):
+            theta = contacts.hull[2]
+            return np.array([math.cos(theta) * r[0] - math.sin(theta) * r[1],
+                             math.sin(theta) * r[0] + math.cos(theta) * r[1]])
+
+        reaches = {  # body moved, centre, reach
+            "sprocket": (0, lambda k: k.hull[:2] + turned(k.sprocket_local),
+                         lay.SPROCKET_PITCH_RADIUS + 0.08),
+            "idler": (contacts.link0 - 1, lambda k: k.idler, lay.IDLER_PIN_RADIUS),
+            "roller": (0, lambda k: k.hull[:2] + turned(k.roller_local),
+                       lay.ROLLER_PIN_RADIUS)}
+        for name, (body, centre, reach) in reaches.items():
+            for beyond in (-1e-6, 1e-11, 1e-9):
+                q, j, distance = _moved_to_reach(contacts, q0, body, centre, reach, beyond)
+                assert abs(distance - (reach + beyond)) < 1e-12, (name, beyond)
+                held = contacts.tooth_gap[j]
+                _compare(_both_kernels(contacts, q, np.zeros_like(q)))
+                if name == "sprocket":
+                    assert (held > 0.0) == (beyond < 0.0), beyond
+    finally:
+        vehicle.coupling.free()

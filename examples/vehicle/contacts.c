@@ -401,25 +401,37 @@ CONTACTS_EXPORT int contacts_set_tyre_laws(Contacts *c, LawLoads law_loads, cons
     return 0;
 }
 
-/* model.Vehicle.tyre_loads on the compiled path: each wheel's two tyres at its
- * compression (-HORN_HEIGHT out of contact), their loads and slopes summed as numpy sums
- * a row; the bank's laws are rate-free (no slope by the rate) */
-static void tyre_loads(Contacts *c)
+/* model.Vehicle.tyre_loads on the compiled path, in two halves about the bank's laws'
+ * call: each wheel's two tyres at its compression (-HORN_HEIGHT out of contact) into
+ * `deflection` (the bank's rows)... */
+CONTACTS_EXPORT void contacts_tyre_deflections(const Contacts *c, double *deflection)
 {
     for (int w = 0; w < c->wheels; w++) {
         double x = ARRAY(COMPRESSION)[w];
         x = isfinite(x) ? x : -P(HORN_HEIGHT);
-        c->law_deflection[c->tyre_row[2 * w]] = c->law_deflection[c->tyre_row[2 * w + 1]] = x;
+        deflection[c->tyre_row[2 * w]] = deflection[c->tyre_row[2 * w + 1]] = x;
     }
-    c->law_loads(c->bank, c->law_deflection, c->law_load, c->law_slope);
+}
+
+/* ...and their loads and slopes (the bank's rows) summed as numpy sums a row; the bank's
+ * laws are rate-free (no slope by the rate) */
+CONTACTS_EXPORT void contacts_tyre_loads(Contacts *c, const double *load, const double *slope)
+{
     for (int w = 0; w < c->wheels; w++) {
         const int *row = c->tyre_row + 2 * w;
-        double loads[2] = {c->law_load[row[0]], c->law_load[row[1]]};
-        double slopes[2] = {c->law_slope[row[0]], c->law_slope[row[1]]};
+        double loads[2] = {load[row[0]], load[row[1]]};
+        double slopes[2] = {slope[row[0]], slope[row[1]]};
         ARRAY(LOADS)[w] = numpy_sum(loads, 2);
         ARRAY(SLOPES)[w] = numpy_sum(slopes, 2);
         ARRAY(RATE_SLOPES)[w] = 0.0;
     }
+}
+
+static void tyre_loads(Contacts *c)
+{
+    contacts_tyre_deflections(c, c->law_deflection);
+    c->law_loads(c->bank, c->law_deflection, c->law_load, c->law_slope);
+    contacts_tyre_loads(c, c->law_load, c->law_slope);
 }
 
 /* One evaluation in one call, where the kernel has the tyres' laws and the course:

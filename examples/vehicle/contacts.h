@@ -75,6 +75,9 @@ typedef struct {
     double *pair_weight, *pair_gradient; /* pairs x 12 */
     int springs, spring_capacity;
     Spring *spring;
+    /* 1: contacts_forces leaves the springs out (c->springs then lacks them: a caller
+     * that wants the Jacobian evaluates again with 0, contacts_new's) */
+    int forces_only;
     Candidate *candidate; /* wheels x links */
     int *in_contact; /* wheels */
     double *scratch, *pin; /* 8 (links + wheels), links x 2 */

@@ -9,6 +9,15 @@
 #define P(name) (c->parameter[P_##name])
 #define ARRAY(name) (c->array[A_##name])
 
+/* Whether a point at (r0, r1) from a centre lies surely beyond `reach` of it (hypot > reach):
+ * its squared distance past reach's square by a margin far above the round-off of either
+ * (1e-9 relative), so that a pair beyond it would have given no force, to the bit; NaN
+ * is never beyond (the full computation says what it gives). */
+static int surely_beyond(double r0, double r1, double reach)
+{
+    return r0 * r0 + r1 * r1 > reach * reach * (1.0 + 1e-9);
+}
+
 /* d(point)/d(body's x, y, angle): how a force at a point fixed on the body loads it, and
  * how the point moves with it. */
 static void point_g(const Contacts *c, int body, const double *point, double g[2][3])
@@ -94,7 +103,7 @@ static void ground(Contacts *c)
                                     P(GROUND_DAMPING), &k, &damping);
         c->pin[2 * j + 1] += load;
         ARRAY(GROUND_LOAD)[j] = load;
-        if (load > 0.0) {
+        if (load > 0.0 && !c->forces_only) {
             normal_matrices(k, damping, up, stiffness_m, damping_m);
             pin_spring(c, j, stiffness_m, damping_m);
         }
@@ -150,6 +159,13 @@ static void sprocket(Contacts *c)
         const double *pin = pins + 2 * j, *pin_v = pins_v + 2 * j;
         t->rel[0] = pin[0] - centre[0];
         t->rel[1] = pin[1] - centre[1];
+        if (surely_beyond(t->rel[0], t->rel[1], radius + 0.08)) {
+            /* out of the teeth's reach (below: weight, slope and curvature 0): its tooth
+             * and ramp forces are zeros, which leave the pin's sum as it is */
+            t->weight = t->slope = t->curvature = 0.0;
+            ARRAY(TOOTH_GAP)[j] = 0.0;
+            continue;
+        }
         double angle = atan2(t->rel[1], t->rel[0]);
         double into = numpy_remainder(angle - hull[2] - P(WRAP_START), P(TWO_PI));
         engagement(c, into, &t->weight, &t->slope, &t->curvature);
@@ -209,6 +225,7 @@ static void sprocket(Contacts *c)
             moment[on++] = r0 * t->tooth_force[1] - r1 * t->tooth_force[0];
         }
     ARRAY(DRIVE_TORQUE)[0] = -numpy_sum(moment, on);
+    if (c->forces_only) return; /* below: the springs */
     double slot_g[2][3], motion_g[2][3], pin_g[2][3];
     for (int j = 0; j < c->links; j++) {
         const Tooth *t = &teeth[j];
@@ -268,6 +285,7 @@ static void wheel_contact(Contacts *c, const double centre[2], const double cent
     point_g(c, body, centre, centre_g);
     for (int j = 0; j < c->links; j++) {
         double rel[2] = {pins[2 * j] - centre[0], pins[2 * j + 1] - centre[1]};
+        if (surely_beyond(rel[0], rel[1], radius)) continue; /* no depth: no force */
         double distance = hypot(rel[0], rel[1]);
         double normal[2] = {rel[0] / distance, rel[1] / distance};
         double closing = -((pins_v[2 * j] - centre_v[0]) * normal[0]
@@ -282,6 +300,7 @@ static void wheel_contact(Contacts *c, const double centre[2], const double cent
             forces[2 * on + i] = -pushed;
         }
         on++;
+        if (c->forces_only) continue;
         normal_matrices(k, damping, normal, k_m, c_m);
         add_member(pin_spring(c, j, k_m, c_m), body, centre_g, centre_g, -1.0);
     }

@@ -21,15 +21,28 @@
 #define JOINTS_EXPORT __attribute__((visibility("default")))
 #endif
 
-JOINTS_EXPORT void joints_kinematics(int n, double half, const double *reference,
-                                     const double *q, const double *qd, const double *offset,
-                                     double *link, double *joint)
+/* Each link's cos and sin (link); where `state` is not NULL, a link whose angle is
+ * state's (x, y, angle rows) to the bit takes its cos and sin from `direction` (n x 2:
+ * the contacts' kernel's of the same angles) */
+static void directions(int n, const double *reference, const double *q, const double *state,
+                       const double *direction, double *link)
 {
     for (int k = 0; k < n; k++) {
         double angle = reference[3 * k + 2] + q[3 * k + 2];
+        if (state != NULL && angle == state[3 * k + 2]) {
+            link[2 * k] = direction[2 * k];
+            link[2 * k + 1] = direction[2 * k + 1];
+            continue;
+        }
         link[2 * k] = cos(angle);
         link[2 * k + 1] = sin(angle);
     }
+}
+
+/* joints_kinematics once `link` is set */
+static void seats(int n, double half, const double *reference, const double *q,
+                  const double *qd, const double *offset, const double *link, double *joint)
+{
     for (int j = 0; j < n; j++) {
         int a = (j + n - 1) % n, b = j;
         const double *ca = link + 2 * a, *cb = link + 2 * b;
@@ -53,6 +66,14 @@ JOINTS_EXPORT void joints_kinematics(int n, double half, const double *reference
         out[6] = (q[3 * b + 2] - q[3 * a + 2]) + offset[j];
         out[7] = wb - wa;
     }
+}
+
+JOINTS_EXPORT void joints_kinematics(int n, double half, const double *reference,
+                                     const double *q, const double *qd, const double *offset,
+                                     double *link, double *joint)
+{
+    directions(n, reference, q, NULL, NULL, link);
+    seats(n, half, reference, q, qd, offset, link, joint);
 }
 
 /* The seats' arms from their links' nodes: a's front seat, b's rear seat. */
@@ -210,20 +231,36 @@ JOINTS_EXPORT void *joints_bind(int n, double half, double fade, LawLoads law_lo
 
 JOINTS_EXPORT void joints_unbind(void *bound) { free(bound); }
 
-/* joints_kinematics, the bank's laws at the joints' deflections (joints.py's Joints.laws:
- * loads and slopes by deflection; the bank's laws are rate-free), joints_forces: the
- * three calls of the three-call path, the same operations. */
-JOINTS_EXPORT void joints_evaluate(void *bound)
+/* joints_evaluate in three parts, for a caller that calls the bank's laws once for more
+ * than the joints (system.c): joints_kinematics (the links' cos and sin taken from
+ * `direction` where their angles are `state`'s: directions above; NULL: none) and the
+ * joints' deflections into the bank's rows (the other rows' stay the caller's)... */
+JOINTS_EXPORT void joints_deflections(void *bound, const double *state,
+                                      const double *direction)
 {
     Bound *b = bound;
     int n = b->n;
-    joints_kinematics(n, b->half, b->reference, b->q, b->qd, b->offset, b->link, b->joint);
+    directions(n, b->reference, b->q, state, direction, b->link);
+    seats(n, b->half, b->reference, b->q, b->qd, b->offset, b->link, b->joint);
     for (int j = 0; j < n; j++) {
         b->deflection[b->radial_rows[j]] = b->joint[8 * j + 2];
         b->deflection[b->torsion_rows[j]] = b->joint[8 * j + 6];
     }
+}
+
+/* ...the bank's laws at every row's deflection (loads and slopes by deflection; the
+ * bank's laws are rate-free)... */
+JOINTS_EXPORT void joints_laws(void *bound)
+{
+    Bound *b = bound;
     b->law_loads(b->bank, b->deflection, b->loads, b->slopes);
-    for (int j = 0; j < n; j++) {
+}
+
+/* ...and the joints' laws read from them, joints_forces. */
+JOINTS_EXPORT void joints_apply_laws(void *bound)
+{
+    Bound *b = bound;
+    for (int j = 0; j < b->n; j++) {
         double *l = b->law + 6 * j;
         l[0] = b->loads[b->radial_rows[j]];
         l[1] = b->slopes[b->radial_rows[j]];
@@ -232,7 +269,17 @@ JOINTS_EXPORT void joints_evaluate(void *bound)
         l[4] = b->slopes[b->torsion_rows[j]];
         l[5] = 0.0;
     }
-    joints_forces(n, b->half, b->fade, b->link, b->joint, b->law, b->effort, b->generalized);
+    joints_forces(b->n, b->half, b->fade, b->link, b->joint, b->law, b->effort,
+                  b->generalized);
+}
+
+/* joints_kinematics, the bank's laws at the joints' deflections (joints.py's Joints.laws),
+ * joints_forces: the three calls of the three-call path, the same operations. */
+JOINTS_EXPORT void joints_evaluate(void *bound)
+{
+    joints_deflections(bound, NULL, NULL);
+    joints_laws(bound);
+    joints_apply_laws(bound);
 }
 
 /* The Jacobian at the bound q, qd with the bank's current laws: evaluated again there

@@ -6,9 +6,9 @@
  * constant mass diagonal, for a solver of M a = f - G^T lambda, g = 0.
  *
  * The forces are the model's own kernels, compiled into this library with it: the
- * contacts (contacts.c: contacts_evaluate, contacts_jacobian) and the track's joints
- * (joints.c: joints_evaluate, joints_jacobian), each calling the coupling bank's laws
- * (bank.c's bank_law_loads, or law_table_loads) as the compiled path does; the dampers'
+ * contacts (contacts.c: contacts_evaluate's parts, contacts_jacobian) and the track's
+ * joints (joints.c: joints_evaluate's parts, joints_jacobian), the coupling bank's laws
+ * (bank.c's bank_law_loads, or law_table_loads) called once for both; the dampers'
  * laws are read from the joints' call of the same laws (their deflections written into
  * its array first). Here only what exudyn's own elements compute: the coordinate
  * spring-dampers (the speed hold, the torsion bars, the dampers' connectors, the
@@ -22,10 +22,14 @@
 #define SYSTEM_EXPORT CONTACTS_EXPORT
 
 /* contacts.c's and contacts_jacobian.c's, and joints.c's, called here */
-int contacts_evaluate(Contacts *c, int settling);
 long contacts_jacobian(Contacts *c, double factor, double factor_t, double *out,
                        long capacity);
-void joints_evaluate(void *bound);
+void joints_deflections(void *bound, const double *state, const double *direction);
+void joints_laws(void *bound);
+void joints_apply_laws(void *bound);
+void contacts_kinematics(Contacts *c);
+void contacts_tyre_deflections(const Contacts *c, double *deflection);
+void contacts_tyre_loads(Contacts *c, const double *load, const double *slope);
 void joints_jacobian(int n, double half, const double *link, const double *joint,
                      const double *qd, const double *law, const double *effort, double factor,
                      double factor_t, double *triplets);
@@ -89,16 +93,20 @@ static double spring_force(const VehicleSystem *s, const CoordinateSpring *c, do
     return c->stiffness * (d - c->offset - c->drift * t) + c->damping * (rate - c->drift);
 }
 
-/* The contacts and the joints at (q, v) (their kernels' memory), the dampers' laws with
- * the joints' (their deflections written first) */
-static void evaluate_kernels(VehicleSystem *s, const double *q, const double *v)
+/* The contacts and the joints at (q, v) (their kernels' memory): the bank's laws called
+ * once for the tyres, the joints and the dampers (each row's law is its own, so that
+ * this gives contacts_evaluate's and joints_evaluate's numbers), the dampers' deflections
+ * written with the joints' and the tyres', into the joints' array */
+static void evaluate_kernels(VehicleSystem *s, const double *q, const double *v,
+                             int forces_only)
 {
     Contacts *c = s->contacts;
+    c->forces_only = forces_only; /* the residual's: the contacts' springs left out */
     for (int i = 0; i < 3 * s->bodies; i++) {
         c->array[A_STATE][i] = c->reference[i] + q[s->body_index[i]];
         c->array[A_RATES][i] = v[s->body_index[i]];
     }
-    contacts_evaluate(c, 0);
+    contacts_kinematics(c);
     double **j = s->joint_arrays;
     for (int i = 0; i < 3 * s->links; i++) {
         j[J_Q][i] = q[s->link_index[i]];
@@ -109,7 +117,20 @@ static void evaluate_kernels(VehicleSystem *s, const double *q, const double *v)
         if (spring->row >= 0)
             j[J_DEFLECTION][spring->row] = q[spring->b] - (spring->a >= 0 ? q[spring->a] : 0.0);
     }
-    joints_evaluate(s->joints);
+    /* the links' cos and sin: the contacts' where their angles are the same bits (the
+     * links in the same order there) */
+    int same = s->links == c->links;
+    for (int i = 0; same && i < 3 * s->links; i++)
+        same = s->link_index[i] == s->body_index[3 * c->link0 + i];
+    if (same)
+        joints_deflections(s->joints, c->array[A_STATE] + 3 * c->link0, c->array[A_U]);
+    else
+        joints_deflections(s->joints, NULL, NULL);
+    contacts_tyre_deflections(c, j[J_DEFLECTION]);
+    joints_laws(s->joints);
+    contacts_tyre_loads(c, j[J_LOADS], j[J_SLOPES]);
+    contacts_forces(c, 0);
+    joints_apply_laws(s->joints);
 }
 
 /* A revolute joint's node i: its position's arm (rotation times local) */
@@ -144,7 +165,7 @@ SYSTEM_EXPORT void vsystem_constraints(const VehicleSystem *s, const double *q, 
 SYSTEM_EXPORT void vsystem_residual(VehicleSystem *s, double t, const double *q,
                                     const double *v, double *f, double *g)
 {
-    evaluate_kernels(s, q, v);
+    evaluate_kernels(s, q, v, 1);
     memcpy(f, s->gravity, sizeof(double) * s->n);
     const double *contact = s->contacts->array[A_GENERALIZED];
     for (int i = 0; i < 3 * s->bodies; i++) f[s->body_index[i]] += contact[i];
@@ -186,7 +207,7 @@ SYSTEM_EXPORT long vsystem_jacobian(VehicleSystem *s, double t, const double *q,
                                     const double *v, double factor, double factor_t,
                                     double *out, long capacity, double *scratch)
 {
-    evaluate_kernels(s, q, v);
+    evaluate_kernels(s, q, v, 0);
     Triplets result = {out, 0, capacity};
     double **j = s->joint_arrays;
     joints_jacobian(s->links, s->half, j[J_LINK], j[J_JOINT], j[J_QD], j[J_LAW], j[J_EFFORT],
