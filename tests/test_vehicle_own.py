@@ -145,8 +145,7 @@ def test_the_step_check_judges_the_solvers_arrays_as_exudyns_data(runs):
 
 
 class _Solver:
-    """A solver core whose Newton converges only on steps up to `longest` (and its
-    reader, OwnHost's _Reader)."""
+    """A solver core whose Newton converges only on steps up to `longest`."""
 
     def __init__(self, longest):
         self.longest, self.restarts = longest, 0
@@ -191,7 +190,7 @@ def _host(longest):
 
     host = OwnHost.__new__(OwnHost)
     host.solver, host.bank = _Solver(longest), _Bank()
-    host.reader, host.adopt = host.solver, lambda t, q, v: False
+    host.adopt = lambda t, q, v: False
     host.path = type("Path", (), {"deflections": lambda self, q, v, t: q})()
     host.refused = host.halved = host.solves = host.newton = 0
     host._start = None

@@ -28,6 +28,7 @@ LIBRARY = Library("vehicle_alpha", [HERE / "bordered_band.c", HERE / "alpha_solv
 STATUS = {0: "converged", 1: "not converged", 2: "band pivot not positive",
           3: "entry outside the band and the border", 4: "border singular",
           5: "callback failed"}
+OUTSIDE = 3  # alpha_solver.h's ALPHA_OUTSIDE: the Newton matrix's structure, not Newton
 BB_OUTSIDE, BB_PIVOT, BB_SINGULAR = 1, 2, 3
 TRACE = 64  # alpha_solver.h's ALPHA_TRACE: iterations of a solve traced
 
@@ -231,6 +232,9 @@ class AlphaSolver:
             raise ValueError("solver: order is not a permutation of the unknowns, or the "
                              "sizes are wrong")
         self.time = 0.0
+        # what state() and report() read into, made once (a host reads them every pass)
+        self._lam = np.empty(max(self.nm, 1))
+        self._ints, self._reals = np.zeros(5, dtype=np.intc), np.zeros(2)
 
     def __del__(self):
         if getattr(self, "handle", None):
@@ -265,15 +269,20 @@ class AlphaSolver:
         return status
 
     def state(self):
-        q, v, a = (np.empty(self.nq) for _ in range(3))
-        lam = np.empty(max(self.nm, 1))
-        self.lib.alpha_state(self.handle, q.ctypes.data, v.ctypes.data, a.ctypes.data,
-                             lam.ctypes.data)
-        return q, v, a, lam[:self.nm]
+        """(q, v, a, lambda): q, v and a rows of one new block, lambda a copy."""
+        block = np.empty((3, self.nq))
+        at, row = block.ctypes.data, 8 * self.nq
+        self.lib.alpha_state(self.handle, at, at + row, at + 2 * row, self._lam.ctypes.data)
+        return block[0], block[1], block[2], self._lam[:self.nm].copy()
+
+    def iterations(self):
+        """The last step's Newton iterations (report's first)."""
+        self.lib.alpha_report(self.handle, self._ints.ctypes.data, self._reals.ctypes.data)
+        return int(self._ints[0])
 
     def report(self):
         """The last step's (iterations, Jacobians, residual norm, bad row, bad column)."""
-        ints, reals = np.zeros(5, dtype=np.intc), np.zeros(2)
+        ints, reals = self._ints, self._reals
         self.lib.alpha_report(self.handle, ints.ctypes.data, reals.ctypes.data)
         return dict(iterations=int(ints[0]), jacobians=int(ints[1]),
                     total_jacobians=int(ints[2]), bad_row=int(ints[3]),

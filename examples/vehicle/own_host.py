@@ -57,7 +57,6 @@ DEFAULT_NEWTON = "reuse"
 # most Newton iterations of a step's last solve plus its solves (discontinuous iterations)
 # with which the step may be doubled (adaptiveStepRecoveryIterations)
 RECOVERY, INCREASE, RECOVERY_ITERATIONS = 10, 2.0, 7
-OUTSIDE = 3  # alpha_solver.h's ALPHA_OUTSIDE: the Newton matrix's structure, not Newton
 
 
 class _Context(ctypes.Structure):
@@ -131,29 +130,6 @@ def solver_for(vehicle, laws, relative_tolerance=1e-8):
     return own, solver
 
 
-class _Reader:
-    """The solver core's state (q, v, a) and its last step's Newton iterations as
-    AlphaSolver.state and .report read them (alpha_state, alpha_report), with the least
-    Python per call: one block of three rows per state (the host keeps states across
-    steps), the multipliers and the report into arrays made once."""
-
-    def __init__(self, solver):
-        self.lib, self.handle, self.n = solver.lib, solver.handle, solver.nq
-        self.lam = np.empty(max(solver.nm, 1))
-        self.ints, self.reals = np.zeros(5, dtype=np.intc), np.zeros(2)
-        self.at = (self.lam.ctypes.data, self.ints.ctypes.data, self.reals.ctypes.data)
-
-    def state(self):
-        block = np.empty((3, self.n))
-        at, row = block.ctypes.data, 8 * self.n
-        self.lib.alpha_state(self.handle, at, at + row, at + 2 * row, self.at[0])
-        return block[0], block[1], block[2]
-
-    def iterations(self):
-        self.lib.alpha_report(self.handle, *self.at[1:])
-        return int(self.ints[0])
-
-
 class StepLength:
     """The host step's length as exudyn's adaptive step sets it (CSolverBase::SolveSteps):
     the steps converged since the last shortening counted from every shortening (a step
@@ -187,7 +163,6 @@ class OwnHost:
         self.path = vehicle.compiled_path
         self.bank = self.path.bank
         self.own, self.solver = solver_for(vehicle, self.bank, relative_tolerance)
-        self.reader = _Reader(self.solver)
         # the contacts at a pass's solution: the system's Newton evaluated them last there
         contacts, evaluated = vehicle.contacts, self.own.system.contacts
         self.adopt = lambda t, q, v: contacts.adopt(t, q, v, evaluated)
@@ -220,9 +195,9 @@ class OwnHost:
                   else self.solver.repeat(h, t_new, warm))
         self.seconds["solve"] += time.process_time() - began
         self.solves += 1
-        self.iterations = self.reader.iterations()
+        self.iterations = self.solver.iterations()
         self.newton += self.iterations
-        if status == OUTSIDE:  # halving would not change the matrix's structure
+        if status == alpha.OUTSIDE:  # halving would not change the matrix's structure
             report, name = self.solver.report(), self.own.system.coordinate_name
             raise VehicleError(
                 f"the own solver stopped at t = {t_new:.4f} s: its Newton matrix has an "
@@ -233,7 +208,7 @@ class OwnHost:
     def _pass_end(self, t, t_new, check):
         """The step check's and the bank's verdict on a solved pass: (refused, verdict).
         Its parts' clocks: each part's end the next one's start."""
-        self._solved = q, v, _ = self.reader.state()
+        self._solved = q, v, _ = self.solver.state()[:3]
         seconds, began = self.seconds, time.process_time()
         self.adopt(t_new, q, v)  # for the step check, the deflections and the record
         if check is not None:
@@ -297,7 +272,7 @@ class OwnHost:
         solver's state, or another that reads exudyn's data, where it is written)."""
         began = time.process_time()
         # the last pass's solution, or the initial state
-        state = self._accepted = self._solved or self.reader.state()
+        state = self._accepted = self._solved or self.solver.state()[:3]
         if self.bank.record == self.v._record:
             self.v.given_state = state
         else:

@@ -228,8 +228,7 @@ class VehicleSystem:
         """From now on leave out of `jacobian` the entries that fall neither in the band
         nor in the border of `ordering`'s order (the few a tyre's blend writes beyond
         REACH), counted: left_out()."""
-        position = np.empty(len(order), dtype=np.intc)
-        position[order] = np.arange(len(order))
+        position = positions(order).astype(np.intc)
         position[position >= len(order) - border] = -1
         self._band_position = np.ascontiguousarray(position[:self.n])
         self.system.band_position = _at(self._band_position)
@@ -303,11 +302,17 @@ def ordering(system, border_link=0):
     return order, 3 * REACH + 2, len(order) - len(band)
 
 
+def positions(order):
+    """Each unknown's position in `order` (its inverse permutation)."""
+    position = np.empty(len(order), dtype=int)
+    position[order] = np.arange(len(order))
+    return position
+
+
 def outside_band(order, half_bandwidth, border, rows, columns):
     """The entries (rows[k], columns[k]) that fall neither in the band nor in the border
     of `ordering`'s order: their indices (none where the order holds)."""
-    position = np.empty(len(order), dtype=int)
-    position[order] = np.arange(len(order))
+    position = positions(order)
     p, q = position[np.asarray(rows, dtype=int)], position[np.asarray(columns, dtype=int)]
     in_border = (p >= len(order) - border) | (q >= len(order) - border)
     return np.flatnonzero(~in_border & (np.abs(p - q) > half_bandwidth))
