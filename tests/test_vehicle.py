@@ -203,9 +203,10 @@ def test_the_stored_static_point_is_keyed_by_the_models_values(native_fmus, monk
 
 
 def test_a_short_run_prints_its_summary_and_writes_the_csv(native_fmus, tmp_path):
-    """Four host steps of 1 ms from the laid-out geometry: the summary counts the 175 FMU
-    instances, the cost and exudyn's iterations, the CSV has SI columns, the track stays
-    closed and every wheel stays on it."""
+    """Four host steps of 1 ms from the laid-out geometry, the default run: on the own
+    solver, and the summary says so; it counts the 175 FMU instances, the cost and the
+    own solver's iterations, the CSV has SI columns, the track stays closed and every
+    wheel stays on it."""
     pytest.importorskip("exudyn", reason=NO_EXUDYN)
     run = subprocess.run(
         [sys.executable, str(ROOT / "examples" / "tracked_vehicle.py"), "--end-time", "0.004",
@@ -214,8 +215,9 @@ def test_a_short_run_prints_its_summary_and_writes_the_csv(native_fmus, tmp_path
         capture_output=True, text=True, timeout=900)
     assert run.returncode == 0, run.stderr[-2000:]
     assert "175 FMU instances" in run.stdout and "compiled path" in run.stdout
+    assert "solver own (no exudyn in the time loop)" in run.stdout
     assert re.search(r"s wall and [0-9.]+ s CPU per simulated second", run.stdout)
-    assert re.search(r"exudyn: [0-9.]+ Newton iterations per solve", run.stdout)
+    assert re.search(r"^own: [0-9.]+ Newton iterations per solve", run.stdout, re.M)
     assert "Newton tolerance 2.5" in run.stdout
     assert f"wrote {tmp_path}" in run.stdout
     with open(tmp_path / "bump_3mps.csv") as stream:
@@ -250,6 +252,36 @@ def test_the_newton_tolerance_reaches_exudyn_and_a_bad_one_is_refused_naming_it(
     assert "--newton-tolerance -1: give a value above 0" in run.stderr
 
 
+@pytest.mark.parametrize("argv, named", [
+    (["--path", "python"], "--path python: the own solver runs the coupling's compiled path"),
+    (["--joints", "connectors"], "--joints connectors: the own solver takes the track's joints"),
+    (["--coupling", "predicted"], "--coupling predicted (a scheme the bank does not have)")])
+def test_where_the_own_solver_cannot_run_the_default_run_is_refused_naming_the_flag(
+        argv, named, capsys):
+    """The default run is the own solver's: given settings it cannot run (the Python
+    path, the joints as connectors, a scheme the bank lacks), the command line stops
+    before the build naming the setting and --solver exudyn, and simulate raises naming
+    solver='exudyn'; with --solver exudyn the same settings pass the check."""
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    import tracked_vehicle
+    from vehicle.model import VehicleError
+
+    with pytest.raises(SystemExit) as stop:
+        tracked_vehicle.main(argv)
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert named in err and "add --solver exudyn" in err
+    given = dict(zip((a.lstrip("-") for a in argv[::2]), argv[1::2]))
+    with pytest.raises(VehicleError, match=r"solver='exudyn' \(--solver exudyn\)"):
+        tracked_vehicle.simulate("bump", 3.0, 0.001, 1e-3, given.get("coupling", "iterated"),
+                                 path=given.get("path", "compiled"),
+                                 joints=given.get("joints", "kernel"))
+    assert tracked_vehicle.own_refusal(given.get("path", "compiled"),
+                                       given.get("coupling", "iterated"),
+                                       given.get("joints", "kernel")) in err
+    assert tracked_vehicle.own_refusal() is None  # the defaults: the own solver runs
+
+
 def test_the_compiled_path_gives_the_python_paths_numbers(native_fmus):
     """Three host steps of 1 ms from the laid-out geometry (5 m/s, `corrected`): the bank
     with every instance's law in exudyn's compiled symbolic functions and the tyres' laws
@@ -264,7 +296,7 @@ def test_the_compiled_path_gives_the_python_paths_numbers(native_fmus):
     runs, steps = {}, {}
     for path in ("python", "compiled"):
         vehicle, runs[path], _, _ = simulate("bump", 5.0, 0.003, 1e-3, "corrected", None,
-                                             statics, 0.0, fmu_dir, path)
+                                             statics, 0.0, fmu_dir, path, solver="exudyn")
         assert vehicle.compiled == (path == "compiled")
         assert type(vehicle.coupling).__name__ == ("Bank" if vehicle.compiled else "Coupling")
         # every step (3 asked; exudyn may halve one in this start from the laid-out

@@ -72,6 +72,26 @@ def test_the_study_lets_newton_iterate_longer_than_exudyns_default(study):
     settings = study.newton_limit(100)()
     assert settings.timeIntegration.newton.maxIterations == 100
     assert study.model.run_settings().timeIntegration.newton.maxIterations == 25
+    # the own solver's too, in each of its Newton policies
+    from vehicle.alpha_solver import Settings
+    policies = study.own_newton_limit(100)
+    assert set(policies) == set(study.own_host.NEWTON)
+    for name, policy in policies.items():
+        assert Settings(**policy).max_iterations == 100
+        assert Settings(**study.own_host.NEWTON[name]).max_iterations == 25
+
+
+def test_the_study_runs_on_the_own_solver_by_default(study, capsys):
+    """The default study's runs are the own solver's (tracked_vehicle's default);
+    --solver exudyn reaches them; --same-steps, exudyn's step hook, and the Python path
+    are refused on the own solver naming --solver exudyn."""
+    assert study.parse([]).solver == "own"
+    assert study.parse(["--solver", "exudyn", "--same-steps"]).solver == "exudyn"
+    for argv in (["--same-steps"], ["--path", "python"]):
+        with pytest.raises(SystemExit):
+            study.parse(argv)
+        err = capsys.readouterr().err
+        assert argv[0] in err and "add --solver exudyn" in err
 
 
 def test_the_study_runs_with_the_solver_settings_it_is_given(study, monkeypatch):
@@ -92,6 +112,7 @@ def test_the_study_runs_with_the_solver_settings_it_is_given(study, monkeypatch)
     for scheme, tolerance, settings in asked:
         assert settings["spectral_radius"] == 0.3
         assert settings["newton_tolerance"] == 0.01
+        assert settings["solver"] == "own"  # the default
     assert [(scheme, tolerance) for scheme, tolerance, _ in asked] == [
         ("corrected", own), ("converged", 1e-6)]
     assert study.Converged.tolerance == own
@@ -159,6 +180,7 @@ def test_the_same_steps_flag_reaches_the_converged_run_only(study, monkeypatch):
     run's times, the default run with the vehicle's own; the check is put back after."""
     own = study.step_check.StepCheck
     monkeypatch.setattr(study.model, "run_settings", study.model.run_settings)
+    monkeypatch.setattr(study.own_host, "NEWTON", study.own_host.NEWTON)
     monkeypatch.setattr(study.model, "static_points", lambda: None)
     checks = {}
     times = np.arange(0, 0.0505, 1e-3)
@@ -172,7 +194,7 @@ def test_the_same_steps_flag_reaches_the_converged_run_only(study, monkeypatch):
                 "newton_per_pass": 3.0, "passes_per_step": 2.0}
 
     monkeypatch.setattr(study, "run", run)
-    study.main(["--same-steps", "--course", "sine"])
+    study.main(["--same-steps", "--course", "sine", "--solver", "exudyn"])
     assert checks[study.model.COUPLING] is own and checks["course"] == "sine"
     assert checks["converged"] is not own and issubclass(checks["converged"], own)
     assert study.step_check.StepCheck is own
