@@ -30,10 +30,10 @@ the range, as much as the coupling's own error. So the study lets Newton take up
 --newton-iterations iterations (exudyn's default is 25, the own solver's too: the limit
 reaches both), and says where two runs' steps part if they still do. Where the default
 run's Newton fails even so and exudyn halves steps `converged` does not (5 m/s, from
-284 ms: docs/vehicle.md, Past 0.2 s and on the courses), --same-steps (exudyn's step
-hook: with --solver exudyn) has `converged` take the default run's steps (it refuses a
-solution whose step passes over a time that run reached, and exudyn solves the step
-again at half its length), so that the comparison goes on like for like past them. All
+284 ms: docs/vehicle.md, Past 0.2 s and on the courses), --same-steps has `converged`
+take the default run's steps (it refuses a solution whose step passes over a time that
+run reached, and the solver, either, solves the step again at half its length), so that
+the comparison goes on like for like past them. All
 runs start from the same stored static point (one settling first, excluded from the
 costs). CPU figures are this machine's, in one run, under whatever load it carries:
 compare them within a table only.
@@ -89,24 +89,21 @@ def nanoseconds(times):
     return np.round(np.asarray(times) * 1e9).astype(np.int64)
 
 
-def step_start(mbs):
-    """The time of the start of the step exudyn solves."""
-    import exudyn as exu
-    return mbs.systemData.GetTime(exu.ConfigurationType.StartOfStep)
-
-
 def same_steps(times, check=None):
     """The vehicle's step check (step_check.StepCheck, or `check`) that also refuses a
-    solution whose step passes over a time the run of `times` reached: exudyn solves
-    that step again at half its length, as it did where its Newton failed in that run,
+    solution whose step passes over a time the run of `times` reached: the solver
+    (exudyn's or the own) solves that step again at half its length, as it did where its
+    Newton failed in that run,
     so that the run takes the other's steps (a refused step is solved again from its
     start)."""
     reached = np.unique(nanoseconds(times))
 
     class SameSteps(check or step_check.StepCheck):
-        def __call__(self, mbs, t):
-            jumped = super().__call__(mbs, t)
-            start, end = int(nanoseconds(step_start(mbs))), int(nanoseconds(t))
+        def judge(self, t, h, *state):
+            # both hosts judge through here: exudyn's hook (StepCheck.__call__) with the
+            # step from its start, the own host directly
+            jumped = super().judge(t, h, *state)
+            start, end = int(nanoseconds(t - h)), int(nanoseconds(t))
             passed = reached[np.searchsorted(reached, start, "right"):
                              np.searchsorted(reached, end, "left")]
             if jumped is None and len(passed):
@@ -241,8 +238,6 @@ def parse(argv=None):
     args = parser.parse_args(argv)
     check_solver_arguments(parser, args)
     refusal = own_refusal(args.path, args.scheme) if args.solver == "own" else None
-    if refusal is None and args.solver == "own" and args.same_steps:
-        refusal = "--same-steps follows the default run's steps in exudyn's step hook"
     if refusal:
         parser.error(f"{refusal}; add --solver exudyn to run the study in exudyn")
     if args.newton_iterations < 1:

@@ -83,15 +83,14 @@ def test_the_study_lets_newton_iterate_longer_than_exudyns_default(study):
 
 def test_the_study_runs_on_the_own_solver_by_default(study, capsys):
     """The default study's runs are the own solver's (tracked_vehicle's default);
-    --solver exudyn reaches them; --same-steps, exudyn's step hook, and the Python path
-    are refused on the own solver naming --solver exudyn."""
+    --solver exudyn reaches them; the Python path is refused on the own solver naming
+    --solver exudyn."""
     assert study.parse([]).solver == "own"
-    assert study.parse(["--solver", "exudyn", "--same-steps"]).solver == "exudyn"
-    for argv in (["--same-steps"], ["--path", "python"]):
-        with pytest.raises(SystemExit):
-            study.parse(argv)
-        err = capsys.readouterr().err
-        assert argv[0] in err and "add --solver exudyn" in err
+    assert study.parse(["--solver", "exudyn"]).solver == "exudyn"
+    with pytest.raises(SystemExit):
+        study.parse(["--path", "python"])
+    err = capsys.readouterr().err
+    assert "--path python" in err and "add --solver exudyn" in err
 
 
 def test_the_study_runs_with_the_solver_settings_it_is_given(study, monkeypatch):
@@ -145,34 +144,50 @@ class Check:
     def __init__(self, jumps=()):
         self.jumps = jumps
 
-    def __call__(self, mbs, t):
+    def judge(self, t, h, *state):
         return "jumped" if round(t * 1e6) in self.jumps else None
 
 
-class Host:
-    """A stand-in for exudyn's system: the step being solved starts at `start`."""
-
-    def __init__(self, start):
-        self.systemData = self
-        self.start = start
-
-    def GetTime(self, configuration):
-        return self.start
-
-
 def test_same_steps_refuses_a_step_over_a_time_the_followed_run_reached(study):
-    # the followed run halved its steps from 30 to 32 ms
+    # the followed run halved its steps from 30 to 32 ms; a step from s to t is judged as
+    # either host asks (t, its length)
     followed = np.array([0.0, 0.029, 0.030, 0.0305, 0.031, 0.0315, 0.032, 0.033])
-    check = study.same_steps(followed, Check)()
-    assert check(Host(0.028), 0.029) is None
-    assert check(Host(0.030), 0.0305) is None
-    assert check(Host(0.032), 0.033) is None
-    assert "passes over 30.5000 ms" in check(Host(0.030), 0.031)
-    assert "passes over 31.0000 ms" in check(Host(0.0305), 0.032)
+    check = study.same_steps(followed, Check)().judge
+    assert check(0.029, 0.029 - 0.028) is None
+    assert check(0.0305, 0.0305 - 0.030) is None
+    assert check(0.033, 0.033 - 0.032) is None
+    assert "passes over 30.5000 ms" in check(0.031, 0.031 - 0.030)
+    assert "passes over 31.0000 ms" in check(0.032, 0.032 - 0.0305)
     # a shorter step than the followed run's goes (the steps part; the study says where)
-    assert check(Host(0.032), 0.0325) is None
+    assert check(0.0325, 0.0325 - 0.032) is None
     # the step check's own refusal stands where the followed run went on
-    assert study.same_steps(followed, Check)(jumps={29000})(Host(0.028), 0.029) == "jumped"
+    assert study.same_steps(followed, Check)(jumps={29000}).judge(0.029, 0.001) == "jumped"
+
+
+def test_same_steps_reaches_exudyns_hook_through_judge(study):
+    """exudyn's hook (StepCheck.__call__) judges the step from its start in exudyn's
+    data: the same-steps check refuses there too."""
+    state = np.zeros(3)
+
+    class Hook(Check):
+        __call__ = study.step_check.StepCheck.__call__
+
+    class Data:
+        def __init__(self, start):
+            self.start = start
+            self.systemData = self
+
+        def GetTime(self, configuration):
+            return self.start
+
+        def GetODE2Coordinates(self, configuration=None):
+            return state
+
+        GetODE2Coordinates_t = GetODE2Coordinates
+
+    check = study.same_steps(np.array([0.0, 0.030, 0.0305, 0.031]), Hook)()
+    assert "passes over 30.5000 ms" in check(Data(0.030), 0.031)
+    assert check(Data(0.030), 0.0305) is None
 
 
 def test_the_same_steps_flag_reaches_the_converged_run_only(study, monkeypatch):
@@ -194,7 +209,7 @@ def test_the_same_steps_flag_reaches_the_converged_run_only(study, monkeypatch):
                 "newton_per_pass": 3.0, "passes_per_step": 2.0}
 
     monkeypatch.setattr(study, "run", run)
-    study.main(["--same-steps", "--course", "sine", "--solver", "exudyn"])
+    study.main(["--same-steps", "--course", "sine"])
     assert checks[study.model.COUPLING] is own and checks["course"] == "sine"
     assert checks["converged"] is not own and issubclass(checks["converged"], own)
     assert study.step_check.StepCheck is own
