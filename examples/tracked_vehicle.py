@@ -99,15 +99,15 @@ def simulate(course_name, speed, end_time, step, coupling=COUPLING, linear=None,
 
 
 def add_solver_arguments(parser):
-    """exudyn's settings a run takes: generalized-alpha's spectral radius, Newton's
-    absolute tolerance (check them with check_solver_arguments)."""
+    """The settings a run takes on either solver: generalized-alpha's spectral radius,
+    Newton's absolute tolerance (check them with check_solver_arguments)."""
     parser.add_argument("--spectral-radius", type=float, default=SPECTRAL_RADIUS,
                         help="generalized-alpha's spectral radius at infinite frequency, "
                              f"0 to 1 (default {SPECTRAL_RADIUS:g}: damps the links' "
                              "in-phase turning the 1 ms step does not resolve; exudyn's own "
                              "default is 0.9)")
     parser.add_argument("--newton-tolerance", type=float, default=NEWTON_TOLERANCE,
-                        help="exudyn's Newton stops where its residual per coordinate is "
+                        help="Newton (either solver's) stops where its residual's norm is "
                              f"below this (default {NEWTON_TOLERANCE:g}; 1 takes about 10 %% "
                              "fewer iterations and moves the hull's accelerations by "
                              "0.004 %% of their range: docs/vehicle.md, What remains 2)")
@@ -145,11 +145,11 @@ def main(argv=None):
                              f"{DEFAULT_JOINTS})")
     add_solver_arguments(parser)
     parser.add_argument("--solver", choices=SOLVERS, default=DEFAULT_SOLVER,
-                        help="the time integration: the vehicle's own solver in C, "
-                             "exudyn's generalized-alpha with no exudyn in the time loop "
-                             "(default; the compiled path with the joints' kernel only), "
-                             "or exudyn's own (docs/vehicle.md, The vehicle on its own "
-                             "solver)")
+                        help="the time integration: the vehicle's own solver, exudyn's "
+                             "generalized-alpha scheme in C with no exudyn in the time loop "
+                             "(default; the compiled path with the joints' kernel only: "
+                             "other settings are refused naming --solver exudyn), or "
+                             "exudyn's (docs/vehicle.md, The vehicle on its own solver)")
     parser.add_argument("--own-newton", choices=tuple(NEWTON),
                         help=f"the own solver's Newton policy (default {DEFAULT_NEWTON}; "
                              "docs/vehicle.md, The vehicle on its own solver)")
