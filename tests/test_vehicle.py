@@ -252,36 +252,6 @@ def test_the_newton_tolerance_reaches_exudyn_and_a_bad_one_is_refused_naming_it(
     assert "--newton-tolerance -1: give a value above 0" in run.stderr
 
 
-@pytest.mark.parametrize("argv, named", [
-    (["--path", "python"], "--path python: the own solver runs the coupling's compiled path"),
-    (["--joints", "connectors"], "--joints connectors: the own solver takes the track's joints"),
-    (["--coupling", "predicted"], "--coupling predicted (a scheme the bank does not have)")])
-def test_where_the_own_solver_cannot_run_the_default_run_is_refused_naming_the_flag(
-        argv, named, capsys):
-    """The default run is the own solver's: given settings it cannot run (the Python
-    path, the joints as connectors, a scheme the bank lacks), the command line stops
-    before the build naming the setting and --solver exudyn, and simulate raises naming
-    solver='exudyn'; with --solver exudyn the same settings pass the check."""
-    pytest.importorskip("exudyn", reason=NO_EXUDYN)
-    import tracked_vehicle
-    from vehicle.model import VehicleError
-
-    with pytest.raises(SystemExit) as stop:
-        tracked_vehicle.main(argv)
-    assert stop.value.code == 2
-    err = capsys.readouterr().err
-    assert named in err and "add --solver exudyn" in err
-    given = dict(zip((a.lstrip("-") for a in argv[::2]), argv[1::2]))
-    with pytest.raises(VehicleError, match=r"solver='exudyn' \(--solver exudyn\)"):
-        tracked_vehicle.simulate("bump", 3.0, 0.001, 1e-3, given.get("coupling", "iterated"),
-                                 path=given.get("path", "compiled"),
-                                 joints=given.get("joints", "kernel"))
-    assert tracked_vehicle.own_refusal(given.get("path", "compiled"),
-                                       given.get("coupling", "iterated"),
-                                       given.get("joints", "kernel")) in err
-    assert tracked_vehicle.own_refusal() is None  # the defaults: the own solver runs
-
-
 def test_the_compiled_path_gives_the_python_paths_numbers(native_fmus):
     """Three host steps of 1 ms from the laid-out geometry (5 m/s, `corrected`): the bank
     with every instance's law in exudyn's compiled symbolic functions and the tyres' laws
