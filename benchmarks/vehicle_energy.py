@@ -13,6 +13,10 @@ engagement's own, what remains of the teeth's work after the drive, their spring
 of stored energy and their dampers' loss: zero for a passive engagement), the work done
 on the bushes and dampers (their losses), the largest swing of a wheel's tyre load and
 the track tensions' range. A run that stops (a wheel leaving the track) prints where.
+The audit's run is exudyn's (model.Vehicle's solver, not tracked_vehicle.py's default,
+the own solver), and says so: it reads the joints' forces as exudyn's last residual of
+the accepted pass left them in the joints' kernel, which the own solver's Newton does not
+evaluate (its equations are system.c's).
 """
 
 import argparse
@@ -124,7 +128,8 @@ def main(argv=None):
                           - power["sprocket_stored"][0]
                           + cumulative_trapezoid(power["sprocket_damped"], time, initial=0.0))
     columns = [*CLASSES, "engagement"]
-    print(f"{args.course}, {args.speed:g} m/s, step {args.step * 1e3:g} ms, {args.coupling}: "
+    print(f"{args.course}, {args.speed:g} m/s, step {args.step * 1e3:g} ms, {args.coupling}, "
+          f"{vehicle.solver}'s solver (the audit reads the joints' forces of its residual): "
           f"work on the bodies per window (J); bushes (as applied), dampers: work done on "
           f"them (J); "
           f"largest wheel-load swing, tensions (kN)")

@@ -63,7 +63,7 @@ def exudyn_run(course, speed, end):
 
     ExudynCoupling._pre_step = pre_step
     try:
-        vehicle, result, _, _ = simulate(course, speed, end, DEFAULT_STEP)
+        vehicle, result, _, _ = simulate(course, speed, end, DEFAULT_STEP, solver="exudyn")
     finally:
         ExudynCoupling._pre_step = pre
     return result, vehicle.solver_statistics(), again, stale

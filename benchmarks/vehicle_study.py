@@ -3,7 +3,8 @@ docs/vehicle.md): a benchmark, not a test (minutes to hours of CPU).
 
     python benchmarks/vehicle_study.py --end-time 0.05            # coupling's own error
     python benchmarks/vehicle_study.py --steps 4 2 1 0.5 --end-time 0.05
-    python benchmarks/vehicle_study.py --path python    # the coupling's Python path
+    python benchmarks/vehicle_study.py --solver exudyn  # the time loop in exudyn
+    python benchmarks/vehicle_study.py --path python --solver exudyn  # the Python path
 
 For each host step: the run with the default coupling and with `converged` at the same
 step (the coupling's own error: the largest difference in hull vertical acceleration, in
@@ -16,21 +17,23 @@ its pass limit before its loads agreed (its own error there); then the hull erro
 time window (--window), where in the run it grows. With --spread TOL, a third run,
 `converged` stopping where its loads agree to TOL instead of 1e-9: how far the run moves
 for that small a change of the loads (the solution's own sensitivity, the scale below
-which the coupling's own error says little). exudyn's spectral radius and Newton
-tolerance are the vehicle's unless given (--spectral-radius, --newton-tolerance), the
-same in every run.
+which the coupling's own error says little). The runs are on the vehicle's own solver
+(tracked_vehicle.py's default; --solver exudyn: in exudyn); its spectral radius and
+Newton tolerance are the vehicle's unless given (--spectral-radius, --newton-tolerance),
+the same in every run.
 
 Like for like: runs are compared at the times both reached, never interpolated. exudyn
 halves a step where its Newton fails, and where it does depends on the smallest
 difference: two `converged` runs differing only in their tolerance (1e-9 and 1e-6, bump
 at 5 m/s, 1 ms) halved different steps from 31.75 ms on and then differed by 1.9 % of
-the range, as much as the coupling's own error. So the study lets exudyn's Newton take
-up to --newton-iterations iterations (exudyn's default is 25), and says where two runs'
-steps part if they still do. Where the default run's Newton fails even so and exudyn
-halves steps `converged` does not (5 m/s, from 284 ms: docs/vehicle.md, Past 0.2 s and
-on the courses), --same-steps has `converged` take the default run's steps (it refuses
-a solution whose step passes over a time that run reached, and exudyn solves the step
-again at half its length), so that the comparison goes on like for like past them. All
+the range, as much as the coupling's own error. So the study lets Newton take up to
+--newton-iterations iterations (exudyn's default is 25, the own solver's too: the limit
+reaches both), and says where two runs' steps part if they still do. Where the default
+run's Newton fails even so and exudyn halves steps `converged` does not (5 m/s, from
+284 ms: docs/vehicle.md, Past 0.2 s and on the courses), --same-steps has `converged`
+take the default run's steps (it refuses a solution whose step passes over a time that
+run reached, and the solver, either, solves the step again at half its length), so that
+the comparison goes on like for like past them. All
 runs start from the same stored static point (one settling first, excluded from the
 costs). CPU figures are this machine's, in one run, under whatever load it carries:
 compare them within a table only.
@@ -50,9 +53,10 @@ sys.path[:0] = [str(ROOT / "examples"), str(ROOT / "src")]
 from fmu_components.coupling.schemes import Converged  # noqa: E402
 
 import bank_path  # noqa: E402
-from tracked_vehicle import (add_solver_arguments, check_solver_arguments,  # noqa: E402
+from tracked_vehicle import (DEFAULT_SOLVER, SOLVER_NAMES, SOLVERS,  # noqa: E402
+                             add_solver_arguments, check_solver_arguments, own_refusal,
                              simulate)
-from vehicle import model, step_check  # noqa: E402
+from vehicle import model, own_host, step_check  # noqa: E402
 
 KEY = "hull_vertical_acceleration"
 # each kind's loads, compared instance by instance (docs/vehicle.md, Outputs)
@@ -74,28 +78,32 @@ def newton_limit(iterations):
     return run_settings
 
 
+def own_newton_limit(iterations):
+    """The own solver's Newton policies (own_host.NEWTON) with its Newton allowed
+    `iterations` per solve."""
+    return {name: dict(policy, max_iterations=iterations)
+            for name, policy in own_host.NEWTON.items()}
+
+
 def nanoseconds(times):
     return np.round(np.asarray(times) * 1e9).astype(np.int64)
 
 
-def step_start(mbs):
-    """The time of the start of the step exudyn solves."""
-    import exudyn as exu
-    return mbs.systemData.GetTime(exu.ConfigurationType.StartOfStep)
-
-
 def same_steps(times, check=None):
     """The vehicle's step check (step_check.StepCheck, or `check`) that also refuses a
-    solution whose step passes over a time the run of `times` reached: exudyn solves
-    that step again at half its length, as it did where its Newton failed in that run,
+    solution whose step passes over a time the run of `times` reached: the solver
+    (exudyn's or the own) solves that step again at half its length, as it did where its
+    Newton failed in that run,
     so that the run takes the other's steps (a refused step is solved again from its
     start)."""
     reached = np.unique(nanoseconds(times))
 
     class SameSteps(check or step_check.StepCheck):
-        def __call__(self, mbs, t):
-            jumped = super().__call__(mbs, t)
-            start, end = int(nanoseconds(step_start(mbs))), int(nanoseconds(t))
+        def judge(self, t, h, *state):
+            # both hosts judge through here: exudyn's hook (StepCheck.__call__) with the
+            # step from its start, the own host directly
+            jumped = super().judge(t, h, *state)
+            start, end = int(nanoseconds(t - h)), int(nanoseconds(t))
             passed = reached[np.searchsorted(reached, start, "right"):
                              np.searchsorted(reached, end, "left")]
             if jumped is None and len(passed):
@@ -129,7 +137,7 @@ def run(args, step, scheme, statics, tolerance=None):
             vehicle, result, _, run_cpu = simulate(
                 args.course, args.speed, args.end_time, step, scheme, None, statics,
                 args.settle_time, path=args.path, spectral_radius=args.spectral_radius,
-                newton_tolerance=args.newton_tolerance)
+                newton_tolerance=args.newton_tolerance, solver=args.solver)
     except model.VehicleError as error:
         print(f"  {what} at {step * 1e3:g} ms stopped: {error}", flush=True)
         return None
@@ -219,6 +227,9 @@ def parse(argv=None):
                              f"(its own: {Converged.tolerance:g}), e.g. 1e-6: how far so small "
                              f"a change moves the run")
     add_solver_arguments(parser)
+    parser.add_argument("--solver", choices=SOLVERS, default=DEFAULT_SOLVER,
+                        help=f"the time integration of every run: the vehicle's own solver "
+                             f"(default {DEFAULT_SOLVER}) or exudyn's")
     parser.add_argument("--same-steps", action="store_true",
                         help="converged takes the default run's steps (a solution whose step "
                              "passes over a time that run reached is refused, the step "
@@ -226,6 +237,9 @@ def parse(argv=None):
     bank_path.add_argument(parser)
     args = parser.parse_args(argv)
     check_solver_arguments(parser, args)
+    refusal = own_refusal(args.path, args.scheme) if args.solver == "own" else None
+    if refusal:
+        parser.error(f"{refusal}; add --solver exudyn to run the study in exudyn")
     if args.newton_iterations < 1:
         parser.error(f"--newton-iterations {args.newton_iterations}: give 1 or more")
     if not args.window > 0:
@@ -247,6 +261,7 @@ def spread(runs, key):
 def main(argv=None):
     args = parse(argv)
     model.run_settings = newton_limit(args.newton_iterations)
+    own_host.NEWTON = own_newton_limit(args.newton_iterations)
     statics = model.static_points()
     runs = {}
     for step in sorted(args.steps, reverse=True):
@@ -257,7 +272,8 @@ def main(argv=None):
             runs[step] += (run(args, h, "converged", statics, args.spread),)
     finest = runs[min(runs)][1] or {"time": [], KEY: []}
     print(f"\n{args.course} at {args.speed:g} m/s, {args.end_time:g} s, the coupling's "
-          f"{args.path} path, exudyn's Newton up to {args.newton_iterations} iterations to "
+          f"{args.path} path, solver {SOLVER_NAMES[args.solver]}, Newton up to "
+          f"{args.newton_iterations} iterations to "
           f"{args.newton_tolerance:g}, spectral radius {args.spectral_radius:g}"
           f"{SAME_STEPS if args.same_steps else ''}; errors in % "
           f"of range at the times both runs reached\n")
@@ -283,7 +299,7 @@ def main(argv=None):
         print(f"| {step:g} | {error} | {loads} | "
               f"{'-' if part is None else f'{part * 1e3:.3f} ms'} | "
               f"{converged['unconverged']} of {converged['steps']} | "
-              f"{difference(default, finest)[0]:.3g} | {default['cpu']:.0f} | "
+              f"{difference(default, finest)[0]:.3g} | {default['cpu']:.3g} | "
               f"{default['newton_per_pass']:.1f} | {default['passes_per_step']:.2f} | "
               f"{spread(runs[step], KEY)}, "
               f"{spread(runs[step], LOADS['radial bush force'])} |")

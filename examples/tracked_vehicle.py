@@ -4,14 +4,18 @@ host, every running-gear part an FMU: 12 RoadWheelTyre (two per wheel), 3 Rotary
 the 80 joints of the closed track loop, coupled by fmu_components.coupling: by default
 its compiled path (one bank of all 175 instances, the load laws in exudyn's compiled
 symbolic functions; vehicle/compiled.py), or its Python path (--path python, the readable
-reference; the same numbers). See docs/vehicle.md for the model, its values and its
-present state.
+reference; the same numbers). By default the time integration is the vehicle's own
+solver (exudyn's generalized-alpha in C, no exudyn in the time loop: vehicle/own_host.py);
+--solver exudyn integrates in exudyn, and is needed where the own solver cannot run
+(--path python, --joints connectors, a scheme the bank lacks; the --linear vehicle's run
+is exudyn's, and says so). See docs/vehicle.md for the model, its values and its present
+state.
 
     python examples/tracked_vehicle.py --course bump --speed 3 --end-time 2
     python examples/tracked_vehicle.py --course random --csv --animate
     python examples/tracked_vehicle.py --course sine --linear   # and the Kelvin vehicle
-    python examples/tracked_vehicle.py --path python            # the Python path
-    python examples/tracked_vehicle.py --solver own             # no exudyn in the time loop
+    python examples/tracked_vehicle.py --solver exudyn          # the time loop in exudyn
+    python examples/tracked_vehicle.py --path python --solver exudyn   # the Python path
 
 Plots, CSV and the animation go to reports/tracked_vehicle/ (or --out).
 """
@@ -33,12 +37,34 @@ from vehicle.model import (COUPLING, DEFAULT_JOINTS, JOINTS, NEWTON_TOLERANCE, S
 from vehicle.own_host import DEFAULT_NEWTON, NEWTON
 
 DEFAULT_STEP = 1e-3  # s
+SOLVERS = ("own", "exudyn")
+SOLVER_NAMES = {"own": "own (no exudyn in the time loop)", "exudyn": "exudyn's"}
+DEFAULT_SOLVER = "own"  # the vehicle's own solver where it can run (own_refusal)
+
+
+def own_refusal(path=bank_path.DEFAULT_PATH, coupling=COUPLING, joints=DEFAULT_JOINTS,
+                linear=None):
+    """Why the own solver cannot run a vehicle of these settings, naming the flag that
+    made it so; None where it can. It runs the coupling's compiled path (the bank) with
+    the track's joints as one object."""
+    if linear is not None:
+        return ("no bank for the linear vehicle's Kelvin elements (the own solver runs the "
+                "FMUs' compiled path)")
+    if joints != "kernel":
+        return ("--joints connectors: the own solver takes the track's joints as one "
+                "object (--joints kernel)")
+    if not bank_path.compiled(path, coupling):
+        taken = ("--path python" if path == "python" else
+                 f"--coupling {coupling} (a scheme the bank does not have)"
+                 if coupling not in bank_path.SCHEME_CODES else "no C compiler found")
+        return f"{taken}: the own solver runs the coupling's compiled path"
+    return None
 
 
 def simulate(course_name, speed, end_time, step, coupling=COUPLING, linear=None,
              statics=None, settle_time=3.0, fmu_dir=None, path=bank_path.DEFAULT_PATH,
              contacts=None, joints=DEFAULT_JOINTS, spectral_radius=SPECTRAL_RADIUS,
-             newton_tolerance=NEWTON_TOLERANCE, solver="exudyn", own_newton=None):
+             newton_tolerance=NEWTON_TOLERANCE, solver=DEFAULT_SOLVER, own_newton=None):
     """One run; returns (vehicle, histories, wall seconds, CPU seconds) of the run proper
     (the settling to the static point, stored after the first run, and the set-up,
     Vehicle.prepare, excluded). contacts: the contacts' kernel, "compiled" or "numpy"
@@ -46,9 +72,15 @@ def simulate(course_name, speed, end_time, step, coupling=COUPLING, linear=None,
     joints as one object with their Jacobian ("kernel", vehicle/joints.py) or as two
     exudyn connectors each ("connectors"). spectral_radius: generalized-alpha's, at
     infinite frequency (model.SPECTRAL_RADIUS). newton_tolerance: exudyn's Newton's
-    absolute tolerance (model.NEWTON_TOLERANCE). solver: "exudyn", or "own" (the compiled
-    path on the vehicle's own solver, no exudyn in the time loop: vehicle/own_host.py).
+    absolute tolerance (model.NEWTON_TOLERANCE). solver: "own" (default: the compiled
+    path on the vehicle's own solver, no exudyn in the time loop: vehicle/own_host.py; a
+    VehicleError naming why where it cannot run: own_refusal), or "exudyn".
     own_newton: the own solver's Newton policy (own_host.NEWTON; None: its default)."""
+    if solver not in SOLVERS:
+        raise ValueError(f"solver {solver!r}: one of {', '.join(SOLVERS)}")
+    refusal = own_refusal(path, coupling, joints, linear) if solver == "own" else None
+    if refusal:
+        raise VehicleError(f"{refusal}; solver='exudyn' (--solver exudyn) runs it in exudyn")
     statics = statics or static_points(fmu_dir)
     vehicle = Vehicle(None, speed, fmu_dir, linear, coupling, statics, path, joints)
     vehicle.spectral_radius = spectral_radius
@@ -67,15 +99,15 @@ def simulate(course_name, speed, end_time, step, coupling=COUPLING, linear=None,
 
 
 def add_solver_arguments(parser):
-    """exudyn's settings a run takes: generalized-alpha's spectral radius, Newton's
-    absolute tolerance (check them with check_solver_arguments)."""
+    """The settings a run takes on either solver: generalized-alpha's spectral radius,
+    Newton's absolute tolerance (check them with check_solver_arguments)."""
     parser.add_argument("--spectral-radius", type=float, default=SPECTRAL_RADIUS,
                         help="generalized-alpha's spectral radius at infinite frequency, "
                              f"0 to 1 (default {SPECTRAL_RADIUS:g}: damps the links' "
                              "in-phase turning the 1 ms step does not resolve; exudyn's own "
                              "default is 0.9)")
     parser.add_argument("--newton-tolerance", type=float, default=NEWTON_TOLERANCE,
-                        help="exudyn's Newton stops where its residual per coordinate is "
+                        help="Newton (either solver's) stops where its residual's norm is "
                              f"below this (default {NEWTON_TOLERANCE:g}; 1 takes about 10 %% "
                              "fewer iterations and moves the hull's accelerations by "
                              "0.004 %% of their range: docs/vehicle.md, What remains 2)")
@@ -112,11 +144,12 @@ def main(argv=None):
                              f"(kernel) or two exudyn connectors each (default "
                              f"{DEFAULT_JOINTS})")
     add_solver_arguments(parser)
-    parser.add_argument("--solver", choices=("exudyn", "own"), default="exudyn",
-                        help="the time integration: exudyn's generalized-alpha (default), or "
-                             "the same scheme on the vehicle's own solver in C, no exudyn in "
-                             "the time loop (the compiled path only; docs/vehicle.md, The "
-                             "vehicle on its own solver)")
+    parser.add_argument("--solver", choices=SOLVERS, default=DEFAULT_SOLVER,
+                        help="the time integration: the vehicle's own solver, exudyn's "
+                             "generalized-alpha scheme in C with no exudyn in the time loop "
+                             "(default; the compiled path with the joints' kernel only: "
+                             "other settings are refused naming --solver exudyn), or "
+                             "exudyn's (docs/vehicle.md, The vehicle on its own solver)")
     parser.add_argument("--own-newton", choices=tuple(NEWTON),
                         help=f"the own solver's Newton policy (default {DEFAULT_NEWTON}; "
                              "docs/vehicle.md, The vehicle on its own solver)")
@@ -125,8 +158,10 @@ def main(argv=None):
     if args.speed < 0 or args.end_time <= 0 or args.step <= 0:
         parser.error("--speed must be >= 0, --end-time and --step > 0")
     check_solver_arguments(parser, args)
-    if args.solver == "own" and not bank_path.compiled(args.path, args.coupling):
-        parser.error("--solver own runs the coupling's compiled path (--path compiled)")
+    refusal = (own_refusal(args.path, args.coupling, args.joints)
+               if args.solver == "own" else None)
+    if refusal:
+        parser.error(f"{refusal}; add --solver exudyn to run it in exudyn")
     args.out.mkdir(parents=True, exist_ok=True)
     warnings.simplefilter("once")
     statics = static_points(args.fmu_dir)
@@ -143,12 +178,14 @@ def main(argv=None):
         if args.linear:
             linear = Linear(statics, args.fmu_dir)
             print(f"Kelvin equivalents: {linear.describe()}")
+            print(f"the linear vehicle on exudyn's solver: {own_refusal(linear=linear)}")
             runs["linear"] = simulate(args.course, args.speed, args.end_time, args.step,
                                       args.coupling, linear, statics, args.settle_time,
                                       args.fmu_dir, contacts=args.contacts,
                                       joints=args.joints,
                                       spectral_radius=args.spectral_radius,
-                                      newton_tolerance=args.newton_tolerance)[1]
+                                      newton_tolerance=args.newton_tolerance,
+                                      solver="exudyn")[1]
     except VehicleError as error:
         sys.exit(f"tracked_vehicle: {error}")
     simulated = result["time"][-1] - result["time"][0]
@@ -159,7 +196,7 @@ def main(argv=None):
           f"{vehicle.contacts.kernel} contacts, joints by "
           f"{vehicle.joints.kernel + ' kernel' if vehicle.joints else 'connectors'}, "
           f"spectral radius {vehicle.spectral_radius:g}, Newton tolerance "
-          f"{vehicle.newton_tolerance:g}")
+          f"{vehicle.newton_tolerance:g}, solver {SOLVER_NAMES[vehicle.solver]}")
     print(f"{simulated:.3f} s simulated in {wall:.1f} s wall, {cpu:.1f} s CPU: "
           f"{wall / simulated:.1f} s wall and {cpu / simulated:.1f} s CPU per simulated "
           f"second")

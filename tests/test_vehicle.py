@@ -203,9 +203,10 @@ def test_the_stored_static_point_is_keyed_by_the_models_values(native_fmus, monk
 
 
 def test_a_short_run_prints_its_summary_and_writes_the_csv(native_fmus, tmp_path):
-    """Four host steps of 1 ms from the laid-out geometry: the summary counts the 175 FMU
-    instances, the cost and exudyn's iterations, the CSV has SI columns, the track stays
-    closed and every wheel stays on it."""
+    """Four host steps of 1 ms from the laid-out geometry, the default run: on the own
+    solver, and the summary says so; it counts the 175 FMU instances, the cost and the
+    own solver's iterations, the CSV has SI columns, the track stays closed and every
+    wheel stays on it."""
     pytest.importorskip("exudyn", reason=NO_EXUDYN)
     run = subprocess.run(
         [sys.executable, str(ROOT / "examples" / "tracked_vehicle.py"), "--end-time", "0.004",
@@ -214,8 +215,9 @@ def test_a_short_run_prints_its_summary_and_writes_the_csv(native_fmus, tmp_path
         capture_output=True, text=True, timeout=900)
     assert run.returncode == 0, run.stderr[-2000:]
     assert "175 FMU instances" in run.stdout and "compiled path" in run.stdout
+    assert "solver own (no exudyn in the time loop)" in run.stdout
     assert re.search(r"s wall and [0-9.]+ s CPU per simulated second", run.stdout)
-    assert re.search(r"exudyn: [0-9.]+ Newton iterations per solve", run.stdout)
+    assert re.search(r"^own: [0-9.]+ Newton iterations per solve", run.stdout, re.M)
     assert "Newton tolerance 2.5" in run.stdout
     assert f"wrote {tmp_path}" in run.stdout
     with open(tmp_path / "bump_3mps.csv") as stream:
@@ -264,7 +266,7 @@ def test_the_compiled_path_gives_the_python_paths_numbers(native_fmus):
     runs, steps = {}, {}
     for path in ("python", "compiled"):
         vehicle, runs[path], _, _ = simulate("bump", 5.0, 0.003, 1e-3, "corrected", None,
-                                             statics, 0.0, fmu_dir, path)
+                                             statics, 0.0, fmu_dir, path, solver="exudyn")
         assert vehicle.compiled == (path == "compiled")
         assert type(vehicle.coupling).__name__ == ("Bank" if vehicle.compiled else "Coupling")
         # every step (3 asked; exudyn may halve one in this start from the laid-out

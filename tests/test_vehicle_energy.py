@@ -120,3 +120,16 @@ def test_a_short_audited_run_keeps_the_loads_the_host_applied(native_fmus):
     whole = window_account(time, power, account, 0, len(time) - 1)
     assert abs(whole["bodies"]) > 100.0
     assert abs(whole["balance"]) < 0.01 * abs(whole["bodies"])
+
+
+def test_the_audit_refuses_a_vehicle_set_to_the_own_solver():
+    """The audit reads the joints' forces of exudyn's last residual: a vehicle set to the
+    own solver (tracked_vehicle.py's default) is refused before anything runs, naming
+    exudyn's."""
+    from types import SimpleNamespace
+
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle.energy import audited_run
+
+    with pytest.raises(ValueError, match=r"run it on exudyn's \(vehicle.solver = 'exudyn'\)"):
+        audited_run(SimpleNamespace(solver="own"), 0.005, 5e-4)

@@ -5,7 +5,8 @@ stored static point over 0.02 s at 3 m/s on the bump. The two take the same Newt
 iterations, and their histories agree far below Newton's tolerance (the same iterates, to
 round-off). The reuse policy (the Newton matrix kept) against full Newton: their
 difference falls with Newton's tolerance. The host's halving of a step whose Newton
-fails, on stand-ins."""
+fails, on stand-ins. The own solver is the default run, and settings it cannot run are
+refused naming --solver exudyn."""
 
 import sys
 
@@ -387,3 +388,33 @@ def test_the_step_lengths_are_exudyns_adaptive_steps():
     length = StepLength(STEP)
     for (asked, taken, effort), (following, _, _) in zip(steps[:-2], steps[1:-1]):
         assert length.next(asked, taken, effort) == pytest.approx(following, rel=1e-12)
+
+
+@pytest.mark.parametrize("argv, named", [
+    (["--path", "python"], "--path python: the own solver runs the coupling's compiled path"),
+    (["--joints", "connectors"], "--joints connectors: the own solver takes the track's joints"),
+    (["--coupling", "predicted"], "--coupling predicted (a scheme the bank does not have)")])
+def test_where_the_own_solver_cannot_run_the_default_run_is_refused_naming_the_flag(
+        argv, named, capsys):
+    """The default run is the own solver's: given settings it cannot run (the Python
+    path, the joints as connectors, a scheme the bank lacks), the command line stops
+    before the build naming the setting and --solver exudyn, and simulate raises naming
+    solver='exudyn', both with own_refusal's reason; the defaults are the own solver's."""
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    import tracked_vehicle
+    from vehicle.model import VehicleError
+
+    with pytest.raises(SystemExit) as stop:
+        tracked_vehicle.main(argv)
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert named in err and "add --solver exudyn" in err
+    given = dict(zip((a.lstrip("-") for a in argv[::2]), argv[1::2]))
+    with pytest.raises(VehicleError, match=r"solver='exudyn' \(--solver exudyn\)"):
+        tracked_vehicle.simulate("bump", 3.0, 0.001, 1e-3, given.get("coupling", "iterated"),
+                                 path=given.get("path", "compiled"),
+                                 joints=given.get("joints", "kernel"))
+    assert tracked_vehicle.own_refusal(given.get("path", "compiled"),
+                                       given.get("coupling", "iterated"),
+                                       given.get("joints", "kernel")) in err
+    assert tracked_vehicle.own_refusal() is None  # the defaults: the own solver runs

@@ -72,6 +72,25 @@ def test_the_study_lets_newton_iterate_longer_than_exudyns_default(study):
     settings = study.newton_limit(100)()
     assert settings.timeIntegration.newton.maxIterations == 100
     assert study.model.run_settings().timeIntegration.newton.maxIterations == 25
+    # the own solver's too, in each of its Newton policies
+    from vehicle.alpha_solver import Settings
+    policies = study.own_newton_limit(100)
+    assert set(policies) == set(study.own_host.NEWTON)
+    for name, policy in policies.items():
+        assert Settings(**policy).max_iterations == 100
+        assert Settings(**study.own_host.NEWTON[name]).max_iterations == 25
+
+
+def test_the_study_runs_on_the_own_solver_by_default(study, capsys):
+    """The default study's runs are the own solver's (tracked_vehicle's default);
+    --solver exudyn reaches them; the Python path is refused on the own solver naming
+    --solver exudyn."""
+    assert study.parse([]).solver == "own"
+    assert study.parse(["--solver", "exudyn"]).solver == "exudyn"
+    with pytest.raises(SystemExit):
+        study.parse(["--path", "python"])
+    err = capsys.readouterr().err
+    assert "--path python" in err and "add --solver exudyn" in err
 
 
 def test_the_study_runs_with_the_solver_settings_it_is_given(study, monkeypatch):
@@ -92,6 +111,7 @@ def test_the_study_runs_with_the_solver_settings_it_is_given(study, monkeypatch)
     for scheme, tolerance, settings in asked:
         assert settings["spectral_radius"] == 0.3
         assert settings["newton_tolerance"] == 0.01
+        assert settings["solver"] == "own"  # the default
     assert [(scheme, tolerance) for scheme, tolerance, _ in asked] == [
         ("corrected", own), ("converged", 1e-6)]
     assert study.Converged.tolerance == own
@@ -124,34 +144,50 @@ class Check:
     def __init__(self, jumps=()):
         self.jumps = jumps
 
-    def __call__(self, mbs, t):
+    def judge(self, t, h, *state):
         return "jumped" if round(t * 1e6) in self.jumps else None
 
 
-class Host:
-    """A stand-in for exudyn's system: the step being solved starts at `start`."""
-
-    def __init__(self, start):
-        self.systemData = self
-        self.start = start
-
-    def GetTime(self, configuration):
-        return self.start
-
-
 def test_same_steps_refuses_a_step_over_a_time_the_followed_run_reached(study):
-    # the followed run halved its steps from 30 to 32 ms
+    # the followed run halved its steps from 30 to 32 ms; a step from s to t is judged as
+    # either host asks (t, its length)
     followed = np.array([0.0, 0.029, 0.030, 0.0305, 0.031, 0.0315, 0.032, 0.033])
-    check = study.same_steps(followed, Check)()
-    assert check(Host(0.028), 0.029) is None
-    assert check(Host(0.030), 0.0305) is None
-    assert check(Host(0.032), 0.033) is None
-    assert "passes over 30.5000 ms" in check(Host(0.030), 0.031)
-    assert "passes over 31.0000 ms" in check(Host(0.0305), 0.032)
+    check = study.same_steps(followed, Check)().judge
+    assert check(0.029, 0.029 - 0.028) is None
+    assert check(0.0305, 0.0305 - 0.030) is None
+    assert check(0.033, 0.033 - 0.032) is None
+    assert "passes over 30.5000 ms" in check(0.031, 0.031 - 0.030)
+    assert "passes over 31.0000 ms" in check(0.032, 0.032 - 0.0305)
     # a shorter step than the followed run's goes (the steps part; the study says where)
-    assert check(Host(0.032), 0.0325) is None
+    assert check(0.0325, 0.0325 - 0.032) is None
     # the step check's own refusal stands where the followed run went on
-    assert study.same_steps(followed, Check)(jumps={29000})(Host(0.028), 0.029) == "jumped"
+    assert study.same_steps(followed, Check)(jumps={29000}).judge(0.029, 0.001) == "jumped"
+
+
+def test_same_steps_reaches_exudyns_hook_through_judge(study):
+    """exudyn's hook (StepCheck.__call__) judges the step from its start in exudyn's
+    data: the same-steps check refuses there too."""
+    state = np.zeros(3)
+
+    class Hook(Check):
+        __call__ = study.step_check.StepCheck.__call__
+
+    class Data:
+        def __init__(self, start):
+            self.start = start
+            self.systemData = self
+
+        def GetTime(self, configuration):
+            return self.start
+
+        def GetODE2Coordinates(self, configuration=None):
+            return state
+
+        GetODE2Coordinates_t = GetODE2Coordinates
+
+    check = study.same_steps(np.array([0.0, 0.030, 0.0305, 0.031]), Hook)()
+    assert "passes over 30.5000 ms" in check(Data(0.030), 0.031)
+    assert check(Data(0.030), 0.0305) is None
 
 
 def test_the_same_steps_flag_reaches_the_converged_run_only(study, monkeypatch):
@@ -159,6 +195,7 @@ def test_the_same_steps_flag_reaches_the_converged_run_only(study, monkeypatch):
     run's times, the default run with the vehicle's own; the check is put back after."""
     own = study.step_check.StepCheck
     monkeypatch.setattr(study.model, "run_settings", study.model.run_settings)
+    monkeypatch.setattr(study.own_host, "NEWTON", study.own_host.NEWTON)
     monkeypatch.setattr(study.model, "static_points", lambda: None)
     checks = {}
     times = np.arange(0, 0.0505, 1e-3)

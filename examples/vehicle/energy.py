@@ -138,7 +138,8 @@ def window_account(time, power, account, a, b):
 
 
 def audited_run(vehicle, end_time, step):
-    """Runs the vehicle (settled) with the audit at every accepted step; returns (time,
+    """Runs the vehicle (settled) with the audit at every accepted step, in exudyn (a
+    vehicle set to another solver is refused); returns (time,
     {class: power}, account, histories, the VehicleError's text or None). `account`, per
     step: the radial bushes' distance, law load, applied force (the joints' kernel's, as
     its last force evaluation left them: the accepted state's) and the FMUs' load and
@@ -147,6 +148,10 @@ def audited_run(vehicle, end_time, step):
     and the linear dampers' loss (Stored)."""
     from .model import VehicleError
 
+    if vehicle.solver != "exudyn":
+        raise ValueError(f"the energy audit reads the joints' forces of exudyn's last "
+                         f"residual, which the {vehicle.solver} solver's Newton does not "
+                         f"evaluate: run it on exudyn's (vehicle.solver = 'exudyn')")
     joints = vehicle.joints
     if joints is None:
         raise ValueError("the energy audit reads the joints' kernel: build the Vehicle "
