@@ -8,12 +8,15 @@ Jacobian's error alone gives near the solution, the spectral radius of S^-1 (S_c
 (S the Newton matrix, S_cd the same with K by central differences), with that error kept
 to a few blocks; and per iteration of the exact matrix's Newton, the part of the next
 residual its linearization did not predict, the contacts' apart from the rest, where it
-is largest and the radial bushes' seat distances there. With --host: the own host's run
-(examples/tracked_vehicle.py --solver own) with the system's Jacobian or with central
-differences as the Newton matrix (both through alpha_solver.PythonSystem, slow), its
-Newton iterations per solve and matrices per step.
+is largest and the radial bushes' seat distances there; with --radial-linear also the
+same step with the radial bushes' laws made linear through zero load at zero distance
+(F = k d along the seats' line, k the law's slope: an experiment, not the model). With
+--host: the own host's run (examples/tracked_vehicle.py --solver own) with the system's
+Jacobian or with central differences as the Newton matrix (both through
+alpha_solver.PythonSystem, slow), its Newton iterations per solve and matrices per step.
 
     python benchmarks/vehicle_newton.py [--speed 5] [--steps 100 200 300 350 400]
+                                        [--radial-linear]
     python benchmarks/vehicle_newton.py --host [--end-time 0.4] [--newton full reuse]
 """
 
@@ -33,7 +36,9 @@ from vehicle import own_host  # noqa: E402
 from vehicle.course import Bump  # noqa: E402
 from vehicle.model import Vehicle  # noqa: E402
 from vehicle.system import VehicleSystem, dense, ordering, outside_band  # noqa: E402
-from vehicle.system_states import run_states  # noqa: E402
+from vehicle.system_states import State, run_states  # noqa: E402
+
+from fmu_components.coupling.bank import LawTable  # noqa: E402
 
 STEP_Q = 1e-8  # m or rad: the central differences' step (the tests' for K)
 MATRICES = ("system", "differences")
@@ -75,6 +80,7 @@ class Probe:
         self.order, self.half, self.border = ordering(system)
         system.keep_band(self.order, self.half, self.border)
         self.iterates, self.matrices, self.solver = [], [], None
+        self.calls = np.zeros(2, dtype=np.int64)  # evaluations, Jacobians
         python = alpha.PythonSystem(system.n, system.m, self._evaluate, self._jacobian)
         self.evaluate, self.jacobian, self.context = (python.evaluate, python.jacobian,
                                                       python.context)
@@ -83,11 +89,12 @@ class Probe:
     def bind(self, solver):
         self.solver = solver
 
-    def times(self):  # as own_host.OwnSystem's (not timed here)
-        return np.zeros(2), np.zeros(2, dtype=np.int64)
+    def times(self):  # as own_host.OwnSystem's (calls counted, not timed)
+        return np.zeros(2), self.calls.copy()
 
     def _evaluate(self, t, q, v):
         system = self.system
+        self.calls[0] += 1
         f, g = (part.copy() for part in system.residual(t, q, v))
         G, _ = system.constraint_jacobian(q)
         if self.record:
@@ -99,6 +106,7 @@ class Probe:
 
     def _jacobian(self, t, q, v):
         system, n = self.system, self.system.n
+        self.calls[1] += 1
         _, H = system.constraint_jacobian(q, self.solver.state()[3])
         D = system.jacobian(t, q, v, 0.0, 1.0).copy()
         if self.matrix == "system":
@@ -204,6 +212,18 @@ def remainders(probe):
     return rows
 
 
+def radial_linear(vehicle, state):
+    """`state` with its radial bushes' laws (bank.c's law_load) linear through zero: the
+    load at the operating point k x* (F* = k x*, k the law's slope there), a constant
+    secant, no kink branch."""
+    rows = VehicleSystem(vehicle, state.laws).joints.arrays["radial_rows"]
+    laws = state.laws.laws.copy()
+    laws[rows, 1] = laws[rows, 2] * laws[rows, 0]
+    laws[rows, 3] = laws[rows, 11] = 0.0
+    return State(state.step, state.t, state.q, state.v, state.multipliers,
+                 LawTable(laws, state.laws.unilateral))
+
+
 def host_run(speed, end_time, policy, matrix):
     """The own host's run with the probe's Newton matrix: its statistics."""
     original = own_host.solver_for
@@ -229,6 +249,7 @@ def main(argv=None):
     parser.add_argument("--speed", type=float, default=5.0)
     parser.add_argument("--steps", type=int, nargs="+", default=[100, 200, 300, 350, 400],
                         help="host steps of the exudyn run whose states are taken")
+    parser.add_argument("--radial-linear", action="store_true")
     parser.add_argument("--host", action="store_true")
     parser.add_argument("--end-time", type=float, default=0.4)
     parser.add_argument("--newton", nargs="+", default=["full", own_host.DEFAULT_NEWTON],
@@ -255,6 +276,10 @@ def main(argv=None):
         for matrix in MATRICES:
             norms, probe = one_step(vehicle, state, matrix, record=matrix == "differences")
             print(f"  K from the {matrix:11s}: " + " ".join(f"{x:.3g}" for x in norms))
+        if args.radial_linear:
+            norms, _ = one_step(vehicle, radial_linear(vehicle, state), "differences")
+            print("  radial laws linear, K from the differences: "
+                  + " ".join(f"{x:.3g}" for x in norms))
         print("  linear rate from the Jacobian's error: " + "; ".join(
             f"{name} {rate:.3g}" for name, rate in rates(vehicle, state).items()))
         print("  the exact matrix's iterations: the next residual's unpredicted part "
