@@ -101,7 +101,9 @@ class Probe:
             lam = self.solver.state()[3]
             self.iterates.append(dict(q=q, v=v, lam=lam, f=f, contacts=contacts_force(system),
                                       G=dense(G, system.m, system.n),
-                                      seats=system.joints.arrays["joint"][:, 2].copy()))
+                                      seats=system.joints.arrays["joint"][:, 2].copy(),
+                                      radial=system.joints.arrays["loads"][
+                                          system.joints.arrays["radial_rows"]].copy()))
         return f, g, (G[:, 0], G[:, 1], G[:, 2])
 
     def _jacobian(self, t, q, v):
@@ -188,8 +190,10 @@ def rates(vehicle, state):
 
 def remainders(probe):
     """Per iteration: |next residual's unpredicted part| (the contacts', the rest's, the
-    multipliers' term's), the largest link move, the row where the part is largest and
-    the radial seat distances of that link's two joints before and after."""
+    multipliers' term's), the largest link move, the radial bushes whose law's load
+    changed sign (the load cut at zero, model.radial_pull: slack or not), the row where
+    the part is largest and the radial seat distances of that link's two joints before
+    and after."""
     system, rows = probe.system, []
     links = len(system.link_index) // 3
     for k, mats in enumerate(probe.matrices[:len(probe.iterates) - 1]):
@@ -206,9 +210,10 @@ def remainders(probe):
             joints = (slot[0] // 3, (slot[0] // 3 + 1) % links)
             seats = ", ".join(f"{a['seats'][j] * 1e6:.0f} -> {b['seats'][j] * 1e6:.0f} um"
                               for j in joints)
+        crossed = int(np.sum((a["radial"] > 0.0) != (b["radial"] > 0.0)))
         rows.append((np.linalg.norm(f), np.linalg.norm(contacts), np.linalg.norm(f - contacts),
                      np.linalg.norm(multipliers), np.abs(dq[system.link_index]).max(),
-                     system.coordinate_name(top), seats))
+                     crossed, system.coordinate_name(top), seats))
     return rows
 
 
@@ -283,11 +288,13 @@ def main(argv=None):
         print("  linear rate from the Jacobian's error: " + "; ".join(
             f"{name} {rate:.3g}" for name, rate in rates(vehicle, state).items()))
         print("  the exact matrix's iterations: the next residual's unpredicted part "
-              "(contacts, rest, multipliers' term), largest link move, where")
-        for k, (total, contacts, rest, multipliers, move, row, seats) in enumerate(
+              "(contacts, rest, multipliers' term), largest link move, radial bushes "
+              "turned slack or loaded, where")
+        for k, (total, contacts, rest, multipliers, move, crossed, row, seats) in enumerate(
                 remainders(probe)):
             print(f"    {k + 1}: {total:.3g} ({contacts:.3g}, {rest:.3g}, {multipliers:.2g}), "
-                  f"{move * 1e3:.3f} mm, {row}{'; seat distances ' + seats if seats else ''}")
+                  f"{move * 1e3:.3f} mm, {crossed}, {row}"
+                  f"{'; seat distances ' + seats if seats else ''}")
     print("load after:", os.getloadavg())
 
 
