@@ -132,6 +132,16 @@ class KernelResults:
             return self._compiled.publish(name)
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
+    def last(self, name):
+        """The last evaluation's result `name` (of PUBLISHED): the C kernel's memory itself
+        where the kernel made it and holds it as an array (no copy: valid until the next
+        evaluation), else the attribute."""
+        if self.__dict__.get("_by_compiled"):
+            view = self._compiled.views.get(name)
+            if view is not None:
+                return view
+        return getattr(self, name)
+
     def adopt(self, t, q, qd, kernel):
         """The last evaluation of `kernel` (a CompiledContacts over these contacts: the own
         solver's system's, whose Newton evaluates it last at the step's solution) as this
