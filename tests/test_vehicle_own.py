@@ -60,8 +60,8 @@ def _watch_adoptions(patch):
 
     adopted, adopt = [], Contacts.adopt
 
-    def watched(self, t, q, qd, kernel):
-        taken = adopt(self, t, q, qd, kernel)
+    def watched(self, t, q, qd, kernel, *given):
+        taken = adopt(self, t, q, qd, kernel, *given)
         views = self._compiled.views
         took = {name: view.copy() for name, view in views.items()}
         self._key = None

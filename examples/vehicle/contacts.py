@@ -566,7 +566,7 @@ class Contacts(KernelResults):
         """Stop with the part and the time where the model no longer holds (at the
         host's current state, or at q, qd: evaluate's; the kinematics alone are read)."""
         self.evaluate(t, q, qd, laws=False)
-        compression = self.compression
+        (compression, _), (gap, _) = self.last("compression"), self.last("tooth_gap")
         # the wheels one by one only where one is out of bounds (the first named)
         if compression.max() > lay.TYRE_RUBBER or compression.min() < -HORN_HEIGHT:
             w = np.flatnonzero((compression > lay.TYRE_RUBBER)
@@ -583,8 +583,8 @@ class Contacts(KernelResults):
                     f"road wheel {w + 1} has left the track (more than {HORN_HEIGHT * 1e3:g} mm "
                     f"above the link beneath, the guide horns' height) at t = {t:.4f} s; "
                     f"lower --speed or choose a gentler course")
-        if self.tooth_gap.max() > 0.3 * lay.LINK_PITCH:
-            j = int(np.argmax(self.tooth_gap))
+        if gap.max() > 0.3 * lay.LINK_PITCH:
+            j = int(np.argmax(gap))
             raise VehicleError(f"the track jumped a sprocket tooth at joint {j} at "
                                f"t = {t:.4f} s; lower --speed or choose a gentler course")
 

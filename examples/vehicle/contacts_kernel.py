@@ -133,29 +133,36 @@ class KernelResults:
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     def last(self, name):
-        """The last evaluation's result `name` (of PUBLISHED): the C kernel's memory itself
-        where the kernel made it and holds it as an array (no copy: valid until the next
-        evaluation), else the attribute."""
+        """The last evaluation's result `name` (of PUBLISHED) and its address: the C
+        kernel's memory itself where the kernel made it and holds it as an array (no copy:
+        valid until the next evaluation; its address taken once), else the attribute (a
+        float array, C order)."""
         if self.__dict__.get("_by_compiled"):
-            view = self._compiled.views.get(name)
+            compiled = self._compiled
+            view = compiled.results.get(name)
             if view is not None:
-                return view
-        return getattr(self, name)
+                return view, compiled.addresses[name]
+        value = np.ascontiguousarray(getattr(self, name), dtype=float)
+        return value, value.ctypes.data
 
-    def adopt(self, t, q, qd, kernel):
+    def adopt(self, t, q, qd, kernel, addresses=None):
         """The last evaluation of `kernel` (a CompiledContacts over these contacts: the own
         solver's system's, whose Newton evaluates it last at the step's solution) as this
         one's at (t, q, qd), the system's coordinates and velocities, where it was made at
         that state (to the bit; the bank's laws have not changed since): `evaluate` there
         has nothing left to do. Its results only: exudyn's Jacobian would evaluate again.
-        True where it was taken."""
+        addresses: q's and qd's, where the caller has them (float arrays, C order). True
+        where it was taken."""
         if self.kernel != "compiled" or self.audit is not None or self.v.settling:
             return False
         if self._adopt_index is None:
             self._adopt_index = np.ascontiguousarray(self.system_index, dtype=np.intc)
-        q = np.ascontiguousarray(q, dtype=float)
-        qd = np.ascontiguousarray(qd, dtype=float)
-        if not self._compiled.adopt(kernel, q, qd, self._adopt_index):
+            self._adopt_index_at = self._adopt_index.ctypes.data
+        if addresses is None:
+            q = np.ascontiguousarray(q, dtype=float)
+            qd = np.ascontiguousarray(qd, dtype=float)
+            addresses = q.ctypes.data, qd.ctypes.data
+        if not self._compiled.adopt(kernel, *addresses, self._adopt_index_at):
             return False
         index = self._coordinates
         self._key = (self._state(t, q[index], qd[index]), self.v.tyre_laws_key())
@@ -196,6 +203,12 @@ class CompiledContacts:
             data = lib.contacts_array(self.handle, index, ctypes.byref(count))
             assert count.value == math.prod(shape), name
             self.views[name] = np.ctypeslib.as_array(data, shape=shape)
+        # what Contacts.last reads: the kernel's arrays and the results that are parts of
+        # them (PUBLISHED's), and their addresses
+        state, rates, link0 = self.views["state"], self.views["rates"], contacts.link0
+        self.results = {**self.views, "hull": state[0], "hull_v": rates[0],
+                        "idler": state[link0 - 1, :2]}
+        self.addresses = {name: view.ctypes.data for name, view in self.results.items()}
         count = ctypes.c_int()
         self.parameters = np.ctypeslib.as_array(
             lib.contacts_array(self.handle, -1, ctypes.byref(count)), shape=(len(PARAMETERS),))
@@ -258,10 +271,9 @@ class CompiledContacts:
     def adopt(self, other, q, qd, index):
         """`other`'s last evaluation (a kernel over the same contacts: the own solver's
         system's) as this kernel's, where it was made at the system's coordinates q and
-        velocities qd (float arrays; `index`: the contacts' coordinates among them, C
-        ints) to the bit: contacts_adopt. True where it was."""
-        if not self.lib.contacts_adopt(self.handle, other.handle, q.ctypes.data,
-                                       qd.ctypes.data, index.ctypes.data):
+        velocities qd (the addresses of float arrays; `index`'s: the contacts' coordinates
+        among them, C ints) to the bit: contacts_adopt. True where it was."""
+        if not self.lib.contacts_adopt(self.handle, other.handle, q, qd, index):
             return False
         self._drop_published()
         return True

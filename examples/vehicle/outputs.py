@@ -21,57 +21,86 @@ def exudyn_state(mbs):
 
 def record(vehicle, t):
     """Vehicle._record: the accepted state at t (the one its host gives,
-    Vehicle.given_state, else exudyn's data) checked (Contacts.check), the step check's
-    start kept (StepCheck.accepted) and its values kept (snapshot)."""
+    Vehicle.given_state, else exudyn's data) checked (Contacts.check, which evaluates the
+    contacts there), the step check's start kept (StepCheck.accepted) and its values
+    written (Records.write)."""
     q, qd, a = vehicle.given_state or exudyn_state(vehicle.mbs)
     vehicle.contacts.check(t, q, qd)
     if vehicle.step_check is not None:
         vehicle.step_check.accepted()
-    vehicle.records.append(snapshot(vehicle, t, q, qd, a))
+    if vehicle.records is None:
+        vehicle.records = Records(vehicle)
+    vehicle.records.write(t, a)
 
 
-def snapshot(vehicle, t, q, qd, a):
-    """What is kept after an accepted step at the state (q, qd, a): the system's values as
-    they are (the contacts' arrays as they are: new at each evaluation; the loads and
-    deflections copies), the histories picked out of them after the run (histories), so
-    that a step's record costs little."""
-    contacts = vehicle.contacts
-    contacts.evaluate(t, q, qd, laws=False)  # nothing here the tyres' laws decide
-    hull = vehicle.mbs.GetNodeODE2Index(vehicle.hull_node)
-    acceleration, angular = a[hull:hull + 2], a[hull + 2]
-    omega = contacts.hull_v[2]
-    theta = contacts.hull[2]
-    seat = (math.cos(theta) * lay.SEAT[0] - math.sin(theta) * lay.SEAT[1],
-            math.sin(theta) * lay.SEAT[0] + math.cos(theta) * lay.SEAT[1])
-    loads, deflections = vehicle.accepted()
-    return {
-        "time": t,
-        "hull_vertical_acceleration": acceleration[1],
-        "hull_pitch_acceleration": angular,
-        "hull_surge_acceleration": acceleration[0],
-        "seat_vertical_acceleration": acceleration[1] + angular * seat[0] - omega ** 2 * seat[1],
-        "hull_x": contacts.hull[0], "hull_y": contacts.hull[1], "hull_pitch": theta,
-        "hull_surge_velocity": contacts.hull_v[0],
-        "loads": loads, "deflections": deflections,
-        "tyre_compression": contacts.compression,
-        "drive_torque": contacts.drive_torque,
-        "ground_load": contacts.ground_load.sum(),
-        "pins": contacts.pins, "wheels": contacts.wheels, "idler": contacts.idler,
-        "seats": contacts.seats, "directions": contacts.u,
-    }
+# the values each accepted step keeps: one number each, in a row of `scalars`
+SCALARS = ("time", "hull_vertical_acceleration", "hull_pitch_acceleration",
+           "hull_surge_acceleration", "seat_vertical_acceleration", "hull_x", "hull_y",
+           "hull_pitch", "hull_surge_velocity", "drive_torque", "ground_load")
+# and arrays: the record's name, the contacts' result it copies
+COPIED = (("tyre_compression", "compression"), ("pins", "pins"), ("wheels", "wheels"),
+          ("idler", "idler"), ("seats", "seats"), ("directions", "u"))
+
+
+class Records:
+    """What is kept after each accepted step: the system's values as they are, in arrays
+    made once (twice as long when full), a row per step, the histories picked out of them
+    after the run (histories), so that a step's record costs little: the contacts' results
+    copied from their last evaluation (the C kernel's memory where it made it:
+    Contacts.last), the bank's loads and deflections."""
+
+    def __init__(self, vehicle, capacity=1024):
+        self.v, self.count = vehicle, 0
+        contacts = vehicle.contacts
+        # the hull's coordinates in the system's vectors (the contacts' first body)
+        self.hull = vehicle.mbs.GetNodeODE2Index(vehicle.hull_node)
+        shapes = {name: np.shape(contacts.last(source)[0]) for name, source in COPIED}
+        n = len(vehicle.components)
+        shapes.update(scalars=(len(SCALARS),), loads=(n,), deflections=(n,))
+        self.arrays = {name: np.empty((capacity,) + shape) for name, shape in shapes.items()}
+
+    def write(self, t, a):
+        """The values at the accepted state at t, whose accelerations are a (the contacts'
+        last evaluation there)."""
+        i, arrays = self.count, self.arrays
+        if i == len(arrays["scalars"]):
+            for name, array in arrays.items():
+                arrays[name] = np.concatenate([array, np.empty_like(array)])
+        contacts, hull = self.v.contacts, self.hull
+        for name, source in COPIED:
+            arrays[name][i] = contacts.last(source)[0]
+        arrays["loads"][i], arrays["deflections"][i] = self.v.accepted()
+        acceleration, angular = a[hull:hull + 2], a[hull + 2]
+        state, rate = contacts.last("hull")[0], contacts.last("hull_v")[0]
+        omega, theta = rate[2], state[2]
+        seat = (math.cos(theta) * lay.SEAT[0] - math.sin(theta) * lay.SEAT[1],
+                math.sin(theta) * lay.SEAT[0] + math.cos(theta) * lay.SEAT[1])
+        arrays["scalars"][i] = (
+            t, acceleration[1], angular, acceleration[0],
+            acceleration[1] + angular * seat[0] - omega ** 2 * seat[1],
+            state[0], state[1], theta, rate[0], contacts.last("drive_torque")[0].flat[0],
+            contacts.last("ground_load")[0].sum())
+        self.count = i + 1
+
+    def stacked(self):
+        """Each value's history (views of the arrays): the scalars by name, the arrays."""
+        count = self.count
+        values = {name: array[:count] for name, array in self.arrays.items()}
+        scalars = values.pop("scalars")
+        values.update({name: scalars[:, k] for k, name in enumerate(SCALARS)})
+        return values
 
 
 def histories(vehicle):
-    """The run's histories from its records (snapshot): each column one step."""
-    records = vehicle.records
-    stacked = {key: np.array([r[key] for r in records]) for key in records[0]}
+    """The run's histories from its records (Records): each column one step."""
+    stacked = vehicle.records.stacked()
     loads, deflections = stacked.pop("loads"), stacked.pop("deflections")
     sprocket_joint, idler_joint = vehicle.contacts.tension_joints(
         np.stack([stacked[key] for key in ("hull_x", "hull_y", "hull_pitch")], axis=1),
         stacked["pins"]).T
     rows = {kind: np.array(rows) for kind, rows in vehicle.rows.items()}
     radial = loads[:, rows["radial"]]
-    steps = np.arange(len(records))
+    steps = np.arange(vehicle.records.count)
     result = {key: stacked[key] for key in ("time", "hull_vertical_acceleration",
                                             "hull_pitch_acceleration",
                                             "hull_surge_acceleration",

@@ -165,7 +165,7 @@ class OwnHost:
         self.own, self.solver = solver_for(vehicle, self.bank, relative_tolerance)
         # the contacts at a pass's solution: the system's Newton evaluated them last there
         contacts, evaluated = vehicle.contacts, self.own.system.contacts
-        self.adopt = lambda t, q, v: contacts.adopt(t, q, v, evaluated)
+        self.adopt = lambda t, q, v, at: contacts.adopt(t, q, v, evaluated, at)
         self.refused = 0  # solutions the step check refused
         self.halved = 0  # steps whose Newton failed
         self.solves = self.newton = 0
@@ -173,6 +173,13 @@ class OwnHost:
         self._start = None  # (q, v) at the step's start, where the step check compares
         # the solver's state (q, v, a) after the last pass, and at the last accepted step
         self._solved = self._accepted = None
+        # the blocks a pass's state is read into (made once), taking turns: a pass writes
+        # into the one that does not hold the accepted state (_free)
+        self._blocks = [np.empty((3, self.solver.nq)) for _ in range(2)]
+        self._blocks_at = [block.ctypes.data for block in self._blocks]
+        self._free = 0
+        self._row = 8 * self.solver.nq  # bytes from a block's q to its v
+        self._accepted_at = None  # the accepted state's q's and v's addresses
         self.seconds = dict(solve=0.0, bank=0.0, deflections=0.0, record=0.0, check=0.0)
 
     # --- the state in exudyn's data (for readers of it after the run, or a record that
@@ -208,17 +215,23 @@ class OwnHost:
     def _pass_end(self, t, t_new, check):
         """The step check's and the bank's verdict on a solved pass: (refused, verdict).
         Its parts' clocks: each part's end the next one's start."""
-        self._solved = q, v, _ = self.solver.state()[:3]
+        free = self._free
+        at = self._blocks_at[free]
+        self._solved = q, v, _ = self.solver.state(self._blocks[free], at)[:3]
         seconds, began = self.seconds, time.process_time()
-        self.adopt(t_new, q, v)  # for the step check, the deflections and the record
+        # for the step check, the deflections and the record: where taken, their
+        # evaluations at the solution have nothing left to do (evaluated)
+        adopted = self.adopt(t_new, q, v, (at, at + self._row))
         if check is not None:
-            jumped = check.judge(t_new, t_new - t, q, v, *self._start)
+            jumped = check.judge(t_new, t_new - t, q, v, *self._start, evaluated=adopted,
+                                 addresses=(at, *self._accepted_at))
             ended = time.process_time()
             seconds["check"] += ended - began
             began = ended
             if jumped is not None:
                 return jumped, None
-        deflections = self.path.deflections(q, v, t_new)
+        deflections = self.path.deflections(q, v, t_new, out=self.bank.deflection,
+                                            evaluated=adopted, q_at=at)
         ended = time.process_time()
         seconds["deflections"] += ended - began
         verdict = self.bank.end_pass(t_new, deflections)
@@ -271,8 +284,14 @@ class OwnHost:
         """Record the accepted step (Bank.accept calls the record: outputs.record, of the
         solver's state, or another that reads exudyn's data, where it is written)."""
         began = time.process_time()
-        # the last pass's solution, or the initial state
+        # the last pass's solution (its block now the accepted one's), or the initial state
+        if self._solved is not None:
+            at = self._blocks_at[self._free]
+            self._free = 1 - self._free
         state = self._accepted = self._solved or self.solver.state()[:3]
+        if self._solved is None:
+            at = state[0].ctypes.data  # the initial state's new block
+        self._accepted_at = (at, at + self._row)
         if self.bank.record == self.v._record:
             self.v.given_state = state
         else:

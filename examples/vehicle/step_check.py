@@ -151,7 +151,7 @@ class StepCheck:
         """Keep the contacts' values at the accepted state (the records evaluated them)."""
         c = self.v.contacts
         for kept, name in zip(self._start, ("compression", "compression_rate", "tooth_gap")):
-            kept[:] = c.last(name)
+            kept[:] = c.last(name)[0]
         self.start = self._start
 
     def __call__(self, mbs, t):
@@ -163,16 +163,20 @@ class StepCheck:
                           None, np.asarray(data.GetODE2Coordinates(start)),
                           np.asarray(data.GetODE2Coordinates_t(start)))
 
-    def judge(self, t, h, q1, v1, q0, v0):
+    def judge(self, t, h, q1, v1, q0, v0, evaluated=False, addresses=None):
         """None where the solution q1, v1 at t (v1 None: exudyn's current velocities) is
         one the step of length h from q0, v0 can reach, else what jumped: the links first
         (links_verdict), then, from the second accepted step on, the contacts evaluated at
-        the solution (contacts_verdict), in step_check.c where it builds."""
+        the solution (contacts_verdict), in step_check.c where it builds. evaluated: the
+        contacts' last evaluation is at the solution with the present laws (the own host's
+        Contacts.adopt took it). addresses: q1's, q0's and v0's where the caller has them
+        (float arrays, C order)."""
         compiled, contacts = self._compiled, self.v.contacts
         if compiled is not None:
-            q1, q0, v0 = (_reals(a) for a in (q1, q0, v0))
-            kind, k, values = compiled.links(h, q1.ctypes.data, q0.ctypes.data,
-                                             v0.ctypes.data)
+            if addresses is None:
+                q1, q0, v0 = (_reals(a) for a in (q1, q0, v0))
+                addresses = q1.ctypes.data, q0.ctypes.data, v0.ctypes.data
+            kind, k, values = compiled.links(h, *addresses)
         else:
             kind, k, values = links_verdict(h, q1, q0, v0, self.links, self.link_count)
         if kind == LINK:
@@ -182,12 +186,12 @@ class StepCheck:
                     f"in one step beyond its motion at the step's start")
         if self.start is None:
             return None
-        contacts.evaluate(t, q1, v1)  # the coupling's deflections use this evaluation
-        compression, gap = (_reals(contacts.last(name)) for name in ("compression",
-                                                                     "tooth_gap"))
+        if not evaluated:  # the coupling's deflections use this evaluation
+            contacts.evaluate(t, q1, v1)
+        (compression, compression_at), (gap, gap_at) = (contacts.last(name) for name in (
+            "compression", "tooth_gap"))
         if compiled is not None:
-            kind, k, values = compiled.contacts(h, compression.ctypes.data, gap.ctypes.data,
-                                                *self._start_at)
+            kind, k, values = compiled.contacts(h, compression_at, gap_at, *self._start_at)
         else:
             kind, k, values = contacts_verdict(h, compression, gap, *self.start)
         if kind == TYRE:
