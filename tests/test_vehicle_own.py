@@ -144,6 +144,29 @@ def test_the_step_check_judges_the_solvers_arrays_as_exudyns_data(runs):
     assert check(vehicle.mbs, t + h) == message
 
 
+def test_the_records_copied_in_c_are_numpys_copies(native_fmus):
+    """Records.write's one C call (records.c, from the contacts' kernel's memory and the
+    bank's arrays) keeps what its numpy copies keep: every history of two own runs, one
+    recorded each way, the same bits."""
+    from tracked_vehicle import simulate
+    from vehicle.model import static_points
+    from vehicle.outputs import Records
+
+    fmu_dir = native_fmus["RoadWheelTyre"].parent
+    statics, results = static_points(fmu_dir), []
+    for numpy_copies in (False, True):
+        with pytest.MonkeyPatch.context() as patch:
+            if numpy_copies:
+                patch.setattr(Records, "_sources", lambda self: None)
+            results.append(simulate("bump", 5.0, 0.005, STEP, statics=statics,
+                                    fmu_dir=fmu_dir, solver="own")[1])
+    gathered, copied = results
+    assert len(gathered["time"]) == 6
+    for key, values in gathered.items():
+        if isinstance(values, np.ndarray):
+            assert values.tobytes() == copied[key].tobytes(), key
+
+
 class _Solver:
     """A solver core whose Newton converges only on steps up to `longest`."""
 
@@ -162,7 +185,7 @@ class _Solver:
     def iterations(self):
         return 1
 
-    def state(self):
+    def state(self, block=None, at=None):
         return (np.zeros(3),) * 3
 
 
@@ -173,7 +196,7 @@ class _Bank:
         passes = 1
 
     def __init__(self):
-        self.begun = []
+        self.begun, self.deflection = [], np.zeros(3)
 
     def begin_step(self, time):
         self.begun.append(time)
@@ -190,8 +213,9 @@ def _host(longest):
 
     host = OwnHost.__new__(OwnHost)
     host.solver, host.bank = _Solver(longest), _Bank()
-    host.adopt = lambda t, q, v: False
-    host.path = type("Path", (), {"deflections": lambda self, q, v, t: q})()
+    host.adopt = lambda t, q, v, at: False
+    host.path = type("Path", (), {"deflections": lambda self, q, v, t, **given: q})()
+    host._blocks, host._blocks_at, host._free, host._row = [None] * 2, [0, 0], 0, 24
     host.refused = host.halved = host.solves = host.newton = 0
     host._start = None
     host.seconds = dict(solve=0.0, bank=0.0, deflections=0.0, record=0.0, check=0.0)

@@ -2,12 +2,14 @@
 ISO 2631-1 Wk-weighted rms acceleration at the driver's seat), CSV columns, plots of the
 time histories and of the track's shape, and an animation."""
 
+import ctypes
 import math
 
 import numpy as np
 from scipy import signal
 from scipy.integrate import cumulative_trapezoid
 
+from . import joints
 from . import layout as lay
 from .bush_shear import seat_offsets, warn_across_track
 
@@ -33,49 +35,93 @@ def record(vehicle, t):
     vehicle.records.write(t, a)
 
 
-# the values each accepted step keeps: one number each, in a row of `scalars`
+# the values each accepted step keeps: one number each, a row's first columns
 SCALARS = ("time", "hull_vertical_acceleration", "hull_pitch_acceleration",
            "hull_surge_acceleration", "seat_vertical_acceleration", "hull_x", "hull_y",
            "hull_pitch", "hull_surge_velocity", "drive_torque", "ground_load")
-# and arrays: the record's name, the contacts' result it copies
+# and arrays, in the row after them: the record's name, the contacts' result it copies
 COPIED = (("tyre_compression", "compression"), ("pins", "pins"), ("wheels", "wheels"),
           ("idler", "idler"), ("seats", "seats"), ("directions", "u"))
 
 
+class _Source(ctypes.Structure):
+    """records.c's RecordSource."""
+    _fields_ = [("data", ctypes.c_void_p), ("index", ctypes.c_void_p),
+                ("count", ctypes.c_int), ("stride", ctypes.c_int)]
+
+
 class Records:
-    """What is kept after each accepted step: the system's values as they are, in arrays
-    made once (twice as long when full), a row per step, the histories picked out of them
-    after the run (histories), so that a step's record costs little: the contacts' results
-    copied from their last evaluation (the C kernel's memory where it made it:
-    Contacts.last), the bank's loads and deflections."""
+    """What is kept after each accepted step: the system's values as they are, a row per
+    step of an array made once (twice as long when full), the histories picked out of it
+    after the run (histories), so that a step's record costs little: the contacts'
+    results copied from their last evaluation, the bank's loads and deflections, in one
+    C call (records.c) where they are in the C kernel's memory and the bank's arrays, else
+    by numpy (the same values)."""
 
     def __init__(self, vehicle, capacity=1024):
         self.v, self.count = vehicle, 0
         contacts = vehicle.contacts
-        # the hull's coordinates in the system's vectors (the contacts' first body)
         self.hull = vehicle.mbs.GetNodeODE2Index(vehicle.hull_node)
-        shapes = {name: np.shape(contacts.last(source)[0]) for name, source in COPIED}
         n = len(vehicle.components)
-        shapes.update(scalars=(len(SCALARS),), loads=(n,), deflections=(n,))
-        self.arrays = {name: np.empty((capacity,) + shape) for name, shape in shapes.items()}
+        self.shapes = {name: np.shape(contacts.last(source)[0]) for name, source in COPIED}
+        self.shapes.update(loads=(n,), deflections=(n,))
+        self.columns, at = {}, len(SCALARS)  # each array's columns in a row
+        for name, shape in self.shapes.items():
+            self.columns[name] = slice(at, at + math.prod(shape))
+            at += math.prod(shape)
+        self._rows(np.empty((capacity, at)))
+        self._gather = None  # (bank, lib, sources, their count) once made
+
+    def _rows(self, rows):
+        self.rows, self._rows_at = rows, rows.ctypes.data
+
+    def _sources(self):
+        """records.c's sources where the contacts' last evaluation is the C kernel's and
+        the bank's arrays are the run's, else None."""
+        contacts, bank = self.v.contacts, self.v.bank
+        if bank is None or not contacts.__dict__.get("_by_compiled"):
+            return None
+        if self._gather is None or self._gather[0] is not bank:
+            lib = joints.library()
+            if lib is None:
+                return None
+            lib.records_gather.argtypes = [ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p]
+            if lib.records_layout() != ctypes.sizeof(_Source):
+                raise RuntimeError("records.c and outputs.py disagree on the layout")
+            cells = np.ascontiguousarray(bank.load_cells, dtype=np.int_)
+            sources = (_Source * (len(COPIED) + 2))(
+                *[_Source(contacts.last(source)[1], None, int(np.prod(self.shapes[name])), 1)
+                  for name, source in COPIED],
+                _Source(bank.outputs.ctypes.data, cells.ctypes.data, bank.n, 1),
+                _Source(bank.accepted.ctypes.data + bank.accepted.itemsize, None, bank.n,
+                        bank.accepted.shape[1]))
+            self._gather = (bank, lib, ctypes.addressof(sources), len(sources), (sources,
+                                                                                cells))
+        return self._gather
 
     def write(self, t, a):
         """The values at the accepted state at t, whose accelerations are a (the contacts'
         last evaluation there)."""
-        i, arrays = self.count, self.arrays
-        if i == len(arrays["scalars"]):
-            for name, array in arrays.items():
-                arrays[name] = np.concatenate([array, np.empty_like(array)])
-        contacts, hull = self.v.contacts, self.hull
-        for name, source in COPIED:
-            arrays[name][i] = contacts.last(source)[0]
-        arrays["loads"][i], arrays["deflections"][i] = self.v.accepted()
+        i = self.count
+        if i == len(self.rows):
+            self._rows(np.concatenate([self.rows, np.empty_like(self.rows)]))
+        row, contacts, hull = self.rows[i], self.v.contacts, self.hull
+        gather = self._sources()
+        if gather is not None:
+            _, lib, sources, count, _ = gather
+            lib.records_gather(count, sources,  # the arrays' columns, after the scalars
+                               self._rows_at + i * row.nbytes + row.itemsize * len(SCALARS))
+        else:
+            columns = self.columns
+            for name, source in COPIED:
+                row[columns[name]] = np.ravel(contacts.last(source)[0])
+            row[columns["loads"]], row[columns["deflections"]] = self.v.accepted()
         acceleration, angular = a[hull:hull + 2], a[hull + 2]
         state, rate = contacts.last("hull")[0], contacts.last("hull_v")[0]
         omega, theta = rate[2], state[2]
         seat = (math.cos(theta) * lay.SEAT[0] - math.sin(theta) * lay.SEAT[1],
                 math.sin(theta) * lay.SEAT[0] + math.cos(theta) * lay.SEAT[1])
-        arrays["scalars"][i] = (
+        row[:len(SCALARS)] = (
             t, acceleration[1], angular, acceleration[0],
             acceleration[1] + angular * seat[0] - omega ** 2 * seat[1],
             state[0], state[1], theta, rate[0], contacts.last("drive_torque")[0].flat[0],
@@ -83,11 +129,11 @@ class Records:
         self.count = i + 1
 
     def stacked(self):
-        """Each value's history (views of the arrays): the scalars by name, the arrays."""
-        count = self.count
-        values = {name: array[:count] for name, array in self.arrays.items()}
-        scalars = values.pop("scalars")
-        values.update({name: scalars[:, k] for k, name in enumerate(SCALARS)})
+        """Each value's history (a new array): the scalars by name, the arrays."""
+        rows = self.rows[:self.count]
+        values = {name: np.ascontiguousarray(rows[:, k]) for k, name in enumerate(SCALARS)}
+        values.update({name: np.ascontiguousarray(rows[:, self.columns[name]]).reshape(
+            (self.count,) + shape) for name, shape in self.shapes.items()})
         return values
 
 

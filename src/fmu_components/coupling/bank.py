@@ -182,7 +182,8 @@ class Bank:
         self._python_laws = 0  # instances whose first law Python makes (_predicted_law)
         for i, component in enumerate(self.components):
             self._hand_over(i, component)
-        self._load_cells = np.arange(n) * MAX_OUTPUTS + self.load_index  # in outputs, flat
+        # each instance's load's cell in `outputs`, flat (loads; a reader of its own)
+        self.load_cells = np.arange(n) * MAX_OUTPUTS + self.load_index
         # a host step's calls: their arguments and results in a block bound once, the
         # functions and the bank's pointer looked up once (a fixed few microseconds of
         # Python per host step, whatever the number of instances)
@@ -431,7 +432,7 @@ class Bank:
     @property
     def loads(self):
         """Each instance's load after the last accepted step."""
-        return self.outputs.take(self._load_cells)
+        return self.outputs.take(self.load_cells)
 
     def costs(self):
         steps, n = max(self.steps, 1), max(self.n, 1)
