@@ -25,15 +25,37 @@ enum { PASSED = 0, LINK = 1, TYRE = 2, TOOTH = 3 };
 
 STEP_CHECK_EXPORT int step_check_layout(void) { return (int)sizeof(StepCheckLayout); }
 
-/* numpy's argmax's pick: where `value` takes over from the best so far (index `best`,
- * -1 before the first) */
-static int takes_over(double value, int best, double largest)
+/* numpy's argmax's pick: the first NaN, else the first largest; index -1 before the first */
+typedef struct {
+    int index;
+    double value;
+} Largest;
+
+static int takes_over(const Largest *largest, double value)
 {
-    if (best < 0)
+    if (largest->index < 0)
         return 1;
-    if (isnan(largest))
+    if (isnan(largest->value))
         return 0;
-    return isnan(value) || value > largest;
+    return isnan(value) || value > largest->value;
+}
+
+static void consider(Largest *largest, int index, double value)
+{
+    if (takes_over(largest, value)) {
+        largest->index = index;
+        largest->value = value;
+    }
+}
+
+/* where the largest is beyond `threshold`: found[0] its index, found[1] its value */
+static int beyond(const Largest *largest, double threshold, double *found)
+{
+    if (largest->index < 0 || !(largest->value > threshold))
+        return 0;
+    found[0] = largest->index;
+    found[1] = largest->value;
+    return 1;
 }
 
 /* PASSED, or LINK with found[0] the link's index, found[1] and found[2] its motion and
@@ -41,8 +63,8 @@ static int takes_over(double value, int best, double largest)
 STEP_CHECK_EXPORT int step_check_links(const StepCheckLayout *c, double h, const double *q1,
                                        const double *q0, const double *v0, double *found)
 {
-    int best = -1;
-    double largest = 0.0, moved_best = 0.0, turned_best = 0.0;
+    Largest largest = {-1, 0.0};
+    double moved_best = 0.0, turned_best = 0.0;
     for (int k = 0; k < c->links; k++) {
         const int *at = c->link_index + 3 * k;
         double dx = q1[at[0]] - q0[at[0]] - h * v0[at[0]];
@@ -51,15 +73,14 @@ STEP_CHECK_EXPORT int step_check_links(const StepCheckLayout *c, double h, const
         double moved = hypot(dx, dy), turned = fabs(dt);
         double a = moved / c->link_jump, b = turned / c->link_turn;
         double ratio = (isnan(a) || isnan(b)) ? NAN : (a >= b ? a : b); /* np.maximum */
-        if (takes_over(ratio, best, largest)) {
-            best = k;
-            largest = ratio;
+        if (takes_over(&largest, ratio)) {
+            consider(&largest, k, ratio);
             moved_best = moved;
             turned_best = turned;
         }
     }
-    if (best >= 0 && (moved_best > c->link_jump || turned_best > c->link_turn)) {
-        found[0] = best;
+    if (largest.index >= 0 && (moved_best > c->link_jump || turned_best > c->link_turn)) {
+        found[0] = largest.index;
         found[1] = moved_best;
         found[2] = turned_best;
         return LINK;
@@ -76,36 +97,17 @@ STEP_CHECK_EXPORT int step_check_contacts(const StepCheckLayout *c, double h,
                                           const double *compression0, const double *rate0,
                                           const double *gap0, double *found)
 {
-    int best = -1;
-    double largest = 0.0;
+    Largest tyre = {-1, 0.0}, tooth = {-1, 0.0};
     for (int w = 0; w < c->wheels; w++) {
+        int both = compression0[w] > -INFINITY && compression1[w] > -INFINITY;
         double jump = fabs(compression1[w] - compression0[w] - h * rate0[w]);
-        if (!(compression0[w] > -INFINITY && compression1[w] > -INFINITY))
-            jump = 0.0;
-        if (takes_over(jump, best, largest)) {
-            best = w;
-            largest = jump;
-        }
+        consider(&tyre, w, both ? jump : 0.0);
     }
-    if (best >= 0 && largest > c->tyre_jump) {
-        found[0] = best;
-        found[1] = largest;
+    if (beyond(&tyre, c->tyre_jump, found))
         return TYRE;
-    }
-    best = -1;
     for (int j = 0; j < c->links; j++) {
-        double skip = fabs(gap1[j] - gap0[j]);
-        if (!(gap0[j] > 0.0 && gap1[j] > 0.0))
-            skip = 0.0;
-        if (takes_over(skip, best, largest)) {
-            best = j;
-            largest = skip;
-        }
+        int both = gap0[j] > 0.0 && gap1[j] > 0.0;
+        consider(&tooth, j, both ? fabs(gap1[j] - gap0[j]) : 0.0);
     }
-    if (best >= 0 && largest > c->tooth_jump) {
-        found[0] = best;
-        found[1] = largest;
-        return TOOTH;
-    }
-    return PASSED;
+    return beyond(&tooth, c->tooth_jump, found) ? TOOTH : PASSED;
 }

@@ -188,8 +188,8 @@ class StepCheck:
             return None
         if not evaluated:  # the coupling's deflections use this evaluation
             contacts.evaluate(t, q1, v1)
-        (compression, compression_at), (gap, gap_at) = (contacts.last(name) for name in (
-            "compression", "tooth_gap"))
+        compression, compression_at = contacts.last("compression")
+        gap, gap_at = contacts.last("tooth_gap")
         if compiled is not None:
             kind, k, values = compiled.contacts(h, compression_at, gap_at, *self._start_at)
         else:

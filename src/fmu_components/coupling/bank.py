@@ -345,12 +345,13 @@ class Bank:
                 self._corrected_law(i, time)
         return _verdict(call.mismatch, repeat=True)
 
-    def accept(self, time, next_time=None):
+    def accept(self, time, next_time=None, record=True):
         """The host accepted its step to `time` (at the time reached: only records).
         `next_time`, the end of the host's next step where it knows it: that step begins
         in the same call (its saves and first laws now; `laws` are then the next step's),
         and begin_step(next_time) has nothing left to do (one C call fewer per host
-        step). Leave it out on the last step."""
+        step). Leave it out on the last step. record False: the host calls `record`
+        itself after this call (to time it apart)."""
         if _thread() != self._owner:
             self._self_check()
         if time > self.time:
@@ -361,7 +362,7 @@ class Bank:
                 self._raise()
             self.time = time
             self.steps += 1
-        if self.record:
+        if self.record and record:
             self.record(time)
 
     def reject(self):
