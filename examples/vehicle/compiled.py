@@ -79,6 +79,11 @@ class CompiledPath:
         self._lib, self._layout_at = lib, ctypes.addressof(self._layout)
         self._out = (None, None)  # the last array given to write into, and its address
 
+    def deflections_entry(self):
+        """(deflections.c's deflections' address, its layout's) for C that writes the
+        deflections itself (own_pass.c): deflections(layout, q, compression, out)."""
+        return ctypes.cast(self._lib.deflections, ctypes.c_void_p).value, self._layout_at
+
     def _compile_forces(self):
         """Each connector's force the symbolic law of its instance (the Python path's
         functions in model.py, term for term), and the speed hold's."""

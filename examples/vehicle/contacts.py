@@ -74,7 +74,7 @@ class Contacts(KernelResults):
         # the sprocket (the tight side driving forward) and the top run meets the idler
         self.tension_points = (geo.arc(2).point(0.0) - geo.cg,
                                geo.arc(4).point(0.0) - geo.cg)
-        self._key, self._adopted, self._adopt_index = None, False, None
+        self._key, self._adopted, self._adoption = None, False, None
         self.audit = None  # an energy.Audit: the power of each class of contact
         # "compiled" (contacts_kernel.py, C) where it builds, else "numpy" (this file's)
         self.kernel, self._compiled, self._by_compiled = "numpy", None, False

@@ -36,9 +36,10 @@ from . import alpha_solver as alpha
 from .alpha_solver import HERE
 from .compiled import bank_in_use
 from .model import VehicleError
+from .step_check import found
 from .system import VehicleSystem, ordering
 
-LIBRARY = Library("vehicle_own", [HERE / "own_system.c"],
+LIBRARY = Library("vehicle_own", [HERE / "own_system.c", HERE / "own_pass.c"],
                   [HERE / "alpha_solver.h", HERE / "bordered_band.h"],
                   "the vehicle's own solver's adapter (own_system.c)", "--solver exudyn")
 CAPACITY = 65536  # triplets of the system's Jacobian
@@ -67,6 +68,14 @@ class _Context(ctypes.Structure):
                [(name, ctypes.c_void_p) for name in ("out", "scratch", "G", "H")] + \
                [("seconds", ctypes.c_double * 2),
                 ("calls", ctypes.c_long * 2)]
+
+
+class _Pass(ctypes.Structure):
+    """own_pass.c's OwnPass."""
+    _fields_ = [(name, ctypes.c_void_p) for name in (
+        "adopt", "contacts", "evaluated", "index", "links", "check_contacts", "check",
+        "compression", "gap", "start_compression", "start_rate", "start_gap", "deflections",
+        "deflections_layout", "deflection")] + [("found", ctypes.c_double * 3)]
 
 
 def _address(function):
@@ -180,6 +189,7 @@ class OwnHost:
         self._free = 0
         self._row = 8 * self.solver.nq  # bytes from a block's q to its v
         self._accepted_at = None  # the accepted state's q's and v's addresses
+        self._one = None  # own_pass.c's pass end, where the run's parts are compiled
         self.seconds = dict(solve=0.0, bank=0.0, deflections=0.0, record=0.0, check=0.0)
 
     # --- the state in exudyn's data (for readers of it after the run, or a record that
@@ -212,13 +222,47 @@ class OwnHost:
                 f"the band and the border of its order (system.py's ordering)")
         return status
 
+    def _one_call(self, check):
+        """own_pass.c's pass end over this run's parts (the contacts' adoption, the step
+        check's C, the deflections' C into the bank's input array): (the library, its
+        OwnPass), or None where one of them is not compiled (_pass_end then calls them one
+        by one)."""
+        contacts = self.v.contacts
+        adoption = contacts.adoption(self.own.system.contacts)
+        entries = (None,) * 6 if check is None else check.entries()
+        if adoption is None or entries is None:
+            return None
+        lib = self.own.lib
+        lib.own_pass_end.argtypes = [ctypes.c_void_p, ctypes.c_double] + \
+            [ctypes.c_void_p] * 4 + [ctypes.c_int]
+        if lib.own_pass_layout() != ctypes.sizeof(_Pass):
+            raise RuntimeError("own_pass.c and own_host.py disagree on the layout")
+        one = _Pass(*adoption, *entries[:3], contacts.kernel_address("compression"),
+                    contacts.kernel_address("tooth_gap"), *entries[3:],
+                    *self.path.deflections_entry(), self.bank.deflection.ctypes.data)
+        return lib, one, ctypes.addressof(one)
+
     def _pass_end(self, t, t_new, check):
         """The step check's and the bank's verdict on a solved pass: (refused, verdict).
-        Its parts' clocks: each part's end the next one's start."""
+        Its parts' clocks: each part's end the next one's start (in one call, own_pass.c:
+        the contacts' adoption, the check and the deflections on the check's)."""
         free = self._free
         at = self._blocks_at[free]
         self._solved = q, v, _ = self.solver.state(self._blocks[free], at)[:3]
         seconds, began = self.seconds, time.process_time()
+        if self._one is not None:
+            lib, one, one_at = self._one
+            kind = lib.own_pass_end(one_at, t_new - t, at, at + self._row, *self._accepted_at,
+                                    check is not None and check.start is not None)
+            if kind >= 0:  # the contacts' evaluation taken
+                self.v.contacts.adopted(t_new, q, v)
+                ended = time.process_time()
+                seconds["check"] += ended - began
+                if kind:
+                    return check.message(*found(kind, one.found), q), None
+                verdict = self.bank.end_pass(t_new, self.bank.deflection)
+                seconds["bank"] += time.process_time() - ended
+                return None, verdict
         # for the step check, the deflections and the record: where taken, their
         # evaluations at the solution have nothing left to do (evaluated)
         adopted = self.adopt(t_new, q, v, (at, at + self._row))
@@ -315,6 +359,7 @@ class OwnHost:
         steps = int(np.ceil((end_time - start_time) / step - 1e-9))
         end = start_time + steps * step
         with bank_in_use(self.v):
+            self._one = self._one_call(check)
             return self._run(start_time, end, step, check)
 
     def _run(self, start_time, end, step, check):

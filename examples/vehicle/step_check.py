@@ -107,18 +107,21 @@ class _CompiledCheck:
         self.found = np.zeros(3)
         self.found_at = self.found.ctypes.data
 
-    def _result(self, kind, values):
-        if kind == PASSED:
-            return PASSED, -1, ()
-        return kind, int(self.found[0]), tuple(float(x) for x in self.found[1:1 + values])
-
     def links(self, h, q1, q0, v0):
-        return self._result(self.lib.step_check_links(self.at, h, q1, q0, v0, self.found_at),
-                            2)
+        return found(self.lib.step_check_links(self.at, h, q1, q0, v0, self.found_at),
+                     self.found)
 
     def contacts(self, h, *arrays):
-        return self._result(self.lib.step_check_contacts(self.at, h, *arrays, self.found_at),
-                            1)
+        return found(self.lib.step_check_contacts(self.at, h, *arrays, self.found_at),
+                     self.found)
+
+
+def found(kind, values):
+    """step_check.c's verdict as links_verdict's and contacts_verdict's: (kind, index,
+    values) from its kind and its array `found`."""
+    if kind == PASSED:
+        return PASSED, -1, ()
+    return kind, int(values[0]), tuple(float(x) for x in values[1:3 if kind == LINK else 2])
 
 
 def _reals(array):
@@ -180,10 +183,7 @@ class StepCheck:
         else:
             kind, k, values = links_verdict(h, q1, q0, v0, self.links, self.link_count)
         if kind == LINK:
-            moved, turned = values
-            return (f"link {k}{self._where(k, q1[self.links][3 * k:3 * k + 3])} moved "
-                    f"{moved * 1e3:.1f} mm and turned {math.degrees(turned):.1f} deg "
-                    f"in one step beyond its motion at the step's start")
+            return self.message(kind, k, values, q1)
         if self.start is None:
             return None
         if not evaluated:  # the coupling's deflections use this evaluation
@@ -194,7 +194,19 @@ class StepCheck:
             kind, k, values = compiled.contacts(h, compression_at, gap_at, *self._start_at)
         else:
             kind, k, values = contacts_verdict(h, compression, gap, *self.start)
+        return self.message(kind, k, values, q1)
+
+    def message(self, kind, k, values, q1):
+        """The verdict (kind, index, values: links_verdict's, contacts_verdict's) on the
+        solution q1 in words, None where nothing jumped (a tyre's: at the contacts' last
+        evaluation, the solution's)."""
+        if kind == LINK:
+            moved, turned = values
+            return (f"link {k}{self._where(k, q1[self.links][3 * k:3 * k + 3])} moved "
+                    f"{moved * 1e3:.1f} mm and turned {math.degrees(turned):.1f} deg "
+                    f"in one step beyond its motion at the step's start")
         if kind == TYRE:
+            compression = self.v.contacts.last("compression")[0]
             return (f"road wheel {k + 1}: its tyre's compression jumped by "
                     f"{values[0] * 1e3:.1f} mm in one step (to "
                     f"{compression[k] * 1e3:.1f} mm)")
@@ -202,6 +214,18 @@ class StepCheck:
             return (f"joint {k}: its pin's gap to its sprocket tooth space jumped by "
                     f"{values[0] * 1e3:.1f} mm in one step (a tooth skipped)")
         return None
+
+    def entries(self):
+        """(step_check_links's address, step_check_contacts's, the layout's, the start's
+        compression's, rate's and tooth gap's) for C that checks itself (own_pass.c,
+        which then gives `message` its verdict: found); None where the check runs its
+        numpy reference."""
+        compiled = self._compiled
+        if compiled is None:
+            return None
+        return (*(ctypes.cast(f, ctypes.c_void_p).value for f in (
+            compiled.lib.step_check_links, compiled.lib.step_check_contacts)),
+            compiled.at, *self._start_at)
 
     def _where(self, k, moved):
         """Which road wheel link k is beneath, where one is within a link's pitch."""
