@@ -8,12 +8,14 @@ Per host step what bank_exudyn.py and exudyn_host.py do in exudyn's hooks:
 Bank.begin_step(t); a solve of the step; the contacts at its solution taken from the
 system's evaluation there, its Newton's last (Contacts.adopt); the step check
 (StepCheck.judge on the solver's q and v); the deflections from the solution
-(CompiledPath.deflections at q);
+(CompiledPath.deflections at q), these three in one C call where they are compiled
+(own_pass.c);
 Bank.end_pass(t, deflections): on REPEAT the step solved again from its start with the
 new laws, Newton from the last pass's solution (exudyn's warm start of the next pass,
 where Newton has an absolute tolerance); a verdict to retry, or a solution the step check
-refuses: the step again at half its length; then Bank.accept(t, next_time), which records
-the step (outputs.record) from the last pass's q, v and a (Vehicle.given_state). A step whose Newton fails is
+refuses: the step again at half its length; then Bank.accept(t, next_time) and the
+bank's record of the step (outputs.record) from the last pass's q, v and a
+(Vehicle.given_state). A step whose Newton fails is
 halved, as exudyn's adaptive step does, down to SHORTEST_STEP of the host step, then the
 run stops naming the time; after RECOVERY good steps the step is doubled again, by
 exudyn's rules (StepLength).
