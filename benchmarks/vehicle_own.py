@@ -98,7 +98,9 @@ def agreement(speeds, end_time, tolerances, statics, solvers):
 
 def split(statistics, cpu):
     """The own run's CPU by part, s: the core's own share is its solve less the system's
-    evaluations and Jacobians; Python the run's CPU less every part."""
+    evaluations and Jacobians; Python the run's CPU less every part. Where a pass's end is
+    one C call (own_pass.c), the step check holds the contacts' adoption and the
+    deflections (deflections 0); the bank holds its accept in C, the records the record."""
     s = statistics
     parts = {"system f, g, G": s["evaluate_s"], "system K, D": s["jacobian_s"],
              "solver core (LU, updates)": s["solve"] - s["evaluate_s"] - s["jacobian_s"],

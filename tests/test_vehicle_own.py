@@ -54,24 +54,23 @@ def runs(native_fmus):
 
 
 def _watch_adoptions(patch):
-    """Each Contacts.adopt of the run (the own host's, at each pass's solution): whether
-    it took the system's evaluation, and whether every array it took equals the contacts'
-    own kernel's evaluation at that state, made afterwards."""
+    """Each adoption of the run (the own host's, at each pass's solution, in C: own_pass.c,
+    or Contacts.adopt; both end in Contacts.adopted, a pass not adopted in neither):
+    whether every array it took equals the contacts' own kernel's evaluation at that
+    state, made afterwards."""
     from vehicle.contacts import Contacts
 
-    adopted, adopt = [], Contacts.adopt
+    adopted, taken = [], Contacts.adopted
 
-    def watched(self, t, q, qd, kernel):
-        taken = adopt(self, t, q, qd, kernel)
+    def watched(self, t, q, qd):
+        taken(self, t, q, qd)
         views = self._compiled.views
         took = {name: view.copy() for name, view in views.items()}
         self._key = None
         self.evaluate(t, q, qd)  # the kernel's own evaluation, the same laws
-        adopted.append((taken, all(took[name].tobytes() == views[name].tobytes()
-                                   for name in views)))
-        return taken
+        adopted.append(all(took[name].tobytes() == views[name].tobytes() for name in views))
 
-    patch.setattr(Contacts, "adopt", watched)
+    patch.setattr(Contacts, "adopted", watched)
     return adopted
 
 
@@ -91,7 +90,7 @@ def test_each_pass_takes_the_contacts_the_systems_newton_evaluated_last(runs):
     contacts' own evaluation there."""
     adopted, own = runs["adopted"], runs["own"][1]
     assert len(adopted) == round(own["passes_per_step"] * own["steps"])
-    assert all(taken and equal for taken, equal in adopted)
+    assert all(adopted)
 
 
 def test_the_own_solver_agrees_with_exudyn_below_newtons_tolerance(runs):
@@ -145,6 +144,35 @@ def test_the_step_check_judges_the_solvers_arrays_as_exudyns_data(runs):
     assert check(vehicle.mbs, t + h) == message
 
 
+def test_the_passes_and_records_in_one_call_are_the_calls_one_by_one(native_fmus):
+    """The own host's pass end in one C call (own_pass.c: the contacts' adoption, the step
+    check, the deflections) and Records.write's (records.c, from the contacts' kernel's
+    memory and the bank's arrays) give what their parts' calls one by one and numpy's
+    copies give: every history of two own runs, one each way, the same bits."""
+    from tracked_vehicle import simulate
+    from vehicle.model import static_points
+    from vehicle.outputs import Records
+    from vehicle.own_host import OwnHost
+
+    fmu_dir = native_fmus["RoadWheelTyre"].parent
+    statics, results = static_points(fmu_dir), []
+    for one_by_one in (False, True):
+        with pytest.MonkeyPatch.context() as patch:
+            if one_by_one:
+                patch.setattr(Records, "_sources", lambda self: None)
+                patch.setattr(OwnHost, "_one_call", lambda self, check: None)
+            vehicle, histories, _, _ = simulate("bump", 5.0, 0.005, STEP, statics=statics,
+                                                fmu_dir=fmu_dir, solver="own")
+        # the calls each run took
+        assert (vehicle.host._one is None) == (vehicle.records._gather is None) == one_by_one
+        results.append(histories)
+    together, one_by_one = results
+    assert len(together["time"]) == 6
+    for key, values in together.items():
+        if isinstance(values, np.ndarray):
+            assert values.tobytes() == one_by_one[key].tobytes(), key
+
+
 class _Solver:
     """A solver core whose Newton converges only on steps up to `longest`."""
 
@@ -163,7 +191,7 @@ class _Solver:
     def iterations(self):
         return 1
 
-    def state(self):
+    def state(self, block=None, at=None):
         return (np.zeros(3),) * 3
 
 
@@ -174,7 +202,7 @@ class _Bank:
         passes = 1
 
     def __init__(self):
-        self.begun = []
+        self.begun, self.deflection = [], np.zeros(3)
 
     def begin_step(self, time):
         self.begun.append(time)
@@ -191,8 +219,10 @@ def _host(longest):
 
     host = OwnHost.__new__(OwnHost)
     host.solver, host.bank = _Solver(longest), _Bank()
-    host.adopt = lambda t, q, v: False
-    host.path = type("Path", (), {"deflections": lambda self, q, v, t: q})()
+    host.adopt = lambda t, q, v, at: False
+    host.path = type("Path", (), {"deflections": lambda self, q, v, t, **given: q})()
+    host._blocks, host._blocks_at, host._free, host._row = [None] * 2, [0, 0], 0, 24
+    host._one = None
     host.refused = host.halved = host.solves = host.newton = 0
     host._start = None
     host.seconds = dict(solve=0.0, bank=0.0, deflections=0.0, record=0.0, check=0.0)

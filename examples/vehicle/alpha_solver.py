@@ -235,6 +235,8 @@ class AlphaSolver:
         # what state() and report() read into, made once (a host reads them every pass)
         self._lam = np.empty(max(self.nm, 1))
         self._ints, self._reals = np.zeros(5, dtype=np.intc), np.zeros(2)
+        self._report_at = (self._ints.ctypes.data, self._reals.ctypes.data)
+        self._lam_at = self._lam.ctypes.data
 
     def __del__(self):
         if getattr(self, "handle", None):
@@ -268,22 +270,26 @@ class AlphaSolver:
             self.time = t_new
         return status
 
-    def state(self):
-        """(q, v, a, lambda): q, v and a rows of one new block, lambda a copy."""
-        block = np.empty((3, self.nq))
-        at, row = block.ctypes.data, 8 * self.nq
-        self.lib.alpha_state(self.handle, at, at + row, at + 2 * row, self._lam.ctypes.data)
+    def state(self, block=None, at=None):
+        """(q, v, a, lambda): q, v and a rows of `block` (3 x nq, C order; `at` its
+        address, where the caller has it) or of a new one, lambda a copy."""
+        if block is None:
+            block = np.empty((3, self.nq))
+        if at is None:
+            at = block.ctypes.data
+        row = 8 * self.nq
+        self.lib.alpha_state(self.handle, at, at + row, at + 2 * row, self._lam_at)
         return block[0], block[1], block[2], self._lam[:self.nm].copy()
 
     def iterations(self):
         """The last step's Newton iterations (report's first)."""
-        self.lib.alpha_report(self.handle, self._ints.ctypes.data, self._reals.ctypes.data)
+        self.lib.alpha_report(self.handle, *self._report_at)
         return int(self._ints[0])
 
     def report(self):
         """The last step's (iterations, Jacobians, residual norm, bad row, bad column)."""
         ints, reals = self._ints, self._reals
-        self.lib.alpha_report(self.handle, ints.ctypes.data, reals.ctypes.data)
+        self.lib.alpha_report(self.handle, *self._report_at)
         return dict(iterations=int(ints[0]), jacobians=int(ints[1]),
                     total_jacobians=int(ints[2]), bad_row=int(ints[3]),
                     bad_col=int(ints[4]), residual=float(reals[0]),

@@ -77,6 +77,12 @@ class CompiledPath:
                                     0.5 * lay.LINK_PITCH, HORN_HEIGHT, self.hull_rotation,
                                     *(a.ctypes.data for a in arrays))
         self._lib, self._layout_at = lib, ctypes.addressof(self._layout)
+        self._out = (None, None)  # the last array given to write into, and its address
+
+    def deflections_entry(self):
+        """(deflections.c's deflections' address, its layout's) for C that writes the
+        deflections itself (own_pass.c): deflections(layout, q, compression, out)."""
+        return ctypes.cast(self._lib.deflections, ctypes.c_void_p).value, self._layout_at
 
     def _compile_forces(self):
         """Each connector's force the symbolic law of its instance (the Python path's
@@ -119,24 +125,36 @@ class CompiledPath:
         states = np.array([read() for _, read in self.v.coupling.entries], dtype=float)
         return states[:, 0], states[:, 1]
 
-    def deflections(self, q=None, qd=None, t=None):
+    def deflections(self, q=None, qd=None, t=None, out=None, evaluated=False, q_at=None):
         """Every instance's deflection from the system's coordinates, or from (q, qd) at t
         where they are given (a host of its own: own_host.py), in one pass (the Python
         path's readers, vectorised): a tyre's compression (contacts.py), a radial bush's
         distance between its pin seats, a torsion bush's and a damper's relative
-        rotation."""
+        rotation. out: the array written (the bank's input, Bank.deflection, which
+        end_pass then takes without a copy), else a new one. evaluated: the contacts'
+        last evaluation is at (t, q, qd) with the present laws (Contacts.adopt took it).
+        q_at: q's address where the caller has it (a float array, C order)."""
         v = self.v
         if q is None:
             data = v.mbs.systemData
             q, t = np.asarray(data.GetODE2Coordinates()), data.GetTime()
-        deflection = np.empty(self.bank.n)
-        v.contacts.evaluate(t, q, qd)
-        compression = np.ascontiguousarray(v.contacts.compression, dtype=float)
-        q = np.ascontiguousarray(q, dtype=float)
+        if out is None:
+            deflection = np.empty(self.bank.n)
+            out_at = deflection.ctypes.data
+        else:
+            deflection = out
+            if self._out[0] is not out:
+                self._out = out, out.ctypes.data
+            out_at = self._out[1]
+        if not evaluated:
+            v.contacts.evaluate(t, q, qd)
+        compression, compression_at = v.contacts.last("compression")  # alive: the call
+        if q_at is None:
+            q = np.ascontiguousarray(q, dtype=float)
+            q_at = q.ctypes.data
         # deflections.c: the joints' seat distances and relative angles as the joints'
         # kernel computes them (model._seat_deflection has the same distance)
-        self._lib.deflections(self._layout_at, q.ctypes.data, compression.ctypes.data,
-                              deflection.ctypes.data)
+        self._lib.deflections(self._layout_at, q_at, compression_at, out_at)
         return deflection
 
 

@@ -74,7 +74,7 @@ class Contacts(KernelResults):
         # the sprocket (the tight side driving forward) and the top run meets the idler
         self.tension_points = (geo.arc(2).point(0.0) - geo.cg,
                                geo.arc(4).point(0.0) - geo.cg)
-        self._key, self._adopted, self._adopt_index = None, False, None
+        self._key, self._adopted, self._adoption = None, False, None
         self.audit = None  # an energy.Audit: the power of each class of contact
         # "compiled" (contacts_kernel.py, C) where it builds, else "numpy" (this file's)
         self.kernel, self._compiled, self._by_compiled = "numpy", None, False
@@ -566,7 +566,7 @@ class Contacts(KernelResults):
         """Stop with the part and the time where the model no longer holds (at the
         host's current state, or at q, qd: evaluate's; the kinematics alone are read)."""
         self.evaluate(t, q, qd, laws=False)
-        compression = self.compression
+        (compression, _), (gap, _) = self.last("compression"), self.last("tooth_gap")
         # the wheels one by one only where one is out of bounds (the first named)
         if compression.max() > lay.TYRE_RUBBER or compression.min() < -HORN_HEIGHT:
             w = np.flatnonzero((compression > lay.TYRE_RUBBER)
@@ -583,8 +583,8 @@ class Contacts(KernelResults):
                     f"road wheel {w + 1} has left the track (more than {HORN_HEIGHT * 1e3:g} mm "
                     f"above the link beneath, the guide horns' height) at t = {t:.4f} s; "
                     f"lower --speed or choose a gentler course")
-        if self.tooth_gap.max() > 0.3 * lay.LINK_PITCH:
-            j = int(np.argmax(self.tooth_gap))
+        if gap.max() > 0.3 * lay.LINK_PITCH:
+            j = int(np.argmax(gap))
             raise VehicleError(f"the track jumped a sprocket tooth at joint {j} at "
                                f"t = {t:.4f} s; lower --speed or choose a gentler course")
 

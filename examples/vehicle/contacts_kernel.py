@@ -132,25 +132,66 @@ class KernelResults:
             return self._compiled.publish(name)
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
-    def adopt(self, t, q, qd, kernel):
+    def last(self, name):
+        """The last evaluation's result `name` (of PUBLISHED) and its address: the C
+        kernel's memory itself where the kernel made it and holds it as an array (no copy:
+        valid until the next evaluation; its address taken once), else the attribute (a
+        float array, C order)."""
+        if self.__dict__.get("_by_compiled"):
+            compiled = self._compiled
+            view = compiled.results.get(name)
+            if view is not None:
+                return view, compiled.addresses[name]
+        value = np.ascontiguousarray(getattr(self, name), dtype=float)
+        return value, value.ctypes.data
+
+    def adopt(self, t, q, qd, kernel, addresses=None):
         """The last evaluation of `kernel` (a CompiledContacts over these contacts: the own
         solver's system's, whose Newton evaluates it last at the step's solution) as this
         one's at (t, q, qd), the system's coordinates and velocities, where it was made at
         that state (to the bit; the bank's laws have not changed since): `evaluate` there
         has nothing left to do. Its results only: exudyn's Jacobian would evaluate again.
-        True where it was taken."""
+        addresses: q's and qd's, where the caller has them (float arrays, C order). True
+        where it was taken."""
+        entry = self.adoption(kernel)
+        if entry is None:
+            return False
+        if addresses is None:
+            q = np.ascontiguousarray(q, dtype=float)
+            qd = np.ascontiguousarray(qd, dtype=float)
+            addresses = q.ctypes.data, qd.ctypes.data
+        if not self._compiled.lib.contacts_adopt(entry[1], entry[2], *addresses, entry[3]):
+            return False
+        self.adopted(t, q, qd)
+        return True
+
+    def adoption(self, kernel):
+        """contacts_adopt's call for `adopt` (or C that adopts itself, own_pass.c, then
+        calls `adopted`): (its address, this object's kernel's handle, `kernel`'s, the
+        contacts' coordinates' index among the system's, C ints); None where this object
+        does not adopt (its numpy kernel, the audit, the settling). Made once per kernel."""
         if self.kernel != "compiled" or self.audit is not None or self.v.settling:
-            return False
-        if self._adopt_index is None:
-            self._adopt_index = np.ascontiguousarray(self.system_index, dtype=np.intc)
-        q = np.ascontiguousarray(q, dtype=float)
-        qd = np.ascontiguousarray(qd, dtype=float)
-        if not self._compiled.adopt(kernel, q, qd, self._adopt_index):
-            return False
+            return None
+        if self._adoption is None or self._adoption[0] is not kernel:
+            index = np.ascontiguousarray(self.system_index, dtype=np.intc)
+            lib, handle = self._compiled.lib, self._compiled.handle
+            self._adoption = (kernel, index, (ctypes.cast(lib.contacts_adopt, ctypes.c_void_p)
+                                              .value, handle, kernel.handle, index.ctypes.data))
+        return self._adoption[2]
+
+    def kernel_address(self, name):
+        """The address of the C kernel's array `name` (ARRAYS'), where its evaluations
+        leave it."""
+        return self._compiled.addresses[name]
+
+    def adopted(self, t, q, qd):
+        """After contacts_adopt took the evaluation at (t, q, qd) into this object's kernel:
+        its results this object's (the last evaluation's attributes dropped) and its key
+        theirs."""
+        self._compiled._drop_published()
         index = self._coordinates
         self._key = (self._state(t, q[index], qd[index]), self.v.tyre_laws_key())
         self._by_compiled, self._adopted = True, True
-        return True
 
     def _state(self, t, q, qd):
         """What an evaluation's results depend on besides the tyres' laws (its key's
@@ -186,6 +227,12 @@ class CompiledContacts:
             data = lib.contacts_array(self.handle, index, ctypes.byref(count))
             assert count.value == math.prod(shape), name
             self.views[name] = np.ctypeslib.as_array(data, shape=shape)
+        # what Contacts.last reads: the kernel's arrays and the results that are parts of
+        # them (PUBLISHED's), and their addresses
+        state, rates, link0 = self.views["state"], self.views["rates"], contacts.link0
+        self.results = {**self.views, "hull": state[0], "hull_v": rates[0],
+                        "idler": state[link0 - 1, :2]}
+        self.addresses = {name: view.ctypes.data for name, view in self.results.items()}
         count = ctypes.c_int()
         self.parameters = np.ctypeslib.as_array(
             lib.contacts_array(self.handle, -1, ctypes.byref(count)), shape=(len(PARAMETERS),))
@@ -244,17 +291,6 @@ class CompiledContacts:
         attributes = self.contacts.__dict__
         for name in self._stale(attributes.keys()):
             del attributes[name]
-
-    def adopt(self, other, q, qd, index):
-        """`other`'s last evaluation (a kernel over the same contacts: the own solver's
-        system's) as this kernel's, where it was made at the system's coordinates q and
-        velocities qd (float arrays; `index`: the contacts' coordinates among them, C
-        ints) to the bit: contacts_adopt. True where it was."""
-        if not self.lib.contacts_adopt(self.handle, other.handle, q.ctypes.data,
-                                       qd.ctypes.data, index.ctypes.data):
-            return False
-        self._drop_published()
-        return True
 
     def _set_tyre_laws(self, bank):
         """Let the kernel call the bank's laws for the tyres' loads (Vehicle.tyre_loads,

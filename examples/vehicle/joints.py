@@ -33,8 +33,10 @@ from .law_slopes import load_and_slopes
 from .model import RADIAL_FADE, radial_fade
 
 HERE = Path(__file__).resolve().parent
-# with the coupling's deflections on the compiled path (deflections.c: compiled.py)
-LIBRARY = Library("vehicle_joints", [HERE / "joints.c", HERE / "deflections.c"], [],
+# with the coupling's deflections on the compiled path (deflections.c: compiled.py), the
+# step check (step_check.c: step_check.py) and the records' copies (records.c: outputs.py)
+LIBRARY = Library("vehicle_joints", [HERE / name for name in ("joints.c", "deflections.c",
+                                                              "step_check.c", "records.c")], [],
                   "the track joints' kernel (joints.c)", "the joints take their numpy kernel")
 KERNELS = ("compiled", "numpy")
 

@@ -239,7 +239,7 @@ class Vehicle:
         mbs = SC.AddSystem()
         self.SC, self.mbs = SC, mbs
         self.coupling = Coupling(coupling, record=self._record)
-        self.records = []
+        self.records = None  # the run's (outputs.Records), made at its first record
         self.settling = False
         self.step_check = None  # the run's (step_check.py), while it runs
         self.given_state = None  # (q, v, a) a host of its own records (own_host.py)

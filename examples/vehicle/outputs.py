@@ -2,12 +2,14 @@
 ISO 2631-1 Wk-weighted rms acceleration at the driver's seat), CSV columns, plots of the
 time histories and of the track's shape, and an animation."""
 
+import ctypes
 import math
 
 import numpy as np
 from scipy import signal
 from scipy.integrate import cumulative_trapezoid
 
+from . import joints
 from . import layout as lay
 from .bush_shear import seat_offsets, warn_across_track
 
@@ -21,57 +23,130 @@ def exudyn_state(mbs):
 
 def record(vehicle, t):
     """Vehicle._record: the accepted state at t (the one its host gives,
-    Vehicle.given_state, else exudyn's data) checked (Contacts.check), the step check's
-    start kept (StepCheck.accepted) and its values kept (snapshot)."""
+    Vehicle.given_state, else exudyn's data) checked (Contacts.check, which evaluates the
+    contacts there), the step check's start kept (StepCheck.accepted) and its values
+    written (Records.write)."""
     q, qd, a = vehicle.given_state or exudyn_state(vehicle.mbs)
     vehicle.contacts.check(t, q, qd)
     if vehicle.step_check is not None:
         vehicle.step_check.accepted()
-    vehicle.records.append(snapshot(vehicle, t, q, qd, a))
+    if vehicle.records is None:
+        vehicle.records = Records(vehicle)
+    vehicle.records.write(t, a)
 
 
-def snapshot(vehicle, t, q, qd, a):
-    """What is kept after an accepted step at the state (q, qd, a): the system's values as
-    they are (the contacts' arrays as they are: new at each evaluation; the loads and
-    deflections copies), the histories picked out of them after the run (histories), so
-    that a step's record costs little."""
-    contacts = vehicle.contacts
-    contacts.evaluate(t, q, qd, laws=False)  # nothing here the tyres' laws decide
-    hull = vehicle.mbs.GetNodeODE2Index(vehicle.hull_node)
-    acceleration, angular = a[hull:hull + 2], a[hull + 2]
-    omega = contacts.hull_v[2]
-    theta = contacts.hull[2]
-    seat = (math.cos(theta) * lay.SEAT[0] - math.sin(theta) * lay.SEAT[1],
-            math.sin(theta) * lay.SEAT[0] + math.cos(theta) * lay.SEAT[1])
-    loads, deflections = vehicle.accepted()
-    return {
-        "time": t,
-        "hull_vertical_acceleration": acceleration[1],
-        "hull_pitch_acceleration": angular,
-        "hull_surge_acceleration": acceleration[0],
-        "seat_vertical_acceleration": acceleration[1] + angular * seat[0] - omega ** 2 * seat[1],
-        "hull_x": contacts.hull[0], "hull_y": contacts.hull[1], "hull_pitch": theta,
-        "hull_surge_velocity": contacts.hull_v[0],
-        "loads": loads, "deflections": deflections,
-        "tyre_compression": contacts.compression,
-        "drive_torque": contacts.drive_torque,
-        "ground_load": contacts.ground_load.sum(),
-        "pins": contacts.pins, "wheels": contacts.wheels, "idler": contacts.idler,
-        "seats": contacts.seats, "directions": contacts.u,
-    }
+# the values each accepted step keeps: one number each, a row's first columns
+SCALARS = ("time", "hull_vertical_acceleration", "hull_pitch_acceleration",
+           "hull_surge_acceleration", "seat_vertical_acceleration", "hull_x", "hull_y",
+           "hull_pitch", "hull_surge_velocity", "drive_torque", "ground_load")
+# and arrays, in the row after them: the record's name, the contacts' result it copies
+COPIED = (("tyre_compression", "compression"), ("pins", "pins"), ("wheels", "wheels"),
+          ("idler", "idler"), ("seats", "seats"), ("directions", "u"))
+
+
+class _Source(ctypes.Structure):
+    """records.c's RecordSource."""
+    _fields_ = [("data", ctypes.c_void_p), ("index", ctypes.c_void_p),
+                ("count", ctypes.c_int), ("stride", ctypes.c_int)]
+
+
+class Records:
+    """What is kept after each accepted step: the system's values as they are, a row per
+    step of an array made once (twice as long when full), the histories picked out of it
+    after the run (histories), so that a step's record costs little: the contacts'
+    results copied from their last evaluation, the bank's loads and deflections, in one
+    C call (records.c) where they are in the C kernel's memory and the bank's arrays, else
+    by numpy (the same values)."""
+
+    def __init__(self, vehicle, capacity=1024):
+        self.v, self.count = vehicle, 0
+        contacts = vehicle.contacts
+        self.hull = vehicle.mbs.GetNodeODE2Index(vehicle.hull_node)
+        n = len(vehicle.components)
+        self.shapes = {name: np.shape(contacts.last(source)[0]) for name, source in COPIED}
+        self.shapes.update(loads=(n,), deflections=(n,))
+        self.columns, at = {}, len(SCALARS)  # each array's columns in a row
+        for name, shape in self.shapes.items():
+            self.columns[name] = slice(at, at + math.prod(shape))
+            at += math.prod(shape)
+        self._rows(np.empty((capacity, at)))
+        self._gather = None  # (bank, lib, sources, their count) once made
+
+    def _rows(self, rows):
+        self.rows, self._rows_at = rows, rows.ctypes.data
+
+    def _sources(self):
+        """records.c's sources where the contacts' last evaluation is the C kernel's and
+        the bank's arrays are the run's, else None."""
+        contacts, bank = self.v.contacts, self.v.bank
+        if bank is None or not contacts.__dict__.get("_by_compiled"):
+            return None
+        if self._gather is None or self._gather[0] is not bank:
+            lib = joints.library()
+            if lib is None:
+                return None
+            lib.records_gather.argtypes = [ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p]
+            if lib.records_layout() != ctypes.sizeof(_Source):
+                raise RuntimeError("records.c and outputs.py disagree on the layout")
+            cells = np.ascontiguousarray(bank.load_cells, dtype=np.int_)
+            sources = (_Source * (len(COPIED) + 2))(
+                *[_Source(contacts.last(source)[1], None, int(np.prod(self.shapes[name])), 1)
+                  for name, source in COPIED],
+                _Source(bank.outputs.ctypes.data, cells.ctypes.data, bank.n, 1),
+                _Source(bank.accepted.ctypes.data + bank.accepted.itemsize, None, bank.n,
+                        bank.accepted.shape[1]))
+            self._gather = (bank, lib, ctypes.addressof(sources), len(sources), (sources,
+                                                                                cells))
+        return self._gather
+
+    def write(self, t, a):
+        """The values at the accepted state at t, whose accelerations are a (the contacts'
+        last evaluation there)."""
+        i = self.count
+        if i == len(self.rows):
+            self._rows(np.concatenate([self.rows, np.empty_like(self.rows)]))
+        row, contacts, hull = self.rows[i], self.v.contacts, self.hull
+        gather = self._sources()
+        if gather is not None:
+            _, lib, sources, count, _ = gather
+            lib.records_gather(count, sources,  # the arrays' columns, after the scalars
+                               self._rows_at + i * row.nbytes + row.itemsize * len(SCALARS))
+        else:
+            columns = self.columns
+            for name, source in COPIED:
+                row[columns[name]] = np.ravel(contacts.last(source)[0])
+            row[columns["loads"]], row[columns["deflections"]] = self.v.accepted()
+        acceleration, angular = a[hull:hull + 2], a[hull + 2]
+        state, rate = contacts.last("hull")[0], contacts.last("hull_v")[0]
+        omega, theta = rate[2], state[2]
+        seat = (math.cos(theta) * lay.SEAT[0] - math.sin(theta) * lay.SEAT[1],
+                math.sin(theta) * lay.SEAT[0] + math.cos(theta) * lay.SEAT[1])
+        row[:len(SCALARS)] = (
+            t, acceleration[1], angular, acceleration[0],
+            acceleration[1] + angular * seat[0] - omega ** 2 * seat[1],
+            state[0], state[1], theta, rate[0], contacts.last("drive_torque")[0].flat[0],
+            contacts.last("ground_load")[0].sum())
+        self.count = i + 1
+
+    def stacked(self):
+        """Each value's history (a new array): the scalars by name, the arrays."""
+        rows = self.rows[:self.count]
+        values = {name: np.ascontiguousarray(rows[:, k]) for k, name in enumerate(SCALARS)}
+        values.update({name: np.ascontiguousarray(rows[:, self.columns[name]]).reshape(
+            (self.count,) + shape) for name, shape in self.shapes.items()})
+        return values
 
 
 def histories(vehicle):
-    """The run's histories from its records (snapshot): each column one step."""
-    records = vehicle.records
-    stacked = {key: np.array([r[key] for r in records]) for key in records[0]}
+    """The run's histories from its records (Records): each column one step."""
+    stacked = vehicle.records.stacked()
     loads, deflections = stacked.pop("loads"), stacked.pop("deflections")
     sprocket_joint, idler_joint = vehicle.contacts.tension_joints(
         np.stack([stacked[key] for key in ("hull_x", "hull_y", "hull_pitch")], axis=1),
         stacked["pins"]).T
     rows = {kind: np.array(rows) for kind, rows in vehicle.rows.items()}
     radial = loads[:, rows["radial"]]
-    steps = np.arange(len(records))
+    steps = np.arange(vehicle.records.count)
     result = {key: stacked[key] for key in ("time", "hull_vertical_acceleration",
                                             "hull_pitch_acceleration",
                                             "hull_surge_acceleration",

@@ -8,12 +8,14 @@ Per host step what bank_exudyn.py and exudyn_host.py do in exudyn's hooks:
 Bank.begin_step(t); a solve of the step; the contacts at its solution taken from the
 system's evaluation there, its Newton's last (Contacts.adopt); the step check
 (StepCheck.judge on the solver's q and v); the deflections from the solution
-(CompiledPath.deflections at q);
+(CompiledPath.deflections at q), these three in one C call where they are compiled
+(own_pass.c);
 Bank.end_pass(t, deflections): on REPEAT the step solved again from its start with the
 new laws, Newton from the last pass's solution (exudyn's warm start of the next pass,
 where Newton has an absolute tolerance); a verdict to retry, or a solution the step check
-refuses: the step again at half its length; then Bank.accept(t, next_time), which records
-the step (outputs.record) from the last pass's q, v and a (Vehicle.given_state). A step whose Newton fails is
+refuses: the step again at half its length; then Bank.accept(t, next_time) and the
+bank's record of the step (outputs.record) from the last pass's q, v and a
+(Vehicle.given_state). A step whose Newton fails is
 halved, as exudyn's adaptive step does, down to SHORTEST_STEP of the host step, then the
 run stops naming the time; after RECOVERY good steps the step is doubled again, by
 exudyn's rules (StepLength).
@@ -36,9 +38,10 @@ from . import alpha_solver as alpha
 from .alpha_solver import HERE
 from .compiled import bank_in_use
 from .model import VehicleError
+from .step_check import found
 from .system import VehicleSystem, ordering
 
-LIBRARY = Library("vehicle_own", [HERE / "own_system.c"],
+LIBRARY = Library("vehicle_own", [HERE / "own_system.c", HERE / "own_pass.c"],
                   [HERE / "alpha_solver.h", HERE / "bordered_band.h"],
                   "the vehicle's own solver's adapter (own_system.c)", "--solver exudyn")
 CAPACITY = 65536  # triplets of the system's Jacobian
@@ -67,6 +70,14 @@ class _Context(ctypes.Structure):
                [(name, ctypes.c_void_p) for name in ("out", "scratch", "G", "H")] + \
                [("seconds", ctypes.c_double * 2),
                 ("calls", ctypes.c_long * 2)]
+
+
+class _Pass(ctypes.Structure):
+    """own_pass.c's OwnPass."""
+    _fields_ = [(name, ctypes.c_void_p) for name in (
+        "adopt", "contacts", "evaluated", "index", "links", "check_contacts", "check",
+        "compression", "gap", "start_compression", "start_rate", "start_gap", "deflections",
+        "deflections_layout", "deflection")] + [("found", ctypes.c_double * 3)]
 
 
 def _address(function):
@@ -165,7 +176,7 @@ class OwnHost:
         self.own, self.solver = solver_for(vehicle, self.bank, relative_tolerance)
         # the contacts at a pass's solution: the system's Newton evaluated them last there
         contacts, evaluated = vehicle.contacts, self.own.system.contacts
-        self.adopt = lambda t, q, v: contacts.adopt(t, q, v, evaluated)
+        self.adopt = lambda t, q, v, at: contacts.adopt(t, q, v, evaluated, at)
         self.refused = 0  # solutions the step check refused
         self.halved = 0  # steps whose Newton failed
         self.solves = self.newton = 0
@@ -173,6 +184,14 @@ class OwnHost:
         self._start = None  # (q, v) at the step's start, where the step check compares
         # the solver's state (q, v, a) after the last pass, and at the last accepted step
         self._solved = self._accepted = None
+        # the blocks a pass's state is read into (made once), taking turns: a pass writes
+        # into the one that does not hold the accepted state (_free)
+        self._blocks = [np.empty((3, self.solver.nq)) for _ in range(2)]
+        self._blocks_at = [block.ctypes.data for block in self._blocks]
+        self._free = 0
+        self._row = 8 * self.solver.nq  # bytes from a block's q to its v
+        self._accepted_at = None  # the accepted state's q's and v's addresses
+        self._one = None  # own_pass.c's pass end, where the run's parts are compiled
         self.seconds = dict(solve=0.0, bank=0.0, deflections=0.0, record=0.0, check=0.0)
 
     # --- the state in exudyn's data (for readers of it after the run, or a record that
@@ -205,20 +224,60 @@ class OwnHost:
                 f"the band and the border of its order (system.py's ordering)")
         return status
 
+    def _one_call(self, check):
+        """own_pass.c's pass end over this run's parts (the contacts' adoption, the step
+        check's C, the deflections' C into the bank's input array): (the library, its
+        OwnPass), or None where one of them is not compiled (_pass_end then calls them one
+        by one)."""
+        contacts = self.v.contacts
+        adoption = contacts.adoption(self.own.system.contacts)
+        entries = (None,) * 6 if check is None else check.entries()
+        if adoption is None or entries is None:
+            return None
+        lib = self.own.lib
+        lib.own_pass_end.argtypes = [ctypes.c_void_p, ctypes.c_double] + \
+            [ctypes.c_void_p] * 4 + [ctypes.c_int]
+        if lib.own_pass_layout() != ctypes.sizeof(_Pass):
+            raise RuntimeError("own_pass.c and own_host.py disagree on the layout")
+        one = _Pass(*adoption, *entries[:3], contacts.kernel_address("compression"),
+                    contacts.kernel_address("tooth_gap"), *entries[3:],
+                    *self.path.deflections_entry(), self.bank.deflection.ctypes.data)
+        return lib, one, ctypes.addressof(one)
+
     def _pass_end(self, t, t_new, check):
         """The step check's and the bank's verdict on a solved pass: (refused, verdict).
-        Its parts' clocks: each part's end the next one's start."""
-        self._solved = q, v, _ = self.solver.state()[:3]
+        Its parts' clocks: each part's end the next one's start (in one call, own_pass.c:
+        the contacts' adoption, the check and the deflections on the check's)."""
+        free = self._free
+        at = self._blocks_at[free]
+        self._solved = q, v, _ = self.solver.state(self._blocks[free], at)[:3]
         seconds, began = self.seconds, time.process_time()
-        self.adopt(t_new, q, v)  # for the step check, the deflections and the record
+        if self._one is not None:
+            lib, one, one_at = self._one
+            kind = lib.own_pass_end(one_at, t_new - t, at, at + self._row, *self._accepted_at,
+                                    check is not None and check.start is not None)
+            if kind >= 0:  # the contacts' evaluation taken
+                self.v.contacts.adopted(t_new, q, v)
+                ended = time.process_time()
+                seconds["check"] += ended - began
+                if kind:
+                    return check.message(*found(kind, one.found), q), None
+                verdict = self.bank.end_pass(t_new, self.bank.deflection)
+                seconds["bank"] += time.process_time() - ended
+                return None, verdict
+        # for the step check, the deflections and the record: where taken, their
+        # evaluations at the solution have nothing left to do (evaluated)
+        adopted = self.adopt(t_new, q, v, (at, at + self._row))
         if check is not None:
-            jumped = check.judge(t_new, t_new - t, q, v, *self._start)
+            jumped = check.judge(t_new, t_new - t, q, v, *self._start, evaluated=adopted,
+                                 addresses=(at, *self._accepted_at))
             ended = time.process_time()
             seconds["check"] += ended - began
             began = ended
             if jumped is not None:
                 return jumped, None
-        deflections = self.path.deflections(q, v, t_new)
+        deflections = self.path.deflections(q, v, t_new, out=self.bank.deflection,
+                                            evaluated=adopted, q_at=at)
         ended = time.process_time()
         seconds["deflections"] += ended - began
         verdict = self.bank.end_pass(t_new, deflections)
@@ -268,20 +327,32 @@ class OwnHost:
             h = 0.5 * h
 
     def _accept(self, t, next_time):
-        """Record the accepted step (Bank.accept calls the record: outputs.record, of the
-        solver's state, or another that reads exudyn's data, where it is written)."""
+        """Accept the step (Bank.accept) and record it (the bank's record, called here to
+        time it apart: outputs.record, of the solver's state, or another that reads
+        exudyn's data, where it is written)."""
         began = time.process_time()
-        # the last pass's solution, or the initial state
+        # the last pass's solution (its block now the accepted one's), or the initial state
+        if self._solved is not None:
+            at = self._blocks_at[self._free]
+            self._free = 1 - self._free
         state = self._accepted = self._solved or self.solver.state()[:3]
+        if self._solved is None:
+            at = state[0].ctypes.data  # the initial state's new block
+        self._accepted_at = (at, at + self._row)
         if self.bank.record == self.v._record:
             self.v.given_state = state
         else:
             self._put(t, state)
+        bank = self.bank
         try:
-            self.bank.accept(t, next_time)
+            bank.accept(t, next_time, record=False)
+            accepted = time.process_time()
+            self.seconds["bank"] += accepted - began
+            if bank.record:
+                bank.record(t)
         finally:
             self.v.given_state = None
-        self.seconds["record"] += time.process_time() - began
+        self.seconds["record"] += time.process_time() - accepted
 
     def run(self, end_time, step, start_time=0.0, check=None):
         """Start the bank at the host's initial state, then integrate to the first multiple
@@ -290,6 +361,7 @@ class OwnHost:
         steps = int(np.ceil((end_time - start_time) / step - 1e-9))
         end = start_time + steps * step
         with bank_in_use(self.v):
+            self._one = self._one_call(check)
             return self._run(start_time, end, step, check)
 
     def _run(self, start_time, end, step, check):

@@ -182,7 +182,8 @@ class Bank:
         self._python_laws = 0  # instances whose first law Python makes (_predicted_law)
         for i, component in enumerate(self.components):
             self._hand_over(i, component)
-        self._load_cells = np.arange(n) * MAX_OUTPUTS + self.load_index  # in outputs, flat
+        # each instance's load's cell in `outputs`, flat (loads; a reader of its own)
+        self.load_cells = np.arange(n) * MAX_OUTPUTS + self.load_index
         # a host step's calls: their arguments and results in a block bound once, the
         # functions and the bank's pointer looked up once (a fixed few microseconds of
         # Python per host step, whatever the number of instances)
@@ -344,12 +345,13 @@ class Bank:
                 self._corrected_law(i, time)
         return _verdict(call.mismatch, repeat=True)
 
-    def accept(self, time, next_time=None):
+    def accept(self, time, next_time=None, record=True):
         """The host accepted its step to `time` (at the time reached: only records).
         `next_time`, the end of the host's next step where it knows it: that step begins
         in the same call (its saves and first laws now; `laws` are then the next step's),
         and begin_step(next_time) has nothing left to do (one C call fewer per host
-        step). Leave it out on the last step."""
+        step). Leave it out on the last step. record False: the host calls `record`
+        itself after this call (to time it apart)."""
         if _thread() != self._owner:
             self._self_check()
         if time > self.time:
@@ -360,7 +362,7 @@ class Bank:
                 self._raise()
             self.time = time
             self.steps += 1
-        if self.record:
+        if self.record and record:
             self.record(time)
 
     def reject(self):
@@ -431,7 +433,7 @@ class Bank:
     @property
     def loads(self):
         """Each instance's load after the last accepted step."""
-        return self.outputs.take(self._load_cells)
+        return self.outputs.take(self.load_cells)
 
     def costs(self):
         steps, n = max(self.steps, 1), max(self.n, 1)
