@@ -36,8 +36,9 @@ typedef void (*LawLoads)(const void *bank, const double *deflection, double *loa
 /* The course under the pins (contacts_course.c): course.py's courses, or heights given
  * (Python writes ARRAY(GROUND)). */
 enum Course { COURSE_GIVEN = -1, COURSE_FLAT, COURSE_BUMP, COURSE_SINE, COURSE_RANDOM };
-/* A course's values, in the order contacts_kernel.course_values gives them. */
-enum CourseValue { C_FRONT, C_START, C_LENGTH, C_SCALE, C_FADE, C_OFFSET, C_COUNT };
+/* A course's values, in the order contacts_kernel.course_values gives them (C_CEILING:
+ * course.py's Course.ceiling). */
+enum CourseValue { C_FRONT, C_START, C_LENGTH, C_SCALE, C_FADE, C_OFFSET, C_CEILING, C_COUNT };
 
 /* One spring for the Jacobian: its 2 x 2 stiffness and damping between up to three
  * members, each a body, how a force at its point loads the body (force_g), how the point

@@ -57,13 +57,19 @@ static double random_height(Contacts *c, double x)
     return (numpy_sum(term, n) - v[C_OFFSET]) * (fade > 1.0 ? 1.0 : fade);
 }
 
-/* ARRAY(GROUND) at the pins, unless the course is given (contacts_forces calls it) */
+/* ARRAY(GROUND) at the pins, unless the course is given (contacts_forces calls it): as
+ * course.py's Course.under, the course's ceiling under a pin whose link's ground face is
+ * above it (it cannot meet the course), the course's height under the others */
 CONTACTS_EXPORT void contacts_course_heights(Contacts *c)
 {
     double *ground = ARRAY(GROUND);
     const double *pins = ARRAY(PINS), *v = c->course_value;
     for (int j = 0; j < c->links && c->course != COURSE_GIVEN; j++) {
         double x = pins[2 * j], u;
+        if (pins[2 * j + 1] - P(LINK_OUTER) > v[C_CEILING]) {
+            ground[j] = v[C_CEILING];
+            continue;
+        }
         switch (c->course) {
         case COURSE_BUMP:
             u = along(c, x);

@@ -235,7 +235,8 @@ class CompiledContacts:
                                 v.tyre_loads(views["compression"], views["compression_rate"])):
             views[name][:] = values
         if given:
-            views["ground"][:] = v.course.height(views["pins"][:, 0])
+            pins = views["pins"]
+            views["ground"][:] = v.course.under(pins[:, 0], pins[:, 1] - lay.LINK_OUTER)
         self.lib.contacts_forces(self.handle, bool(v.settling))
 
     def _drop_published(self):
@@ -341,8 +342,8 @@ def course_values(course):
     it computes them; COURSE_GIVEN for a course of another class."""
     kind = COURSE_KINDS.get(type(course), COURSE_GIVEN)
     none = np.zeros(0)
-    values = [course.front, course.start, 1.0, 0.0, 1.0, 0.0] if kind != COURSE_GIVEN \
-        else [0.0] * 6
+    values = [course.front, course.start, 1.0, 0.0, 1.0, 0.0, course.ceiling()] \
+        if kind != COURSE_GIVEN else [0.0] * 7
     waves = (none, none, none)
     if kind == COURSE_KINDS[Bump]:
         values[2:4] = course.length, 0.5 * course.bump_height
@@ -351,7 +352,7 @@ def course_values(course):
     elif kind == COURSE_KINDS[RandomRoad]:
         waves = tuple(np.ascontiguousarray(a, dtype=float)
                       for a in (course.k, course.amplitude, course.phase))
-        values[4:6] = course.fade, (course.amplitude * np.cos(course.phase)).sum()
+        values[4:6] = course.fade, course.offset()
     return kind, tuple(values), waves
 
 
