@@ -110,6 +110,7 @@ class RandomRoad(Course):
         dn = 0.01
         n = np.arange(1 / 20.0, 1 / shortest, dn)
         self.k = 2 * math.pi * n
+        self.k_step = 2 * math.pi * dn  # the wave numbers are k[0] + j k_step
         self.amplitude = np.sqrt(2 * gd0 * (n / ISO8608_N0) ** -2 * dn)
         self.phase = np.random.default_rng(seed).uniform(0, 2 * math.pi, n.size)
 
@@ -120,15 +121,28 @@ class RandomRoad(Course):
         z = np.zeros_like(flat)
         on = flat > 0.0
         if on.any():
-            z[on] = (self.amplitude[None, :]
-                     * np.cos(np.outer(flat[on], self.k) + self.phase[None, :])).sum(axis=1)
+            # a cos(u k_j + phase) = Re(e^(i u k_j) a e^(i phase)), e^(i u k_j) turned term
+            # by term from e^(i u k[0]) by e^(i u k_step) (one cosine and sine each a point)
+            past = flat[on]
+            turn = np.empty((past.size, self.k.size), dtype=complex)
+            turn.real[:, 0], turn.imag[:, 0] = np.cos(past * self.k[0]), np.sin(past * self.k[0])
+            turn.real[:, 1:] = np.cos(past * self.k_step)[:, None]
+            turn.imag[:, 1:] = np.sin(past * self.k_step)[:, None]
+            np.multiply.accumulate(turn, axis=1, out=turn)
+            cosine, sine = self.weights()
+            z[on] = (turn.real * cosine - turn.imag * sine).sum(axis=1)
             z[on] -= self.offset()  # starts at zero height
             z[on] *= np.minimum(flat[on] / self.fade, 1.0)
         return z.reshape(u.shape) if np.ndim(x) else float(z[0])
 
+    def weights(self):
+        """The terms' weights a cos(phase) and a sin(phase): a cos(u k + phase) is
+        a cos(phase) cos(u k) - a sin(phase) sin(u k)."""
+        return self.amplitude * np.cos(self.phase), self.amplitude * np.sin(self.phase)
+
     def offset(self):
         """The cosines' sum at the start, taken off the height."""
-        return (self.amplitude * np.cos(self.phase)).sum()
+        return self.weights()[0].sum()
 
     def ceiling(self):
         """The cosines' sum is at most the sum of their amplitudes; less the offset, faded
