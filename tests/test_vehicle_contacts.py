@@ -509,3 +509,27 @@ def test_the_courses_heights_are_left_out_only_above_their_ceiling(native_fmus):
         _compare(values)
     finally:
         vehicle.coupling.free()
+
+
+def test_the_random_roads_recurrence_gives_its_sum_of_cosines():
+    """RandomRoad.height turns e^(i u k) from term to term instead of evaluating each
+    cosine: over 200 m of road (every 5 mm, the flat start and the fade-in included, class
+    C and E) its heights equal the sum of the amplitudes times cos(u k + phase), each
+    cosine evaluated and the terms summed exactly (math.fsum), less that sum at the start,
+    to 1e-12 of the largest height."""
+    from vehicle.course import RandomRoad
+
+    for roughness in "CE":
+        road = RandomRoad(3.0, roughness)
+        x = np.linspace(3.5, 203.5, 40_001)
+        u = x - road.front - road.start
+        start = math.fsum(road.amplitude * np.cos(road.phase))
+        expected = np.array([
+            (math.fsum(road.amplitude * np.cos(p * road.k + road.phase)) - start)
+            * min(p / road.fade, 1.0) if p > 0.0 else 0.0 for p in u])
+        got = road.height(x)
+        assert np.all(got[u <= 0.0] == 0.0)
+        worst = np.max(np.abs(got - expected))
+        print(f"class {roughness}: {worst:.2g} m, {worst / np.max(np.abs(expected)):.2g} of "
+              f"the largest height")
+        assert worst <= 1e-12 * np.max(np.abs(expected)), roughness
