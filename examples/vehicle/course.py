@@ -67,7 +67,7 @@ class Bump(Course):
         return np.where(inside, 0.5 * self.bump_height * (1 - np.cos(2 * math.pi * u)), 0.0)
 
     def ceiling(self):
-        return self.bump_height + CEILING_MARGIN
+        return max(self.bump_height, 0.0) + CEILING_MARGIN  # a dip's ceiling the flat
 
     def describe(self):
         return (f"single (1 - cos) bump, {self.bump_height * 1e3:g} mm high and "
@@ -89,7 +89,7 @@ class Sine(Course):
         return np.where(u > 0.0, self.amplitude * (1 - np.cos(2 * math.pi * u)), 0.0)
 
     def ceiling(self):
-        return 2 * self.amplitude + CEILING_MARGIN
+        return max(2 * self.amplitude, 0.0) + CEILING_MARGIN
 
     def describe(self):
         return (f"sine-wave course, {2 * self.amplitude * 1e3:g} mm peak to peak, "
