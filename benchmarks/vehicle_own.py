@@ -1,12 +1,13 @@
 """CPU seconds per simulated second of the tracked vehicle on its own solver against exudyn
 (examples/tracked_vehicle.py --solver own/exudyn; docs/vehicle.md "The vehicle on its own
-solver"): the same run on the bump from the stored static point at each speed, the two
-solvers alternated in rounds, with Newton iterations per solve, solves per step and steps;
-for the own solver where its time goes (its solve's CPU: the system's evaluation, its
-Jacobian, the rest the solver core's LU and updates; the bank's calls; the deflections;
-the records; the step check; the rest Python per step).
+solver"): the same run on the bump (--course: another) from the stored static point at
+each speed, the two solvers alternated in rounds, with Newton iterations per solve, solves
+per step and steps; for the own solver where its time goes (its solve's CPU: the system's
+evaluation, its Jacobian, the rest the solver core's LU and updates; the bank's calls; the
+deflections; the records; the step check; the rest Python per step).
 
     python benchmarks/vehicle_own.py [--speeds 3 5] [--end-time 0.2] [--rounds 2]
+                                     [--course bump]
     python benchmarks/vehicle_own.py --agreement 0.1 0.001 [--speeds 3] [--end-time 0.02]
     python benchmarks/vehicle_own.py --newton full reuse [--no-exudyn] ...
     python benchmarks/vehicle_own.py --couplings corrected iterated ...
@@ -35,6 +36,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "examples"), str(ROOT / "src")]
 
 from tracked_vehicle import DEFAULT_STEP, simulate  # noqa: E402
+from vehicle.course import COURSES  # noqa: E402
 from vehicle.model import COUPLING, static_points  # noqa: E402
 from vehicle.outputs import largest_difference  # noqa: E402
 from vehicle.own_host import DEFAULT_NEWTON, NEWTON  # noqa: E402
@@ -54,10 +56,13 @@ def policy(name):
     return name
 
 
+COURSE = ["bump"]  # the runs' course (--course)
+
+
 def run(speed, end_time, statics, solver, **given):
     """simulate's run of `solver`: "exudyn", or an own solver's Newton policy."""
     own = None if solver == "exudyn" else solver
-    return simulate("bump", speed, end_time, DEFAULT_STEP, statics=statics,
+    return simulate(COURSE[0], speed, end_time, DEFAULT_STEP, statics=statics,
                     solver="own" if own else "exudyn", own_newton=own, **given)
 
 
@@ -123,7 +128,9 @@ def main(argv=None):
                         help="the own solver's policies alone")
     parser.add_argument("--couplings", nargs="+", default=[COUPLING], metavar="SCHEME",
                         help=f"coupling schemes (default {COUPLING})")
+    parser.add_argument("--course", choices=sorted(COURSES), default=COURSE[0])
     args = parser.parse_args(argv)
+    COURSE[0] = args.course
     print(f"load before: {os.getloadavg()}")
     statics = static_points()
     solvers = ([] if args.no_exudyn else ["exudyn"]) + args.newton
@@ -148,7 +155,9 @@ def main(argv=None):
                 if solver != "exudyn":
                     print(f"    {s['jacobians'] / s['steps']:.2f} Newton matrices (Jacobian "
                           f"and factorization) per step; the solves "
-                          f"{s['solve'] / simulated:.2f} s CPU per simulated s", flush=True)
+                          f"{s['solve'] / simulated:.2f} s CPU per simulated s; the system's "
+                          f"f, g, G {1e6 * s['evaluate_s'] / s['evaluations']:.1f} us per "
+                          f"evaluation ({s['evaluations']})", flush=True)
                     parts = split(s, cpu)
                     print("    " + ", ".join(f"{name} {seconds / simulated:.3f}"
                                              for name, seconds in parts.items())

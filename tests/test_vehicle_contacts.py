@@ -291,11 +291,11 @@ def test_the_c_kernels_records_are_its_last_evaluations(native_fmus):
 
 
 def test_the_c_kernel_evaluates_the_courses_as_course_py_does(native_fmus):
-    """The C kernel's course heights (contacts_course.c) equal course.py's heights to
-    1e-12 of their largest (the same bits on this machine) for the flat ground, the
-    bump, the sine course and random roads, over the flat start and the course, and
-    again after a course's attribute is set anew; a course of another class gives its
-    heights from Python."""
+    """The C kernel's course heights (contacts_course.c) under links on the ground equal
+    course.py's heights to 1e-12 of their largest (the same bits on this machine) for the
+    flat ground, the bump, the sine course and random roads, over the flat start and the
+    course, and again after a course's attribute is set anew; a course of another class
+    gives its heights from Python."""
     pytest.importorskip("exudyn", reason=NO_EXUDYN)
     from vehicle.course import Bump, Course, RandomRoad, Sine
 
@@ -319,6 +319,7 @@ def test_the_c_kernel_evaluates_the_courses_as_course_py_does(native_fmus):
                 x = np.sort(np.concatenate([rng.uniform(0.0, 12.0, len(kernel.views["pins"])
                                                         - 20), np.linspace(3.9, 6.1, 20)]))
                 kernel.views["pins"][:, 0] = x
+                kernel.views["pins"][:, 1] = 0.0  # the links' faces below every ceiling
                 given = kernel._set_course(course)
                 assert given == isinstance(course, Ramp)
                 if not given:
@@ -448,3 +449,87 @@ def test_the_c_kernels_reach_bounds_skip_no_pin_in_reach(native_fmus):
                     assert (held > 0.0) == (beyond < 0.0), beyond
     finally:
         vehicle.coupling.free()
+
+
+def _faces_at(ceiling, outer):
+    """Pin heights y whose ground face y - outer (as both kernels compute it) is the last
+    at or below `ceiling` and the first above it."""
+    y = ceiling + outer
+    while y - outer > ceiling:
+        y = np.nextafter(y, -np.inf)
+    while np.nextafter(y, np.inf) - outer <= ceiling:
+        y = np.nextafter(y, np.inf)
+    return y, np.nextafter(y, np.inf)
+
+
+def test_the_courses_heights_are_left_out_only_above_their_ceiling(native_fmus):
+    """A course's ceiling (course.py's Course.ceiling) is above every height of it, sampled
+    every 2 mm over 100 m (the bump, the sine, random roads of class C and E); under a
+    link whose ground face is at the last height at or below the ceiling both kernels give
+    the course's height there (course.py's height), under one whose face is the next
+    float up they give the ceiling, not the height, where the height differs from it;
+    and on a random road under the whole vehicle (its ground run in it, its top run above
+    the ceiling) the C kernel's forces, records and Jacobian equal the numpy kernel's."""
+    exu = pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    from vehicle import layout as lay
+    from vehicle.course import Bump, RandomRoad, Sine
+
+    vehicle = _vehicle(native_fmus)
+    try:
+        kernel = vehicle.contacts._compiled
+        x = np.linspace(3.5, 103.5, 50_001)
+        pins = kernel.views["pins"]
+        for course in (Bump(3.0), Sine(3.0), RandomRoad(3.0), RandomRoad(3.0, "E")):
+            heights, ceiling = course.height(x), course.ceiling()
+            assert np.max(heights) < ceiling, type(course)
+            at, above = _faces_at(ceiling, lay.LINK_OUTER)
+            assert at - lay.LINK_OUTER <= ceiling < above - lay.LINK_OUTER
+            # the pins in pairs over the course's features, one at, one above the ceiling
+            spots = np.linspace(4.1, 4.9, len(pins) // 2)
+            pins[:, 0], pins[:, 1] = np.repeat(spots, 2), np.tile([at, above], len(spots))
+            kernel._set_course(course)
+            kernel.lib.contacts_course_heights(kernel.handle)
+            got = kernel.views["ground"].copy()
+            expected = course.under(pins[:, 0], pins[:, 1] - lay.LINK_OUTER)
+            assert np.array_equal(got, expected), type(course)
+            assert np.array_equal(expected[0::2], course.height(spots)), type(course)
+            assert np.all(expected[1::2] == ceiling)
+            assert np.all(course.height(spots) < ceiling)
+        # the whole vehicle on a random road from 10 m behind it
+        vehicle.course = RandomRoad(-10.0)
+        vehicle.coupling.start(0.0)
+        q0 = np.array(vehicle.mbs.systemData.GetODE2Coordinates(
+            exu.ConfigurationType.Current))[vehicle.contacts.system_index]
+        contacts = vehicle.contacts
+        values = _both_kernels(contacts, q0, np.zeros_like(q0))
+        face = contacts.pins[:, 1] - lay.LINK_OUTER
+        above = face > vehicle.course.ceiling()
+        assert 0 < np.sum(above) < len(face)
+        assert np.any(values["numpy"]["ground_load"] > 0.0)
+        _compare(values)
+    finally:
+        vehicle.coupling.free()
+
+
+def test_the_random_roads_recurrence_gives_its_sum_of_cosines():
+    """RandomRoad.height turns e^(i u k) from term to term instead of evaluating each
+    cosine: over 200 m of road (every 5 mm, the flat start and the fade-in included, class
+    C and E) its heights equal the sum of the amplitudes times cos(u k + phase), each
+    cosine evaluated and the terms summed exactly (math.fsum), less that sum at the start,
+    to 1e-12 of the largest height."""
+    from vehicle.course import RandomRoad
+
+    for roughness in "CE":
+        road = RandomRoad(3.0, roughness)
+        x = np.linspace(3.5, 203.5, 40_001)
+        u = x - road.front - road.start
+        start = math.fsum(road.amplitude * np.cos(road.phase))
+        expected = np.array([
+            (math.fsum(road.amplitude * np.cos(p * road.k + road.phase)) - start)
+            * min(p / road.fade, 1.0) if p > 0.0 else 0.0 for p in u])
+        got = road.height(x)
+        assert np.all(got[u <= 0.0] == 0.0)
+        worst = np.max(np.abs(got - expected))
+        print(f"class {roughness}: {worst:.2g} m, {worst / np.max(np.abs(expected)):.2g} of "
+              f"the largest height")
+        assert worst <= 1e-12 * np.max(np.abs(expected)), roughness

@@ -36,8 +36,12 @@ typedef void (*LawLoads)(const void *bank, const double *deflection, double *loa
 /* The course under the pins (contacts_course.c): course.py's courses, or heights given
  * (Python writes ARRAY(GROUND)). */
 enum Course { COURSE_GIVEN = -1, COURSE_FLAT, COURSE_BUMP, COURSE_SINE, COURSE_RANDOM };
-/* A course's values, in the order contacts_kernel.course_values gives them. */
-enum CourseValue { C_FRONT, C_START, C_LENGTH, C_SCALE, C_FADE, C_OFFSET, C_COUNT };
+/* A course's values, in the order contacts_kernel.course_values gives them (C_CEILING:
+ * course.py's Course.ceiling; C_WAVE, C_WAVE_STEP: a random road's k[0] and k_step). */
+enum CourseValue {
+    C_FRONT, C_START, C_LENGTH, C_SCALE, C_FADE, C_OFFSET, C_CEILING, C_WAVE, C_WAVE_STEP,
+    C_COUNT
+};
 
 /* One spring for the Jacobian: its 2 x 2 stiffness and damping between up to three
  * members, each a body, how a force at its point loads the body (force_g), how the point
@@ -85,8 +89,8 @@ typedef struct {
     /* the tyres' Jacobian: p.D's entries (3 per wheel, 9 per pair) */
     int *entry_wheel, *entry_coordinate;
     double *entry_value;
-    /* the course: its kind, values, and a random road's terms (wave numbers, amplitudes,
-     * phases, then room for the terms of one pin: 4 x course_terms) */
+    /* the course: its kind, values, and a random road's terms (weights of the cosines
+     * and of the sines, then room for the terms of one pin: 3 x course_terms) */
     int course, course_terms;
     double course_value[C_COUNT];
     double *course_term;

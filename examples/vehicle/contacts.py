@@ -409,8 +409,8 @@ class Contacts(KernelResults):
             return k[:, None, None] * outer, c[:, None, None] * outer
 
         # ground (frictionless, vertical)
-        ground = v.course.height(self.pins[:, 0])
-        depth = ground - (self.pins[:, 1] - lay.LINK_OUTER)
+        face = self.pins[:, 1] - lay.LINK_OUTER  # the links' ground faces' heights
+        depth = v.course.under(self.pins[:, 0], face) - face
         load, stiffness, damping = _penalty(depth, -self.pins_v[:, 1], GROUND_STIFFNESS,
                                             GROUND_DAMPING)
         pin[:, 1] += load

@@ -88,7 +88,7 @@ def declare(lib):
     lib.contacts_jacobian.argtypes = [handle, ctypes.c_double, ctypes.c_double,
                                       pointer, ctypes.c_long]
     lib.contacts_set_course.argtypes = [handle, ctypes.c_int, pointer, ctypes.c_int,
-                                        pointer, pointer, pointer]
+                                        pointer, pointer]
     lib.contacts_course_heights.argtypes = [handle]
     lib.contacts_set_tyre_laws.argtypes = [handle, handle, handle, ctypes.c_int,
                                            ctypes.POINTER(ctypes.c_int)]
@@ -282,7 +282,8 @@ class CompiledContacts:
                                 v.tyre_loads(views["compression"], views["compression_rate"])):
             views[name][:] = values
         if given:
-            views["ground"][:] = v.course.height(views["pins"][:, 0])
+            pins = views["pins"]
+            views["ground"][:] = v.course.under(pins[:, 0], pins[:, 1] - lay.LINK_OUTER)
         self.lib.contacts_forces(self.handle, bool(v.settling))
 
     def _drop_published(self):
@@ -372,22 +373,22 @@ class CompiledContacts:
 
 
 def course_values(course):
-    """(kind, values, (k, amplitude, phase)) of `course` for contacts_set_course
+    """(kind, values, (cosine weights, sine weights)) of `course` for contacts_set_course
     (contacts.h's enum Course and CourseValue): the numbers its height takes, computed as
     it computes them; COURSE_GIVEN for a course of another class."""
     kind = COURSE_KINDS.get(type(course), COURSE_GIVEN)
     none = np.zeros(0)
-    values = [course.front, course.start, 1.0, 0.0, 1.0, 0.0] if kind != COURSE_GIVEN \
-        else [0.0] * 6
-    waves = (none, none, none)
+    values = [course.front, course.start, 1.0, 0.0, 1.0, 0.0, course.ceiling(), 0.0, 0.0] \
+        if kind != COURSE_GIVEN else [0.0] * 9
+    waves = (none, none)
     if kind == COURSE_KINDS[Bump]:
         values[2:4] = course.length, 0.5 * course.bump_height
     elif kind == COURSE_KINDS[Sine]:
         values[2:4] = course.wavelength, course.amplitude
     elif kind == COURSE_KINDS[RandomRoad]:
-        waves = tuple(np.ascontiguousarray(a, dtype=float)
-                      for a in (course.k, course.amplitude, course.phase))
-        values[4:6] = course.fade, (course.amplitude * np.cos(course.phase)).sum()
+        waves = tuple(np.ascontiguousarray(a, dtype=float) for a in course.weights())
+        values[4:6] = course.fade, course.offset()
+        values[7:9] = course.k[0], course.k_step
     return kind, tuple(values), waves
 
 
