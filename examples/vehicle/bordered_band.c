@@ -26,6 +26,7 @@ EXPORT void bb_free(bb_matrix *m)
     free(m->order); free(m->position); free(m->band); free(m->upper); free(m->lower);
     free(m->corner); free(m->pivot); free(m->scale); free(m->work);
     free(m->first); free(m->by_first); free(m->lower_count); free(m->lower_index);
+    free(m->places);
     free(m);
 }
 
@@ -84,38 +85,77 @@ EXPORT void bb_zero(bb_matrix *m)
         memset(m->lower, 0, sizeof(double) * (size_t)m->nb * m->nd);
     }
     memset(m->corner, 0, sizeof(double) * (size_t)m->nd * m->nd);
+    m->added = 0;
+}
+
+/* Where (row, col), both unknowns, is added (lower: 1 if in `lower`); NULL where the
+   pattern has no place */
+static double *place_of(const bb_matrix *m, int row, int col, int *lower)
+{
+    *lower = 0;
+    if (row < 0 || row >= m->n || col < 0 || col >= m->n) return NULL;
+    int i = m->position[row], j = m->position[col], nb = m->nb, nd = m->nd;
+    if (i < nb && j < nb) return abs(i - j) > m->w ? NULL : &BAND(m, i, j);
+    if (i < nb) return m->upper + (size_t)i * nd + (j - nb);
+    if (j < nb) {
+        *lower = 1;
+        return m->lower + (size_t)(i - nb) * nb + j;
+    }
+    return m->corner + (size_t)(i - nb) * nd + (j - nb);
+}
+
+/* the place of the entry added `added`-th since bb_zero: the last assembly's where its
+   (row, col) is the same, else found (and kept, where there is room) */
+static inline const struct bb_place *place(bb_matrix *m, int row, int col)
+{
+    int k = m->added;
+    if (k < m->places_capacity) {
+        struct bb_place *p = m->places + k;
+        if (p->at == NULL || p->row != row || p->col != col) {
+            p->row = row; p->col = col;
+            p->at = place_of(m, row, col, &p->lower);
+        }
+        m->added++;
+        return p;
+    }
+    if (k == m->places_capacity) {  /* more room: twice as much */
+        int capacity = 2 * k > 1024 ? 2 * k : 1024;
+        struct bb_place *more = realloc(m->places, sizeof *more * (size_t)capacity);
+        if (more) {
+            for (int q = k; q < capacity; q++) more[q].at = NULL;
+            m->places = more;
+            m->places_capacity = capacity;
+            return place(m, row, col);
+        }
+    }
+    return NULL;  /* no room: found each time */
 }
 
 /* Add `value` at (row, col), both unknowns; BB_OUTSIDE where the pattern has no place. */
-EXPORT int bb_add(bb_matrix *m, int row, int col, double value)
+static inline int add(bb_matrix *m, int row, int col, double value)
 {
-    if (row < 0 || row >= m->n || col < 0 || col >= m->n) {
+    const struct bb_place *p = place(m, row, col);
+    int lower = 0;
+    double *at = p ? p->at : place_of(m, row, col, &lower);
+    if (at == NULL) {
         m->bad_row = row; m->bad_col = col;
         return BB_OUTSIDE;
     }
-    int i = m->position[row], j = m->position[col], nb = m->nb, nd = m->nd;
-    if (i < nb && j < nb) {
-        if (abs(i - j) > m->w) {
-            m->bad_row = row; m->bad_col = col;
-            return BB_OUTSIDE;
-        }
-        BAND(m, i, j) += value;
-    } else if (i < nb) {
-        m->upper[(size_t)i * nd + (j - nb)] += value;
-    } else if (j < nb) {
-        m->lower[(size_t)(i - nb) * nb + j] += value;
-        m->lower_listed = 0;
-    } else {
-        m->corner[(size_t)(i - nb) * nd + (j - nb)] += value;
-    }
+    *at += value;
+    if (p ? p->lower : lower) m->lower_listed = 0;
     return BB_OK;
+}
+
+EXPORT int bb_add(bb_matrix *m, int row, int col, double value)
+{
+    return add(m, row, col, value);
 }
 
 EXPORT int bb_add_many(bb_matrix *m, int count, const int *row, const int *col,
                        const double *value, double factor)
 {
     for (int k = 0; k < count; k++) {
-        int status = bb_add(m, row[k], col[k], factor * value[k]);
+        int status = add(m, row[k], col[k], factor * value[k]);
         if (status != BB_OK) return status;
     }
     return BB_OK;
