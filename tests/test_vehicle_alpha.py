@@ -68,6 +68,43 @@ def test_an_entry_outside_the_structure_is_named():
     lu.factorize()
 
 
+def test_an_assembly_that_repeats_or_changes_the_last_ones_entries_gives_the_same_matrix():
+    """The places of the last assembly's entries reused (bordered_band.c): assemblies with
+    the same sequence of (row, col), one whose middle, tail or length changed, an entry
+    outside the structure where the last one had an entry inside, each factorized and
+    solved with the same bits as a matrix assembled once, fresh."""
+    rng = np.random.default_rng(11)
+    n, n_band, w, saddle = 278, 237, 5, 14
+    order, matrix = bordered_matrix(rng, n, n_band, w, saddle)
+    rows, cols = np.nonzero(matrix)
+    kept = alpha.BorderedBand(n, order, n_band, w)
+    rhs = rng.normal(size=n)
+    third = len(rows) // 3
+    middle = np.r_[np.arange(third), third + rng.permutation(len(rows) - third)]
+    sequences = [np.arange(len(rows)), np.arange(len(rows)), middle,
+                 np.r_[np.arange(len(rows)), np.arange(len(rows) // 2)],  # longer: repeated
+                 np.arange(len(rows))[::-1], np.arange(len(rows))]
+    for sequence in sequences:
+        scale = rng.uniform(0.5, 2.0)
+        r, c = rows[sequence], cols[sequence]
+        values = scale * matrix[r, c] / np.bincount(sequence)[sequence]  # repeats add
+        kept.set(r, c, values)
+        kept.factorize()
+        fresh = alpha.BorderedBand(n, order, n_band, w)
+        fresh.set(r, c, values)
+        fresh.factorize()
+        x = kept.solve(rhs)
+        assert np.array_equal(x, fresh.solve(rhs))
+        expected = np.linalg.solve(np.bincount(r * n + c, values, n * n).reshape(n, n), rhs)
+        assert np.abs(x - expected).max() <= 1e-11 * np.abs(expected).max()
+    row, col = order[2], order[9]  # band positions 2 and 9: outside half bandwidth 5
+    r, c = rows.copy(), cols.copy()
+    r[len(r) // 2], c[len(c) // 2] = row, col  # where the last assembly had an entry inside
+    with pytest.raises(alpha.StructureError, match=f"entry \\({row}, {col}\\) outside") as e:
+        kept.set(r, c, matrix[rows, cols])
+    assert (e.value.row, e.value.col) == (row, col)
+
+
 def test_a_band_pivot_that_is_not_positive_is_named():
     rng = np.random.default_rng(6)
     order, matrix = bordered_matrix(rng, 30, 22, 3, 3)

@@ -104,37 +104,31 @@ static double *place_of(const bb_matrix *m, int row, int col, int *lower)
     return m->corner + (size_t)(i - nb) * nd + (j - nb);
 }
 
-/* the place of the entry added `added`-th since bb_zero: the last assembly's where its
-   (row, col) is the same, else found (and kept, where there is room) */
-static inline const struct bb_place *place(bb_matrix *m, int row, int col)
+/* the place of the entry added `added`-th since bb_zero, (row, col) found (and kept,
+   where there is room: more, twice as much, as needed) */
+static const struct bb_place *new_place(bb_matrix *m, int row, int col)
 {
     int k = m->added;
-    if (k < m->places_capacity) {
-        struct bb_place *p = m->places + k;
-        if (p->at == NULL || p->row != row || p->col != col) {
-            p->row = row; p->col = col;
-            p->at = place_of(m, row, col, &p->lower);
-        }
-        m->added++;
-        return p;
-    }
-    if (k == m->places_capacity) {  /* more room: twice as much */
+    if (k >= m->places_capacity) {
         int capacity = 2 * k > 1024 ? 2 * k : 1024;
         struct bb_place *more = realloc(m->places, sizeof *more * (size_t)capacity);
-        if (more) {
-            for (int q = k; q < capacity; q++) more[q].at = NULL;
-            m->places = more;
-            m->places_capacity = capacity;
-            return place(m, row, col);
-        }
+        if (!more) return NULL;  /* no room: found each time */
+        for (int q = m->places_capacity; q < capacity; q++) more[q].at = NULL;
+        m->places = more;
+        m->places_capacity = capacity;
     }
-    return NULL;  /* no room: found each time */
+    struct bb_place *p = m->places + k;
+    p->row = row; p->col = col;
+    p->at = place_of(m, row, col, &p->lower);
+    m->added++;
+    return p;
 }
 
-/* Add `value` at (row, col), both unknowns; BB_OUTSIDE where the pattern has no place. */
-static inline int add(bb_matrix *m, int row, int col, double value)
+/* Add `value` at (row, col), both unknowns, where the last assembly's entry of the same
+   rank had another (row, col) or none; BB_OUTSIDE where the pattern has no place. */
+static int add_new(bb_matrix *m, int row, int col, double value)
 {
-    const struct bb_place *p = place(m, row, col);
+    const struct bb_place *p = new_place(m, row, col);
     int lower = 0;
     double *at = p ? p->at : place_of(m, row, col, &lower);
     if (at == NULL) {
@@ -148,16 +142,35 @@ static inline int add(bb_matrix *m, int row, int col, double value)
 
 EXPORT int bb_add(bb_matrix *m, int row, int col, double value)
 {
-    return add(m, row, col, value);
+    return bb_add_many(m, 1, &row, &col, &value, 1.0);
 }
 
+/* value[k] times factor at (row[k], col[k]): the places of the last assembly's entries of
+   the same rank where their (row, col) is the same (the band or border told once) */
 EXPORT int bb_add_many(bb_matrix *m, int count, const int *row, const int *col,
                        const double *value, double factor)
 {
-    for (int k = 0; k < count; k++) {
-        int status = add(m, row[k], col[k], factor * value[k]);
-        if (status != BB_OK) return status;
+    int k = 0, lower = 0;
+    while (k < count) {
+        const struct bb_place *p = m->places + m->added;
+        int same = m->places_capacity - m->added < count - k
+                   ? m->places_capacity - m->added : count - k;
+        for (; same > 0 && p->at != NULL && p->row == row[k] && p->col == col[k]; same--) {
+            *p->at += factor * value[k];
+            lower |= p->lower;
+            p++; k++;
+        }
+        m->added = (int)(p - m->places);
+        if (k < count) {
+            int status = add_new(m, row[k], col[k], factor * value[k]);
+            if (status != BB_OK) {
+                if (lower) m->lower_listed = 0;
+                return status;
+            }
+            k++;
+        }
     }
+    if (lower) m->lower_listed = 0;
     return BB_OK;
 }
 
