@@ -83,7 +83,9 @@ def test_an_assembly_that_repeats_or_changes_the_last_ones_entries_gives_the_sam
     middle = np.r_[np.arange(third), third + rng.permutation(len(rows) - third)]
     sequences = [np.arange(len(rows)), np.arange(len(rows)), middle,
                  np.r_[np.arange(len(rows)), np.arange(len(rows) // 2)],  # longer: repeated
-                 np.arange(len(rows))[::-1], np.arange(len(rows))]
+                 np.arange(len(rows))[::-1], np.arange(len(rows)),
+                 np.insert(np.arange(len(rows)), [5, 300, 301, 900], [7, 7, 200, 900]),  # in
+                 np.arange(len(rows))]  # and out again
     for sequence in sequences:
         scale = rng.uniform(0.5, 2.0)
         r, c = rows[sequence], cols[sequence]

@@ -26,7 +26,7 @@ EXPORT void bb_free(bb_matrix *m)
     free(m->order); free(m->position); free(m->band); free(m->upper); free(m->lower);
     free(m->corner); free(m->pivot); free(m->scale); free(m->work);
     free(m->first); free(m->by_first); free(m->lower_count); free(m->lower_index);
-    free(m->places);
+    free(m->places); free(m->last);
     free(m);
 }
 
@@ -85,7 +85,12 @@ EXPORT void bb_zero(bb_matrix *m)
         memset(m->lower, 0, sizeof(double) * (size_t)m->nb * m->nd);
     }
     memset(m->corner, 0, sizeof(double) * (size_t)m->nd * m->nd);
-    m->added = 0;
+    struct bb_place *places = m->places;  /* this assembly's places the last one's */
+    int capacity = m->places_capacity;
+    m->places = m->last; m->places_capacity = m->last_capacity;
+    m->last = places; m->last_capacity = capacity;
+    m->last_count = m->added;
+    m->added = m->shift = 0;
 }
 
 /* Where (row, col), both unknowns, is added (lower: 1 if in `lower`); NULL where the
@@ -104,39 +109,56 @@ static double *place_of(const bb_matrix *m, int row, int col, int *lower)
     return m->corner + (size_t)(i - nb) * nd + (j - nb);
 }
 
-/* the place of the entry added `added`-th since bb_zero, (row, col) found (and kept,
-   where there is room: more, twice as much, as needed) */
-static const struct bb_place *new_place(bb_matrix *m, int row, int col)
+/* the last assembly's place of (row, col) near its rank `added` plus `shift` (the ranks
+   on by the entries in or out before), or further on (a block of entries left out);
+   `shift` moved to the one found, or one less (an entry in) where there is none, then
+   the place found. Kept as this assembly's where there is room (more, twice as much). */
+#define BB_NEAR 8
+#define BB_FAR 512
+static struct bb_place new_place(bb_matrix *m, int row, int col)
 {
+    struct bb_place p = {row, col, 0, NULL};
+    const struct bb_place *last = m->last;
+    int j = m->added + m->shift, found = -1;
+    for (int d = 0; d <= 2 * BB_NEAR + BB_FAR && found < 0; d++) {
+        /* j, j - 1, j + 1, ..., j - BB_NEAR, j + BB_NEAR, then on to j + BB_NEAR + BB_FAR */
+        int i = d <= 2 * BB_NEAR ? j + (d % 2 ? -(d + 1) / 2 : d / 2) : j + d - BB_NEAR;
+        if (i >= 0 && i < m->last_count && last[i].row == row && last[i].col == col
+            && last[i].at != NULL)
+            found = i;
+    }
+    if (found >= 0) {
+        p = last[found];
+        m->shift = found - m->added;
+    } else {
+        p.at = place_of(m, row, col, &p.lower);
+        m->shift--;
+    }
     int k = m->added;
     if (k >= m->places_capacity) {
         int capacity = 2 * k > 1024 ? 2 * k : 1024;
         struct bb_place *more = realloc(m->places, sizeof *more * (size_t)capacity);
-        if (!more) return NULL;  /* no room: found each time */
-        for (int q = m->places_capacity; q < capacity; q++) more[q].at = NULL;
+        if (!more) return p;  /* no room: found each time */
         m->places = more;
         m->places_capacity = capacity;
     }
-    struct bb_place *p = m->places + k;
-    p->row = row; p->col = col;
-    p->at = place_of(m, row, col, &p->lower);
+    m->places[k] = p;
     m->added++;
     return p;
 }
 
 /* Add `value` at (row, col), both unknowns, where the last assembly's entry of the same
-   rank had another (row, col) or none; BB_OUTSIDE where the pattern has no place. */
+   rank (plus shift) had another (row, col) or none; BB_OUTSIDE where the pattern has no
+   place. */
 static int add_new(bb_matrix *m, int row, int col, double value)
 {
-    const struct bb_place *p = new_place(m, row, col);
-    int lower = 0;
-    double *at = p ? p->at : place_of(m, row, col, &lower);
-    if (at == NULL) {
+    struct bb_place p = new_place(m, row, col);
+    if (p.at == NULL) {
         m->bad_row = row; m->bad_col = col;
         return BB_OUTSIDE;
     }
-    *at += value;
-    if (p ? p->lower : lower) m->lower_listed = 0;
+    *p.at += value;
+    if (p.lower) m->lower_listed = 0;
     return BB_OK;
 }
 
@@ -146,21 +168,28 @@ EXPORT int bb_add(bb_matrix *m, int row, int col, double value)
 }
 
 /* value[k] times factor at (row[k], col[k]): the places of the last assembly's entries of
-   the same rank where their (row, col) is the same (the band or border told once) */
+   the same rank (plus shift) where their (row, col) is the same (the band or border told
+   once), kept as this assembly's */
 EXPORT int bb_add_many(bb_matrix *m, int count, const int *row, const int *col,
                        const double *value, double factor)
 {
     int k = 0, lower = 0;
     while (k < count) {
-        const struct bb_place *p = m->places + m->added;
-        int same = m->places_capacity - m->added < count - k
-                   ? m->places_capacity - m->added : count - k;
-        for (; same > 0 && p->at != NULL && p->row == row[k] && p->col == col[k]; same--) {
-            *p->at += factor * value[k];
-            lower |= p->lower;
-            p++; k++;
+        int a = m->added, j = a + m->shift;
+        int same = count - k;  /* as far as both sequences and the room go */
+        if (m->last_count - j < same) same = m->last_count - j;
+        if (m->places_capacity - a < same) same = m->places_capacity - a;
+        if (j >= 0 && same > 0) {
+            const struct bb_place *p = m->last + j;
+            struct bb_place *q = m->places + a;
+            for (; same > 0 && p->row == row[k] && p->col == col[k] && p->at != NULL; same--) {
+                *p->at += factor * value[k];
+                lower |= p->lower;
+                *q++ = *p++;
+                k++;
+            }
+            m->added = (int)(q - m->places);
         }
-        m->added = (int)(p - m->places);
         if (k < count) {
             int status = add_new(m, row[k], col[k], factor * value[k]);
             if (status != BB_OK) {

@@ -43,10 +43,11 @@ typedef struct {
     int *lower_count;     /* nd: each border row's band columns not zero */
     int *lower_index;     /* nd x nb: those columns, row by row */
     int lower_listed;     /* lower's entries not zero all in lower_index (bb_zero's hint) */
-    /* the places of the entries added since bb_zero, in the order added (an assembly
-       repeats the last one's sequence of (row, col): a place found once is reused) */
-    struct bb_place *places;
-    int places_capacity, added;
+    /* the places of the entries added since bb_zero, in the order added, and the last
+       assembly's (an assembly repeats the last one's sequence of (row, col), but for a
+       few entries in or out: a place found once is reused, `shift` ranks on) */
+    struct bb_place *places, *last;
+    int places_capacity, last_capacity, added, last_count, shift;
     double pivot_tolerance;
     int bad_row, bad_col; /* unknowns (not positions) named by the last error */
 } bb_matrix;
