@@ -90,7 +90,7 @@ EXPORT void bb_zero(bb_matrix *m)
     m->places = m->last; m->places_capacity = m->last_capacity;
     m->last = places; m->last_capacity = capacity;
     m->last_count = m->added;
-    m->added = m->shift = 0;
+    m->added = m->shift = m->not_found = 0;
 }
 
 /* Where (row, col), both unknowns, is added (lower: 1 if in `lower`); NULL where the
@@ -110,19 +110,21 @@ static double *place_of(const bb_matrix *m, int row, int col, int *lower)
 }
 
 /* the last assembly's place of (row, col) near its rank `added` plus `shift` (the ranks
-   on by the entries in or out before), or further on (a block of entries left out);
-   `shift` moved to the one found, or one less (an entry in) where there is none, then
-   the place found. Kept as this assembly's where there is room (more, twice as much). */
+   on by the entries in or out before), or, after a place found or every BB_FAR_EVERY
+   entries not found, further off (a block of entries in or out); `shift` moved to the
+   one found, or one less (an entry in) where there is none, then the place found. Kept
+   as this assembly's where there is room (more, twice as much, as needed). */
 #define BB_NEAR 8
 #define BB_FAR 512
+#define BB_FAR_EVERY 16
 static struct bb_place new_place(bb_matrix *m, int row, int col)
 {
     struct bb_place p = {row, col, 0, NULL};
     const struct bb_place *last = m->last;
     int j = m->added + m->shift, found = -1;
-    for (int d = 0; d <= 2 * BB_NEAR + BB_FAR && found < 0; d++) {
-        /* j, j - 1, j + 1, ..., j - BB_NEAR, j + BB_NEAR, then on to j + BB_NEAR + BB_FAR */
-        int i = d <= 2 * BB_NEAR ? j + (d % 2 ? -(d + 1) / 2 : d / 2) : j + d - BB_NEAR;
+    int reach = m->not_found % BB_FAR_EVERY == 0 ? BB_FAR : BB_NEAR;
+    for (int d = 0; d <= 2 * reach && found < 0; d++) {  /* j, j - 1, j + 1, j - 2, ... */
+        int i = j + (d % 2 ? -(d + 1) / 2 : d / 2);
         if (i >= 0 && i < m->last_count && last[i].row == row && last[i].col == col
             && last[i].at != NULL)
             found = i;
@@ -130,9 +132,11 @@ static struct bb_place new_place(bb_matrix *m, int row, int col)
     if (found >= 0) {
         p = last[found];
         m->shift = found - m->added;
+        m->not_found = 0;
     } else {
         p.at = place_of(m, row, col, &p.lower);
         m->shift--;
+        m->not_found++;
     }
     int k = m->added;
     if (k >= m->places_capacity) {

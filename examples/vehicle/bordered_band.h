@@ -45,9 +45,10 @@ typedef struct {
     int lower_listed;     /* lower's entries not zero all in lower_index (bb_zero's hint) */
     /* the places of the entries added since bb_zero, in the order added, and the last
        assembly's (an assembly repeats the last one's sequence of (row, col), but for a
-       few entries in or out: a place found once is reused, `shift` ranks on) */
+       few entries in or out: a place found once is reused, `shift` ranks on; not_found:
+       the entries since the last one found there) */
     struct bb_place *places, *last;
-    int places_capacity, last_capacity, added, last_count, shift;
+    int places_capacity, last_capacity, added, last_count, shift, not_found;
     double pivot_tolerance;
     int bad_row, bad_col; /* unknowns (not positions) named by the last error */
 } bb_matrix;
