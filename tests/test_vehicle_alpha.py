@@ -1,5 +1,5 @@
 """The vehicle's own solver core (examples/vehicle/alpha_solver.py, docs/vehicle.md "An own
-solver"): its bordered band LU against numpy's solve and its refusals; its generalized-alpha
+solver"; its bordered band LU in test_vehicle_bordered_band.py): its generalized-alpha
 step against exudyn's on the same small model (a chain of rigid bodies on springs, the first
 pinned to the ground, a border body sprung to all) and against an independent scipy
 solution, at second order; a step that does not converge says so and keeps its start."""
@@ -15,70 +15,6 @@ sys.path.insert(0, str(ROOT / "examples"))  # the example scripts, imported as m
 
 NO_EXUDYN = 'exudyn is not installed: pip install -e ".[examples]"'
 alpha = pytest.importorskip("vehicle.alpha_solver")
-
-
-# --- the bordered band LU --------------------------------------------------------------------
-
-def bordered_matrix(rng, n, n_band, w, saddle, isolated=False):
-    """A random matrix of the structure, in a random order of its unknowns: a diagonally
-    dominant band, a dense border whose last `saddle` rows and columns have a zero
-    corner (the multipliers), `isolated`: those touch only the border; (order, matrix)."""
-    order = rng.permutation(n)
-    position = np.empty(n, dtype=int)
-    position[order] = np.arange(n)
-    pi, pj = np.meshgrid(position, position, indexing="ij")
-    band = (pi < n_band) & (pj < n_band)
-    keep = np.where(band, np.abs(pi - pj) <= w, ~((pi >= n - saddle) & (pj >= n - saddle)))
-    if isolated:
-        keep &= ~(((pi >= n - saddle) & (pj < n_band)) | ((pj >= n - saddle) & (pi < n_band)))
-    matrix = np.where(keep, rng.normal(size=(n, n)), 0.0)
-    rows = np.flatnonzero(position < n_band)
-    matrix[rows, rows] = 1.0 + np.abs(matrix[rows]).sum(axis=1)
-    return order, matrix
-
-
-@pytest.mark.parametrize("n, n_band, w, saddle, isolated",
-                         [(30, 22, 3, 3, False), (278, 237, 5, 14, False),
-                          (278, 237, 5, 14, True), (12, 12, 2, 0, False), (9, 0, 0, 4, False)])
-def test_the_bordered_band_lu_solves_as_numpy(n, n_band, w, saddle, isolated):
-    rng = np.random.default_rng(n + w)
-    order, matrix = bordered_matrix(rng, n, n_band, w, saddle, isolated)
-    lu = alpha.BorderedBand(n, order, n_band, w)
-    rows, cols = np.nonzero(matrix)
-    # each entry given in two parts: repeated entries add
-    values = matrix[rows, cols]
-    lu.set(np.r_[rows, rows], np.r_[cols, cols], np.r_[0.25 * values, 0.75 * values])
-    lu.factorize()
-    for _ in range(3):
-        rhs = rng.normal(size=n)
-        expected = np.linalg.solve(matrix, rhs)
-        assert np.abs(lu.solve(rhs) - expected).max() <= 1e-11 * np.abs(expected).max()
-
-
-def test_an_entry_outside_the_structure_is_named():
-    rng = np.random.default_rng(5)
-    order, matrix = bordered_matrix(rng, 30, 22, 3, 3)
-    lu = alpha.BorderedBand(30, order, 22, 3)
-    row, col = order[2], order[6]  # band positions 2 and 6: 4 apart, half bandwidth 3
-    rows, cols = np.nonzero(matrix)
-    with pytest.raises(alpha.StructureError, match=f"entry \\({row}, {col}\\) outside") as e:
-        lu.set(np.r_[rows, row], np.r_[cols, col], np.r_[matrix[rows, cols], 1.0])
-    assert (e.value.row, e.value.col) == (row, col)
-    lu.set(rows, cols, matrix[rows, cols])  # the same pattern without it is taken
-    lu.factorize()
-
-
-def test_a_band_pivot_that_is_not_positive_is_named():
-    rng = np.random.default_rng(6)
-    order, matrix = bordered_matrix(rng, 30, 22, 3, 3)
-    unknown = order[7]
-    matrix[unknown, unknown] = -matrix[unknown, unknown]
-    lu = alpha.BorderedBand(30, order, 22, 3)
-    rows, cols = np.nonzero(matrix)
-    lu.set(rows, cols, matrix[rows, cols])
-    with pytest.raises(alpha.StructureError, match=f"band pivot not positive at unknown "
-                       f"{unknown}$"):
-        lu.factorize()
 
 
 # --- a small constrained system: a chain of rigid bodies ------------------------------------

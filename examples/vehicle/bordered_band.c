@@ -26,6 +26,7 @@ EXPORT void bb_free(bb_matrix *m)
     free(m->order); free(m->position); free(m->band); free(m->upper); free(m->lower);
     free(m->corner); free(m->pivot); free(m->scale); free(m->work);
     free(m->first); free(m->by_first); free(m->lower_count); free(m->lower_index);
+    free(m->places); free(m->last);
     free(m);
 }
 
@@ -84,40 +85,125 @@ EXPORT void bb_zero(bb_matrix *m)
         memset(m->lower, 0, sizeof(double) * (size_t)m->nb * m->nd);
     }
     memset(m->corner, 0, sizeof(double) * (size_t)m->nd * m->nd);
+    struct bb_place *places = m->places;  /* this assembly's places the last one's */
+    int capacity = m->places_capacity;
+    m->places = m->last; m->places_capacity = m->last_capacity;
+    m->last = places; m->last_capacity = capacity;
+    m->last_count = m->added;
+    m->added = m->shift = m->not_found = 0;
 }
 
-/* Add `value` at (row, col), both unknowns; BB_OUTSIDE where the pattern has no place. */
-EXPORT int bb_add(bb_matrix *m, int row, int col, double value)
+/* Where (row, col), both unknowns, is added (lower: 1 if in `lower`); NULL where the
+   pattern has no place */
+static double *place_of(const bb_matrix *m, int row, int col, int *lower)
 {
-    if (row < 0 || row >= m->n || col < 0 || col >= m->n) {
+    *lower = 0;
+    if (row < 0 || row >= m->n || col < 0 || col >= m->n) return NULL;
+    int i = m->position[row], j = m->position[col], nb = m->nb, nd = m->nd;
+    if (i < nb && j < nb) return abs(i - j) > m->w ? NULL : &BAND(m, i, j);
+    if (i < nb) return m->upper + (size_t)i * nd + (j - nb);
+    if (j < nb) {
+        *lower = 1;
+        return m->lower + (size_t)(i - nb) * nb + j;
+    }
+    return m->corner + (size_t)(i - nb) * nd + (j - nb);
+}
+
+/* the last assembly's place of (row, col) near its rank `added` plus `shift` (the ranks
+   on by the entries in or out before), or, after a place found or every BB_FAR_EVERY
+   entries not found, further off (a block of entries in or out); `shift` moved to the
+   one found, or one less (an entry in) where there is none, then the place found. Kept
+   as this assembly's where there is room (more, twice as much, as needed). */
+#define BB_NEAR 8
+#define BB_FAR 512
+#define BB_FAR_EVERY 16
+static struct bb_place new_place(bb_matrix *m, int row, int col)
+{
+    struct bb_place p = {row, col, 0, NULL};
+    const struct bb_place *last = m->last;
+    int j = m->added + m->shift, found = -1;
+    int reach = m->not_found % BB_FAR_EVERY == 0 ? BB_FAR : BB_NEAR;
+    for (int d = 0; d <= 2 * reach && found < 0; d++) {  /* j, j - 1, j + 1, j - 2, ... */
+        int i = j + (d % 2 ? -(d + 1) / 2 : d / 2);
+        if (i >= 0 && i < m->last_count && last[i].row == row && last[i].col == col
+            && last[i].at != NULL)
+            found = i;
+    }
+    if (found >= 0) {
+        p = last[found];
+        m->shift = found - m->added;
+        m->not_found = 0;
+    } else {
+        p.at = place_of(m, row, col, &p.lower);
+        m->shift--;
+        m->not_found++;
+    }
+    int k = m->added;
+    if (k >= m->places_capacity) {
+        int capacity = 2 * k > 1024 ? 2 * k : 1024;
+        struct bb_place *more = realloc(m->places, sizeof *more * (size_t)capacity);
+        if (!more) return p;  /* no room: found each time */
+        m->places = more;
+        m->places_capacity = capacity;
+    }
+    m->places[k] = p;
+    m->added++;
+    return p;
+}
+
+/* Add `value` at (row, col), both unknowns, where the last assembly's entry of the same
+   rank (plus shift) had another (row, col) or none; BB_OUTSIDE where the pattern has no
+   place. */
+static int add_new(bb_matrix *m, int row, int col, double value)
+{
+    struct bb_place p = new_place(m, row, col);
+    if (p.at == NULL) {
         m->bad_row = row; m->bad_col = col;
         return BB_OUTSIDE;
     }
-    int i = m->position[row], j = m->position[col], nb = m->nb, nd = m->nd;
-    if (i < nb && j < nb) {
-        if (abs(i - j) > m->w) {
-            m->bad_row = row; m->bad_col = col;
-            return BB_OUTSIDE;
-        }
-        BAND(m, i, j) += value;
-    } else if (i < nb) {
-        m->upper[(size_t)i * nd + (j - nb)] += value;
-    } else if (j < nb) {
-        m->lower[(size_t)(i - nb) * nb + j] += value;
-        m->lower_listed = 0;
-    } else {
-        m->corner[(size_t)(i - nb) * nd + (j - nb)] += value;
-    }
+    *p.at += value;
+    if (p.lower) m->lower_listed = 0;
     return BB_OK;
 }
 
+EXPORT int bb_add(bb_matrix *m, int row, int col, double value)
+{
+    return bb_add_many(m, 1, &row, &col, &value, 1.0);
+}
+
+/* value[k] times factor at (row[k], col[k]): the places of the last assembly's entries of
+   the same rank (plus shift) where their (row, col) is the same (the band or border told
+   once), kept as this assembly's */
 EXPORT int bb_add_many(bb_matrix *m, int count, const int *row, const int *col,
                        const double *value, double factor)
 {
-    for (int k = 0; k < count; k++) {
-        int status = bb_add(m, row[k], col[k], factor * value[k]);
-        if (status != BB_OK) return status;
+    int k = 0, lower = 0;
+    while (k < count) {
+        int a = m->added, j = a + m->shift;
+        int same = count - k;  /* as far as both sequences and the room go */
+        if (m->last_count - j < same) same = m->last_count - j;
+        if (m->places_capacity - a < same) same = m->places_capacity - a;
+        if (j >= 0 && same > 0) {
+            const struct bb_place *p = m->last + j;
+            struct bb_place *q = m->places + a;
+            for (; same > 0 && p->row == row[k] && p->col == col[k] && p->at != NULL; same--) {
+                *p->at += factor * value[k];
+                lower |= p->lower;
+                *q++ = *p++;
+                k++;
+            }
+            m->added = (int)(q - m->places);
+        }
+        if (k < count) {
+            int status = add_new(m, row[k], col[k], factor * value[k]);
+            if (status != BB_OK) {
+                if (lower) m->lower_listed = 0;
+                return status;
+            }
+            k++;
+        }
     }
+    if (lower) m->lower_listed = 0;
     return BB_OK;
 }
 

@@ -20,6 +20,12 @@
 #define BB_SINGULAR 3   /* the border's Schur complement singular: bad_row */
 #define BB_MEMORY 4
 
+/* an entry's (row, col) and where it is added: lower tells it is in `lower` */
+struct bb_place {
+    int row, col, lower;
+    double *at;
+};
+
 typedef struct {
     int n, nb, nd, w;     /* unknowns, in the band, in the border, half bandwidth */
     int *order;           /* position -> unknown */
@@ -37,6 +43,12 @@ typedef struct {
     int *lower_count;     /* nd: each border row's band columns not zero */
     int *lower_index;     /* nd x nb: those columns, row by row */
     int lower_listed;     /* lower's entries not zero all in lower_index (bb_zero's hint) */
+    /* the places of the entries added since bb_zero, in the order added, and the last
+       assembly's (an assembly repeats the last one's sequence of (row, col), but for a
+       few entries in or out: a place found once is reused, `shift` ranks on; not_found:
+       the entries since the last one found there) */
+    struct bb_place *places, *last;
+    int places_capacity, last_capacity, added, last_count, shift, not_found;
     double pivot_tolerance;
     int bad_row, bad_col; /* unknowns (not positions) named by the last error */
 } bb_matrix;
