@@ -499,3 +499,24 @@ def _group_alive(group):
     except ProcessLookupError:
         return False
     return True
+
+
+def _distributed_log_level():
+    import logging
+
+    return logging.getLogger("distributed.worker").getEffectiveLevel()
+
+
+def test_a_local_clusters_workers_log_only_what_is_critical():
+    """A worker's heartbeat that meets the scheduler closed at a Ctrl-C's shutdown is
+    logged by distributed as an ERROR with a traceback: the local workers log only what is
+    critical (a task's error reaches the client through its future), and this process's
+    environment is left as it was."""
+    import logging
+
+    kept = os.environ.get("DASK_LOGGING__DISTRIBUTED")
+    with Engine(jobs=2) as engine:
+        levels = engine.client.run(_distributed_log_level)
+    assert len(levels) == 2
+    assert set(levels.values()) == {logging.CRITICAL}
+    assert os.environ.get("DASK_LOGGING__DISTRIBUTED") == kept

@@ -136,7 +136,7 @@ class Engine:
                                   f"{self.scheduler}`") from None
         else:
             workers = min(self.jobs or cores(), tasks or math.inf)
-            with _deaf_to_ctrl_c():
+            with _deaf_to_ctrl_c(), _quiet_workers():
                 self.cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
                                             processes=True, dashboard_address=":0",
                                             silence_logs=logging.ERROR)
@@ -244,6 +244,28 @@ def _deaf_to_ctrl_c():
         yield
     finally:
         signal.signal(signal.SIGINT, previous)
+
+
+# The local workers' loggers, which a worker process sets up from its environment as it
+# starts: at a Ctrl-C's shutdown a worker's heartbeat may meet the scheduler already closed,
+# which distributed logs as an ERROR with a traceback, into the command's output. A task's
+# own error reaches the client through its future, not the log.
+QUIET_WORKERS = {"DASK_LOGGING__DISTRIBUTED": "critical"}
+
+
+@contextmanager
+def _quiet_workers():
+    """The local workers started in here log only what is critical."""
+    kept = {name: os.environ.get(name) for name in QUIET_WORKERS}
+    os.environ.update(QUIET_WORKERS)
+    try:
+        yield
+    finally:
+        for name, value in kept.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
 
 
 def _has_bokeh():
