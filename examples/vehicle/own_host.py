@@ -67,7 +67,7 @@ class _Context(ctypes.Structure):
     _fields_ = [(name, ctypes.c_void_p) for name in ("system", "residual", "jacobian",
                                                      "constraint_jacobian", "solver")] + \
                [("n", ctypes.c_int), ("m", ctypes.c_int), ("capacity", ctypes.c_long)] + \
-               [(name, ctypes.c_void_p) for name in ("out", "scratch", "G", "H")] + \
+               [(name, ctypes.c_void_p) for name in ("scratch", "G", "H")] + \
                [("seconds", ctypes.c_double * 2),
                 ("calls", ctypes.c_long * 2)]
 
@@ -96,11 +96,11 @@ class OwnSystem:
             raise RuntimeError("own_system.c and own_host.py disagree on the context")
         lib.own_times.argtypes = [ctypes.c_void_p] * 3
         self.lib, self.system = lib, system
-        self._arrays = [np.zeros((capacity, 3)), np.zeros((capacity, 3)),
-                        np.zeros((6 * system.m, 3)), np.zeros((system.m, 3))]
+        self._arrays = [np.zeros((capacity, 3)), np.zeros((6 * system.m, 3)),
+                        np.zeros((system.m, 3))]
         sys_lib = system.lib
         self.struct = _Context(system.handle, _address(sys_lib.vsystem_residual),
-                               _address(sys_lib.vsystem_jacobian),
+                               _address(sys_lib.vsystem_jacobian_split),
                                _address(sys_lib.vsystem_constraint_jacobian), None,
                                system.n, system.m, capacity,
                                *(a.ctypes.data for a in self._arrays))
