@@ -439,3 +439,17 @@ def test_a_refused_state_save_is_a_coupling_error(versions, version):
             tyre._state.value = own
         tyre.free()
         damper.free()
+
+
+def test_only_a_scheme_that_always_solves_again_has_a_first_solve_that_cannot_end_a_step():
+    """Scheme.first_solve_may_end: False only where no first solve can end a step
+    (iterated's least passes), whatever its mismatch; the own solver solves such a first
+    solve roughly (examples/vehicle/own_host.py)."""
+    from fmu_components.coupling.schemes import scheme_named
+
+    for name in ("explicit", "corrected", "converged", "iterated"):
+        scheme = scheme_named(name)
+        can_end = any(scheme.done(1, mismatch) for mismatch in (0.0, 1e-12, 1.0))
+        assert scheme.first_solve_may_end() == can_end, name
+    assert not scheme_named("iterated").first_solve_may_end()
+    assert scheme_named("corrected").first_solve_may_end()

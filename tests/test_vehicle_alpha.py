@@ -522,3 +522,36 @@ def test_another_step_or_a_restart_makes_a_new_matrix():
         assert solver.trace()[1][0] == 1
         assert solver.repeat(h, k * h, warm=True) == 0
         assert solver.trace()[1][0] == 0
+
+
+def test_a_rough_first_solve_stops_at_its_own_tolerance_and_the_repeat_at_the_full():
+    """first_pass_tolerance: a step's first solve (alpha_step) stops once its residual is
+    within that tolerance, in fewer iterations than the full tolerance takes; the step's
+    warm repeat (alpha_repeat, as a coupled host's next pass) goes on to the full
+    tolerance, and ends where the full solve does, to the bound the tolerance leaves
+    (J du = S (r_rough - r_full), as the kept matrix's test)."""
+    chain = Chain()
+    h, absolute = 2e-3, 1e-9
+    full = chain_solver(chain, relative_tolerance=1e-14, absolute_tolerance=absolute)
+    q, v = chain.initial()
+    full.initialize(0.0, q, v)
+    assert full.step(h, h) == 0
+    report = full.report()
+    rough_tolerance = 1e-3 * report["initial_residual"]
+    rough = chain_solver(chain, relative_tolerance=1e-14, absolute_tolerance=absolute,
+                         first_pass_tolerance=rough_tolerance)
+    rough.initialize(0.0, q, v)
+    assert rough.step(h, h) == 0
+    first = rough.report()
+    assert absolute < first["residual"] <= rough_tolerance
+    assert first["iterations"] < report["iterations"]
+    assert rough.repeat(h, h, warm=True) == 0
+    again = rough.report()
+    assert again["residual"] <= absolute
+    solved, reference = rough.state(), full.state()
+    J, S = exact_jacobian(chain, full.coefficients(), h, h, *reference[:2], reference[3])
+    bound = np.linalg.norm((np.linalg.inv(J) * S)[:chain.nq], axis=1) * (
+        again["residual"] + report["residual"])
+    assert np.all(np.abs(solved[0] - reference[0]) <= bound)
+    assert rough.step(h, 2 * h) == 0  # each step's first solve rough again
+    assert absolute < rough.report()["residual"] <= rough_tolerance

@@ -228,13 +228,14 @@ static void restore(alpha_solver *s) { copy_start(s, 0); }
 
 /* One step from the current state to t_new = t + h (the caller's time, as exudyn's
    step index times h); on any status but ALPHA_CONVERGED the state is the step's start. */
-static int solve(alpha_solver *s, double h, double t_new, int warm);
+static int solve(alpha_solver *s, double h, double t_new, int warm, double tolerance);
 
 EXPORT int alpha_step(alpha_solver *s, double h, double t_new)
 {
     copy_start(s, 1);
     if (s->set.reuse_jacobian == 1) s->jacobian_update_requested = 1;
-    return solve(s, h, t_new, 0);
+    double first = s->set.first_pass_tolerance;
+    return solve(s, h, t_new, 0, first > 0.0 ? first : s->set.absolute_tolerance);
 }
 
 /* The state back at the last step's start (its time too): a host's retry of a solved step
@@ -261,7 +262,7 @@ EXPORT int alpha_repeat(alpha_solver *s, double h, double t_new, int warm)
         memcpy(s->lambda1, s->lambda, sizeof(double) * s->nm);
     }
     s->t = s->t0;
-    return solve(s, h, t_new, warm);
+    return solve(s, h, t_new, warm, s->set.absolute_tolerance);
 }
 
 /* Newton's update q -= dq, v -= gamma' dq, a -= beta' dq, lambda -= dlambda / scale by
@@ -318,8 +319,9 @@ static void start_point(alpha_solver *s, double h, int warm)
     }
 }
 
-/* A step's Newton from the start kept in q0 .. lambda0 */
-static int solve(alpha_solver *s, double h, double t_new, int warm)
+/* A step's Newton from the start kept in q0 .. lambda0, to an absolute `tolerance` on the
+   residual's norm */
+static int solve(alpha_solver *s, double h, double t_new, int warm, double tolerance)
 {
     int nq = s->nq, status;
     s->t0 = s->t;
@@ -335,7 +337,7 @@ static int solve(alpha_solver *s, double h, double t_new, int warm)
 
     start_point(s, h, warm);
     if ((status = residual(s, t_new, scale, &initial))) goto failed;
-    if (initial <= set->absolute_tolerance) initial = 2. * set->absolute_tolerance;
+    if (initial <= tolerance) initial = 2. * tolerance;
     current = last = initial;
     int converged = 0, stop = 0, restarted = 0, add_restart_step = 0;
     int reuse = set->reuse_jacobian > 0;
@@ -372,7 +374,7 @@ static int solve(alpha_solver *s, double h, double t_new, int warm)
         if (set->adapt_initial_residual && current > initial && s->iterations <= 1
             && (made || !reuse))
             initial = last = current;
-        if (current / initial <= set->relative_tolerance || current <= set->absolute_tolerance)
+        if (current / initial <= set->relative_tolerance || current <= tolerance)
             converged = 1;
 
         if (add_restart_step && converged) {
@@ -392,7 +394,7 @@ static int solve(alpha_solver *s, double h, double t_new, int warm)
             if (reuse) {
                 contractivity = current / last;
                 /* the iterations the present contraction would still take */
-                double target = fmax(set->absolute_tolerance,
+                double target = fmax(tolerance,
                                      set->relative_tolerance * initial);
                 double needed = log(target / current) / log(contractivity);
                 if (diverged && made) {

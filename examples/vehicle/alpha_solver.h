@@ -40,6 +40,9 @@ typedef struct {
     int reuse_jacobian;
     double reuse_contractivity;
     int reuse_broyden;   /* the kept matrix's steps corrected by Broyden's rank-one updates */
+    /* a step's first solve (alpha_step) to this absolute tolerance instead (0: absolute_tolerance):
+       for a coupled host that always solves the step again with new loads (alpha_repeat) */
+    double first_pass_tolerance;
 } alpha_settings;
 
 #define ALPHA_TRACE 64          /* iterations of a solve traced (alpha_trace) */

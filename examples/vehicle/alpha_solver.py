@@ -61,13 +61,15 @@ class Settings(ctypes.Structure):
                 ("max_modified_newton_iterations", _int),
                 ("max_modified_newton_restart_iterations", _int),
                 ("adapt_initial_residual", _int), ("reuse_jacobian", _int),
-                ("reuse_contractivity", _real), ("reuse_broyden", _int)]
+                ("reuse_contractivity", _real), ("reuse_broyden", _int),
+                ("first_pass_tolerance", _real)]
     DEFAULTS = dict(spectral_radius=0.9, relative_tolerance=1e-8, absolute_tolerance=1e-10,
                     maximum_solution_norm=1e38, modified_newton_contractivity=0.5,
                     pivot_tolerance=1e-12, max_iterations=25, use_modified_newton=0,
                     max_modified_newton_iterations=8,
                     max_modified_newton_restart_iterations=7, adapt_initial_residual=1,
-                    reuse_jacobian=0, reuse_contractivity=0.5, reuse_broyden=0)
+                    reuse_jacobian=0, reuse_contractivity=0.5, reuse_broyden=0,
+                    first_pass_tolerance=0.0)
 
     def __init__(self, **given):
         unknown = set(given) - set(self.DEFAULTS)

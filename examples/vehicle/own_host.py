@@ -45,6 +45,11 @@ LIBRARY = Library("vehicle_own", [HERE / "own_system.c", HERE / "own_pass.c"],
                   [HERE / "alpha_solver.h", HERE / "bordered_band.h"],
                   "the vehicle's own solver's adapter (own_system.c)", "--solver exudyn")
 CAPACITY = 65536  # triplets of the system's Jacobian
+# A step's first solve to this many times Newton's absolute tolerance where the scheme always
+# solves the step again (iterated: Scheme.first_solve_may_end) and the policy keeps its
+# matrix: that solution only sets the FMUs' first pass, whose answers give the next law; the
+# step's last solve is to the full tolerance (docs/vehicle.md, "A rough first solve")
+FIRST_PASS_LOOSENESS = 1e4
 # the solver core's Newton policies (alpha_solver.h): exudyn's full Newton (a new
 # factorization every iteration); "chord", the last factorization kept across
 # iterations, passes and steps of the same h, a new one at the present iterate after an
@@ -67,7 +72,7 @@ class _Context(ctypes.Structure):
     _fields_ = [(name, ctypes.c_void_p) for name in ("system", "residual", "jacobian",
                                                      "constraint_jacobian", "solver")] + \
                [("n", ctypes.c_int), ("m", ctypes.c_int), ("capacity", ctypes.c_long)] + \
-               [(name, ctypes.c_void_p) for name in ("out", "scratch", "G", "H")] + \
+               [(name, ctypes.c_void_p) for name in ("scratch", "G", "H")] + \
                [("seconds", ctypes.c_double * 2),
                 ("calls", ctypes.c_long * 2)]
 
@@ -96,11 +101,11 @@ class OwnSystem:
             raise RuntimeError("own_system.c and own_host.py disagree on the context")
         lib.own_times.argtypes = [ctypes.c_void_p] * 3
         self.lib, self.system = lib, system
-        self._arrays = [np.zeros((capacity, 3)), np.zeros((capacity, 3)),
-                        np.zeros((6 * system.m, 3)), np.zeros((system.m, 3))]
+        self._arrays = [np.zeros((capacity, 3)), np.zeros((6 * system.m, 3)),
+                        np.zeros((system.m, 3))]
         sys_lib = system.lib
         self.struct = _Context(system.handle, _address(sys_lib.vsystem_residual),
-                               _address(sys_lib.vsystem_jacobian),
+                               _address(sys_lib.vsystem_jacobian_split),
                                _address(sys_lib.vsystem_constraint_jacobian), None,
                                system.n, system.m, capacity,
                                *(a.ctypes.data for a in self._arrays))
@@ -130,11 +135,18 @@ def solver_for(vehicle, laws, relative_tolerance=1e-8):
     own = OwnSystem(system)
     order, half_bandwidth, border = ordering(system)
     system.keep_band(order, half_bandwidth, border)
+    policy = NEWTON[vehicle.own_newton or DEFAULT_NEWTON]
+    # a rough first solve with the policies that keep a matrix (full Newton stays exudyn's,
+    # iterate for iterate)
+    scheme = getattr(laws, "scheme", None)
+    rough = (scheme is not None and not scheme.first_solve_may_end()
+             and policy.get("reuse_jacobian", 0) > 0)
     settings = alpha.Settings(spectral_radius=vehicle.spectral_radius,
                               relative_tolerance=relative_tolerance,
                               absolute_tolerance=vehicle.newton_tolerance,
-                              use_modified_newton=0,
-                              **NEWTON[vehicle.own_newton or DEFAULT_NEWTON])
+                              first_pass_tolerance=(FIRST_PASS_LOOSENESS
+                                                    * vehicle.newton_tolerance if rough else 0.0),
+                              use_modified_newton=0, **policy)
     solver = alpha.AlphaSolver(own, system.mass_diagonal(), system.m, order,
                                len(order) - border, half_bandwidth, settings, CAPACITY)
     own.bind(solver)

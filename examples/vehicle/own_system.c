@@ -5,7 +5,8 @@
  * for the system's triplets.
  *
  *   evaluate: f and g (vsystem_residual), G (vsystem_constraint_jacobian);
- *   jacobian: K + gamma' D (vsystem_jacobian with factor_t = gamma' = gamma / (h beta),
+ *   jacobian: K + gamma' D (vsystem_jacobian_split, straight into the solver's K, with
+ *             factor_t = gamma' = gamma / (h beta),
  *             the solver's D factor over its K factor; D given empty) plus the
  *             multipliers' term d(G^T lambda)/dq at the solver's present lambda, which
  *             the Newton matrix of r = M a - f + G^T lambda takes in its K block.
@@ -19,8 +20,8 @@
 typedef void (*residual_fn)(void *system, double t, const double *q, const double *v,
                             double *f, double *g);
 typedef long (*jacobian_fn)(void *system, double t, const double *q, const double *v,
-                            double factor, double factor_t, double *out, long capacity,
-                            double *scratch);
+                            double factor, double factor_t, int *row, int *col,
+                            double *value, long capacity, double *scratch);
 typedef void (*constraint_jacobian_fn)(void *system, const double *q, const double *lambda,
                                        double *out, double *hessian);
 
@@ -31,8 +32,8 @@ typedef struct {
     constraint_jacobian_fn constraint_jacobian;
     alpha_solver *solver;
     int n, m;
-    long capacity;           /* of out and scratch, triplets */
-    double *out, *scratch;   /* capacity x 3 each */
+    long capacity;           /* of scratch, triplets */
+    double *scratch;         /* capacity x 3 */
     double *G, *H;           /* 6 m and m triplets */
     double seconds[2];       /* CPU time in evaluate, in jacobian */
     long calls[2];
@@ -86,10 +87,12 @@ EXPORT int own_jacobian(void *context, double t, const double *q, const double *
     OwnContext *c = context;
     const alpha_solver *s = c->solver;
     double start = cpu_now();
-    long count = c->jacobian(c->system, t, q, v, 1.0, s->gamma / (s->jacobian_h * s->beta), c->out,
-                             c->capacity, c->scratch);
-    K->count = D->count = 0;
-    int status = count > c->capacity || append(K, c->out, count);
+    long capacity = K->capacity < c->capacity ? K->capacity : c->capacity;
+    long count = c->jacobian(c->system, t, q, v, 1.0, s->gamma / (s->jacobian_h * s->beta),
+                             K->row, K->col, K->value, capacity, c->scratch);
+    D->count = 0;
+    int status = count > capacity;
+    K->count = status ? 0 : (int)count;
     if (!status) {
         c->constraint_jacobian(c->system, q, s->lambda, c->G, c->H);
         status = append(K, c->H, c->m);

@@ -180,12 +180,40 @@ SYSTEM_EXPORT void vsystem_residual(VehicleSystem *s, double t, const double *q,
     if (g != NULL) vsystem_constraints(s, q, g);
 }
 
+/* Where the Jacobian's entries go: (row, column, value) rows of doubles (`rows`, Python's
+ * view) or the solver core's own row, column and value arrays (alpha_triplets), written
+ * straight there so that no copy of them is made per Newton matrix; counted past the
+ * capacity, as triplets_put */
+typedef struct {
+    double *rows;
+    int *row, *col;
+    double *value;
+    long count, capacity;
+} Sink;
+
+static void sink_put(Sink *k, int row, int column, double value)
+{
+    if (k->count < k->capacity) {
+        if (k->rows != NULL) {
+            double *entry = k->rows + 3 * k->count;
+            entry[0] = row;
+            entry[1] = column;
+            entry[2] = value;
+        } else {
+            k->row[k->count] = row;
+            k->col[k->count] = column;
+            k->value[k->count] = value;
+        }
+    }
+    k->count++;
+}
+
 /* An entry, where it is not zero and falls in the solver's band or border: the kernels'
  * blocks hold zeros beyond where their elements reach (a tyre's blend over the neighbours
  * of the links beneath it), which a band need not hold, and where a tyre's blend reaches
  * further (a wheel over two sharp bends in a row: system.py's REACH) the entries beyond
  * the band are left out, counted: the Newton matrix is then inexact, the residual not */
-static void put(VehicleSystem *s, Triplets *t, int row, int column, double value)
+static void put(VehicleSystem *s, Sink *k, int row, int column, double value)
 {
     if (value == 0.0) return;
     if (s->band_position != NULL) {
@@ -196,19 +224,17 @@ static void put(VehicleSystem *s, Triplets *t, int row, int column, double value
             return;
         }
     }
-    triplets_put(t, row, column, value);
+    sink_put(k, row, column, value);
 }
 
-/* factor K + factor_t D (K = -df/dq, D = -df/dv) at (t, q, v) as (row, column, value)
- * rows into out while they fit `capacity` (repeated entries add, zeros left out); returns
- * how many there are. `scratch`: room for the joints' triplets (36 a joint) and the
- * contacts' (the same capacity as out). */
-SYSTEM_EXPORT long vsystem_jacobian(VehicleSystem *s, double t, const double *q,
-                                    const double *v, double factor, double factor_t,
-                                    double *out, long capacity, double *scratch)
+/* factor K + factor_t D (K = -df/dq, D = -df/dv) at (t, q, v) into `result` while they fit
+ * its capacity (repeated entries add, zeros left out); how many there are. `scratch`: room
+ * for the joints' triplets (36 a joint) and the contacts' (the same capacity as out). */
+static long jacobian_into(VehicleSystem *s, double t, const double *q, const double *v,
+                          double factor, double factor_t, Sink result, long capacity,
+                          double *scratch)
 {
     evaluate_kernels(s, q, v, 0);
-    Triplets result = {out, 0, capacity};
     double **j = s->joint_arrays;
     joints_jacobian(s->links, s->half, j[J_LINK], j[J_JOINT], j[J_QD], j[J_LAW], j[J_EFFORT],
                     factor, factor_t, scratch);
@@ -236,6 +262,25 @@ SYSTEM_EXPORT long vsystem_jacobian(VehicleSystem *s, double t, const double *q,
         put(s, &result, c->b, c->b, value);
     }
     return result.count;
+}
+
+/* jacobian_into as (row, column, value) rows of doubles into `out` */
+SYSTEM_EXPORT long vsystem_jacobian(VehicleSystem *s, double t, const double *q,
+                                    const double *v, double factor, double factor_t,
+                                    double *out, long capacity, double *scratch)
+{
+    Sink rows = {out, NULL, NULL, NULL, 0, capacity};
+    return jacobian_into(s, t, q, v, factor, factor_t, rows, capacity, scratch);
+}
+
+/* jacobian_into straight into a solver's row, column and value arrays (own_system.c) */
+SYSTEM_EXPORT long vsystem_jacobian_split(VehicleSystem *s, double t, const double *q,
+                                          const double *v, double factor, double factor_t,
+                                          int *row, int *col, double *value, long capacity,
+                                          double *scratch)
+{
+    Sink split = {NULL, row, col, value, 0, capacity};
+    return jacobian_into(s, t, q, v, factor, factor_t, split, capacity, scratch);
 }
 
 /* G = dg/dq (rows of g, columns of q) as triplets, 12 per joint (6 a node) into `out`;

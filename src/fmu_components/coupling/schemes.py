@@ -50,6 +50,12 @@ class Scheme:
         return passes >= self.passes or (passes >= self.least_passes
                                          and mismatch <= self.tolerance)
 
+    def first_solve_may_end(self):
+        """Whether a step's first solve can be its last (done after one pass, whatever
+        the mismatch): where it cannot, a host may solve it only roughly, as its answer
+        serves only the next law."""
+        return self.done(1, 0.0)
+
 
 class Corrected(Scheme):
     name = "corrected"
