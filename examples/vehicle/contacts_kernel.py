@@ -128,16 +128,20 @@ class KernelResults:
     _published = frozenset(PUBLISHED)
 
     def __getattr__(self, name):  # only for attributes not set
-        if self.__dict__.get("_by_compiled") and name in self._published:
+        if self.by_compiled() and name in self._published:
             return self._compiled.publish(name)
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
+    def by_compiled(self):
+        """Whether the last evaluation was the C kernel's (its results in its memory)."""
+        return bool(self.__dict__.get("_by_compiled"))
 
     def last(self, name):
         """The last evaluation's result `name` (of PUBLISHED) and its address: the C
         kernel's memory itself where the kernel made it and holds it as an array (no copy:
         valid until the next evaluation; its address taken once), else the attribute (a
         float array, C order)."""
-        if self.__dict__.get("_by_compiled"):
+        if self.by_compiled():
             compiled = self._compiled
             view = compiled.results.get(name)
             if view is not None:

@@ -79,7 +79,7 @@ class Records:
         """records.c's sources where the contacts' last evaluation is the C kernel's and
         the bank's arrays are the run's, else None."""
         contacts, bank = self.v.contacts, self.v.bank
-        if bank is None or not contacts.__dict__.get("_by_compiled"):
+        if bank is None or not contacts.by_compiled():
             return None
         if self._gather is None or self._gather[0] is not bank:
             lib = joints.library()
