@@ -448,3 +448,20 @@ def test_where_the_own_solver_cannot_run_the_default_run_is_refused_naming_the_f
                                        given.get("coupling", "iterated"),
                                        given.get("joints", "kernel")) in err
     assert tracked_vehicle.own_refusal() is None  # the defaults: the own solver runs
+
+
+def test_only_a_scheme_that_always_solves_again_with_a_kept_matrix_solves_first_roughly():
+    """own_host.first_pass_tolerance: FIRST_PASS_LOOSENESS times Newton's tolerance for
+    iterated (its first solve never ends a step) with the policies that keep a matrix; the
+    full tolerance (0) for full Newton (exudyn's iterates), for the schemes whose first
+    solve may end a step, and without a bank."""
+    from fmu_components.coupling.schemes import scheme_named
+    from vehicle.own_host import FIRST_PASS_LOOSENESS, NEWTON, first_pass_tolerance
+
+    iterated = scheme_named("iterated")
+    for name in ("reuse", "chord"):
+        assert first_pass_tolerance(iterated, NEWTON[name], 0.1) == FIRST_PASS_LOOSENESS * 0.1
+    assert first_pass_tolerance(iterated, NEWTON["full"], 0.1) == 0.0
+    for name in ("explicit", "corrected", "converged"):
+        assert first_pass_tolerance(scheme_named(name), NEWTON["reuse"], 0.1) == 0.0
+    assert first_pass_tolerance(None, NEWTON["reuse"], 0.1) == 0.0

@@ -124,6 +124,17 @@ class OwnSystem:
         return seconds, calls
 
 
+def first_pass_tolerance(scheme, policy, tolerance):
+    """The solver core's first_pass_tolerance for a run of `scheme` (None: no bank) with
+    the Newton `policy` (a value of NEWTON) at Newton's absolute `tolerance`: rough
+    (FIRST_PASS_LOOSENESS times) where the scheme always solves a step again and the
+    policy keeps its matrix (full Newton stays exudyn's, iterate for iterate), else 0 (the
+    full tolerance)."""
+    rough = (scheme is not None and not scheme.first_solve_may_end()
+             and policy.get("reuse_jacobian", 0) > 0)
+    return FIRST_PASS_LOOSENESS * tolerance if rough else 0.0
+
+
 def solver_for(vehicle, laws, relative_tolerance=1e-8):
     """(OwnSystem, AlphaSolver) for `vehicle` with the laws of `laws` (a bank or a
     LawTable), with the run's settings: the vehicle's spectral radius and Newton absolute
@@ -136,16 +147,12 @@ def solver_for(vehicle, laws, relative_tolerance=1e-8):
     order, half_bandwidth, border = ordering(system)
     system.keep_band(order, half_bandwidth, border)
     policy = NEWTON[vehicle.own_newton or DEFAULT_NEWTON]
-    # a rough first solve with the policies that keep a matrix (full Newton stays exudyn's,
-    # iterate for iterate)
-    scheme = getattr(laws, "scheme", None)
-    rough = (scheme is not None and not scheme.first_solve_may_end()
-             and policy.get("reuse_jacobian", 0) > 0)
     settings = alpha.Settings(spectral_radius=vehicle.spectral_radius,
                               relative_tolerance=relative_tolerance,
                               absolute_tolerance=vehicle.newton_tolerance,
-                              first_pass_tolerance=(FIRST_PASS_LOOSENESS
-                                                    * vehicle.newton_tolerance if rough else 0.0),
+                              first_pass_tolerance=first_pass_tolerance(
+                                  getattr(laws, "scheme", None), policy,
+                                  vehicle.newton_tolerance),
                               use_modified_newton=0, **policy)
     solver = alpha.AlphaSolver(own, system.mass_diagonal(), system.m, order,
                                len(order) - border, half_bandwidth, settings, CAPACITY)
