@@ -229,7 +229,7 @@ static void put(VehicleSystem *s, Sink *k, int row, int column, double value)
 
 /* factor K + factor_t D (K = -df/dq, D = -df/dv) at (t, q, v) into `result` while they fit
  * its capacity (repeated entries add, zeros left out); how many there are. `scratch`: room
- * for the joints' triplets (36 a joint) and the contacts' (the same capacity as out). */
+ * for the joints' triplets (36 a joint) and the contacts' (`capacity` of them). */
 static long jacobian_into(VehicleSystem *s, double t, const double *q, const double *v,
                           double factor, double factor_t, Sink result, long capacity,
                           double *scratch)

@@ -51,9 +51,9 @@ class Scheme:
                                          and mismatch <= self.tolerance)
 
     def first_solve_may_end(self):
-        """Whether a step's first solve can be its last (done after one pass, whatever
-        the mismatch): where it cannot, a host may solve it only roughly, as its answer
-        serves only the next law."""
+        """Whether a step's first solve can be its last (the scheme done after one pass
+        where the loads agree): where it cannot, a host may solve it only roughly, as its
+        answer serves only the next law."""
         return self.done(1, 0.0)
 
 
