@@ -15,6 +15,7 @@ from contextlib import contextmanager
 import numpy as np
 
 import bank_path
+from fmu_components.coupling.bank_build import function_address
 
 from . import joints as joints_kernel
 from . import layout as lay
@@ -82,7 +83,7 @@ class CompiledPath:
     def deflections_entry(self):
         """(deflections.c's deflections' address, its layout's) for C that writes the
         deflections itself (own_pass.c): deflections(layout, q, compression, out)."""
-        return ctypes.cast(self._lib.deflections, ctypes.c_void_p).value, self._layout_at
+        return function_address(self._lib.deflections), self._layout_at
 
     def _compile_forces(self):
         """Each connector's force the symbolic law of its instance (the Python path's

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fmu_components.coupling.bank_build import Library
+from fmu_components.coupling.bank_build import Library, function_address
 
 from . import layout as lay
 from . import model
@@ -179,8 +179,8 @@ class KernelResults:
         if self._adoption is None or self._adoption[0] is not kernel:
             index = np.ascontiguousarray(self.system_index, dtype=np.intc)
             lib, handle = self._compiled.lib, self._compiled.handle
-            self._adoption = (kernel, index, (ctypes.cast(lib.contacts_adopt, ctypes.c_void_p)
-                                              .value, handle, kernel.handle, index.ctypes.data))
+            self._adoption = (kernel, index, (function_address(lib.contacts_adopt), handle,
+                                              kernel.handle, index.ctypes.data))
         return self._adoption[2]
 
     def kernel_address(self, name):

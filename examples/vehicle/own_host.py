@@ -31,7 +31,7 @@ import numpy as np
 
 import exudyn as exu
 
-from fmu_components.coupling.bank_build import Library
+from fmu_components.coupling.bank_build import Library, function_address
 from fmu_components.coupling.exudyn_host import SHORTEST_STEP
 
 from . import alpha_solver as alpha
@@ -85,10 +85,6 @@ class _Pass(ctypes.Structure):
         "deflections_layout", "deflection")] + [("found", ctypes.c_double * 3)]
 
 
-def _address(function):
-    return ctypes.cast(function, ctypes.c_void_p).value
-
-
 class OwnSystem:
     """The vehicle's system (system.VehicleSystem) as the solver core's callbacks
     (.evaluate, .jacobian, .context, as alpha_solver.PythonSystem's)."""
@@ -104,14 +100,14 @@ class OwnSystem:
         self._arrays = [np.zeros((capacity, 3)), np.zeros((6 * system.m, 3)),
                         np.zeros((system.m, 3))]
         sys_lib = system.lib
-        self.struct = _Context(system.handle, _address(sys_lib.vsystem_residual),
-                               _address(sys_lib.vsystem_jacobian_split),
-                               _address(sys_lib.vsystem_constraint_jacobian), None,
+        self.struct = _Context(system.handle, function_address(sys_lib.vsystem_residual),
+                               function_address(sys_lib.vsystem_jacobian_split),
+                               function_address(sys_lib.vsystem_constraint_jacobian), None,
                                system.n, system.m, capacity,
                                *(a.ctypes.data for a in self._arrays))
         self.context = ctypes.addressof(self.struct)
-        self.evaluate = alpha.EVALUATE(_address(lib.own_evaluate))
-        self.jacobian = alpha.JACOBIAN(_address(lib.own_jacobian))
+        self.evaluate = alpha.EVALUATE(function_address(lib.own_evaluate))
+        self.jacobian = alpha.JACOBIAN(function_address(lib.own_jacobian))
 
     def bind(self, solver):
         self.struct.solver = solver.handle

@@ -32,6 +32,8 @@ import numpy as np
 
 import exudyn as exu
 
+from fmu_components.coupling.bank_build import function_address
+
 from . import joints as joints_kernel
 from . import layout as lay
 from .contacts_kernel import index_or_slice
@@ -223,7 +225,7 @@ class StepCheck:
         compiled = self._compiled
         if compiled is None:
             return None
-        return (*(ctypes.cast(f, ctypes.c_void_p).value for f in (
+        return (*(function_address(f) for f in (
             compiled.lib.step_check_links, compiled.lib.step_check_contacts)),
             compiled.at, *self._start_at)
 

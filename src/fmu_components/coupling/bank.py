@@ -32,7 +32,7 @@ import threading
 
 import numpy as np
 
-from .bank_build import library_path
+from .bank_build import function_address, library_path
 from .errors import CouplingError, StepDiscarded
 from .law import LoadLaw
 from .master import Verdict, count_unconverged
@@ -381,7 +381,7 @@ class Bank:
         evaluates the laws itself at every iterate: bank_law_loads(handle, deflection,
         loads, slopes), arrays of n (slopes may be NULL), as law_loads; valid while the
         bank lives."""
-        return ctypes.cast(self._lib.bank_law_loads, ctypes.c_void_p).value, self._handle
+        return function_address(self._lib.bank_law_loads), self._handle
 
     def law_table(self):
         """The present laws as a LawTable (copies): evaluated as now after the bank
@@ -527,4 +527,4 @@ class LawTable:
 
     def law_loads_entry(self):
         """(the address of bank.c's law_table_loads, the table's), valid while it lives."""
-        return ctypes.cast(self._lib.law_table_loads, ctypes.c_void_p).value, self._handle
+        return function_address(self._lib.law_table_loads), self._handle

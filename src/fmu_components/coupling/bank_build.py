@@ -27,6 +27,12 @@ COMPILERS = {"linux64": ("gcc", ".so", ["-shared", "-fPIC", "-fvisibility=hidden
              "win64": ("x86_64-w64-mingw32-gcc", ".dll", ["-shared", "-static-libgcc"])}
 
 
+def function_address(function):
+    """A loaded library's function's address, for C that calls it through a pointer (a
+    kernel handed another library's function)."""
+    return ctypes.cast(function, ctypes.c_void_p).value
+
+
 class NoCompiler(RuntimeError):
     """No C compiler for the bank: the host can use the coupling's Python path."""
 
