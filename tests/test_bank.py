@@ -14,67 +14,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fmu_components.coupling import Coupling, CouplingError, FmuComponent, LoadLaw
+from fmu_components.coupling import CouplingError, LoadLaw
 from fmu_components.coupling import bank_build, linearised
 from fmu_components.coupling.bank import Bank
 
+from bank_runs import bank_run, mix, motion, python_run
+
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
-
-
-def mix(fmus, names=("tyre", "radial", "torsion", "damper")):
-    made = {"tyre": lambda: FmuComponent(fmus["RoadWheelTyre"], "tyre", unilateral=True),
-            "radial": lambda: FmuComponent(fmus["TrackBushRadial"], "radial"),
-            "torsion": lambda: FmuComponent(fmus["TrackBushTorsion"], "torsion"),
-            "damper": lambda: FmuComponent(fmus["RotaryDamper"], "damper")}
-    return [made[name]() for name in names]
-
-
-def motion(t, passes=0):
-    """Each instance's deflection; the host's solution moves a little with each pass, so
-    that every pass's law shows."""
-    t = t + 1e-5 * passes
-    return np.array([3e-3 + 1e-3 * math.sin(60 * t), 2e-4 + 1e-4 * math.sin(40 * t),
-                     0.1 * math.sin(20 * t), 0.05 * math.sin(30 * t)])
-
-
-def python_run(fmus, scheme, steps, step=1e-3):
-    components = mix(fmus)
-    coupling = Coupling(scheme)
-    now = [0.0, 0]
-    for i, component in enumerate(components):
-        coupling.add(component, lambda i=i: (motion(*now)[i], 0.0))
-    coupling.start(0.0)
-    rows = []
-    try:
-        for k in range(1, steps + 1):
-            now[:] = k * step, 0
-            coupling.begin_step(now[0])
-            while coupling.end_pass(now[0]).repeat:
-                now[1] += 1
-            coupling.accept(now[0])
-            probe = 1.01 * motion(now[0])
-            rows.append([c.load for c in components]
-                        + [c.law(x) for c, x in zip(components, probe)])
-    finally:
-        coupling.free()
-    return np.array(rows), coupling
-
-
-def bank_run(fmus, scheme, steps, step=1e-3):
-    bank = Bank(mix(fmus), scheme)
-    bank.start(0.0, motion(0.0))
-    rows = []
-    try:
-        for k in range(1, steps + 1):
-            t, passes = k * step, 0
-            bank.begin_step(t)
-            while bank.end_pass(t, motion(t, passes)).repeat:
-                passes += 1
-            bank.accept(t)
-            rows.append(list(bank.loads) + list(bank.law_loads(1.01 * motion(t))))
-    finally:
-        bank.free()
-    return np.array(rows), bank
 
 
 @pytest.fixture

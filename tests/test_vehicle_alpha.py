@@ -555,3 +555,36 @@ def test_a_rough_first_solve_stops_at_its_own_tolerance_and_the_repeat_at_the_fu
     assert np.all(np.abs(solved[0] - reference[0]) <= bound)
     assert rough.step(h, 2 * h) == 0  # each step's first solve rough again
     assert absolute < rough.report()["residual"] <= rough_tolerance
+
+
+def test_an_update_that_grew_the_residual_on_a_new_matrix_is_halved():
+    """reuse_damping: a body on a saturating force, F atan(q / eps), whose step crosses the
+    knee. Newton cycles there between iterates on new matrices (each one's tangent sends
+    it past the knee again) and does not converge; with each update that grew the residual
+    on a new matrix halved, the same step converges (the residual is monotone in q, so
+    its one root is the step's solution)."""
+    force, eps = 1e3, 1e-3
+
+    def evaluate(t, q, v):
+        return (-force * np.arctan(q / eps), np.zeros(0),
+                (np.zeros(0, int), np.zeros(0, int), np.zeros(0)))
+
+    def jacobian(t, q, v):
+        one = np.zeros(1, int)
+        return ((one, one, force / eps / (1.0 + (q / eps) ** 2)), (one, one, np.zeros(1)))
+
+    statuses = {}
+    for damping in (0, 3):
+        solver = alpha.AlphaSolver(
+            alpha.PythonSystem(1, 0, evaluate, jacobian), np.ones(1), 0, np.zeros(1, int), 1,
+            0, alpha.Settings(reuse_damping=damping, absolute_tolerance=1e-8,
+                              relative_tolerance=1e-12, reuse_broyden=1, **REUSE), 16)
+        assert solver.initialize(0.0, np.array([0.05]), np.zeros(1)) == 0
+        statuses[damping] = solver.step(1e-2, 1e-2)
+        norms, made = solver.trace()
+        if damping == 0:  # a cycle of two on new matrices to the iteration limit
+            assert len(norms) == solver.settings.max_iterations and made.all()
+            assert norms[-1] == pytest.approx(norms[-3], rel=1e-6) and norms[-1] > 1e3
+        else:
+            assert solver.report()["residual"] <= 1e-8
+    assert [alpha.STATUS[statuses[d]] for d in (0, 3)] == ["not converged", "converged"]

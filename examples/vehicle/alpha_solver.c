@@ -22,7 +22,9 @@
  * present iterate (no restart) after an iteration whose residual norm contracted by a
  * ratio worse than reuse_contractivity, or too slowly for the iterations left; an
  * iterate whose residual grew on a kept matrix undone and a new matrix made at the one
- * before; an iterate beyond maximum_solution_norm
+ * before; past a solve's first iteration, an update on a new matrix that grew it halved
+ * up to reuse_damping times while it still grows (a kink in the forces between the
+ * iterates: Newton would cycle across it); an iterate beyond maximum_solution_norm
  * or not a number: the pass again from its start with a new matrix, or, where the
  * iteration's matrix was new, the step not converged. A step of another h, a restart or
  * a failed step start with a new one. Convergence is tested as exudyn's.
@@ -405,6 +407,18 @@ static int solve(alpha_solver *s, double h, double t_new, int warm, double toler
                     start_point(s, h, warm);
                     double ignored;
                     if ((status = residual(s, t_new, scale, &ignored))) goto failed;
+                } else if (made && s->iterations > 1 && !(contractivity <= 1.0)
+                           && set->reuse_damping > 0) {
+                    /* grown on a new matrix (a kink of the loads between the iterates):
+                       the update halved while the residual still grows */
+                    double share = 1.0;
+                    for (int k = 0; k < set->reuse_damping && !(current <= last); k++) {
+                        share *= 0.5;
+                        update(s, share, scale, beta_prime, gamma_prime);
+                        if ((status = residual(s, t_new, scale, &current))) goto failed;
+                    }
+                    s->jacobian_update_requested = 1;
+                    last = current;
                 } else if (!made && !(contractivity <= 1.0)) {
                     /* grown on a kept matrix: the iterate undone, a new matrix there */
                     update(s, 1.0, scale, beta_prime, gamma_prime);

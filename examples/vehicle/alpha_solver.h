@@ -43,6 +43,9 @@ typedef struct {
     /* a step's first solve (alpha_step) to this absolute tolerance instead (0: absolute_tolerance):
        for a coupled host that always solves the step again with new loads (alpha_repeat) */
     double first_pass_tolerance;
+    /* the reuse policy: where an iteration past the first on a new matrix grew the
+       residual norm, its update halved up to this many times while it still grows (0: off) */
+    int reuse_damping;
 } alpha_settings;
 
 #define ALPHA_TRACE 64          /* iterations of a solve traced (alpha_trace) */

@@ -53,7 +53,8 @@ class Settings(ctypes.Structure):
     or reuse_jacobian (the reuse policy, alpha_solver.h: 1 the factorization kept across
     a step's iterations and passes, 2 across its steps of the same h too; a new one after
     an iteration that contracted the residual norm by a ratio worse than
-    reuse_contractivity)."""
+    reuse_contractivity; reuse_damping: the halvings of an update on a new matrix that
+    grew it)."""
     _fields_ = [("spectral_radius", _real), ("relative_tolerance", _real),
                 ("absolute_tolerance", _real), ("maximum_solution_norm", _real),
                 ("modified_newton_contractivity", _real), ("pivot_tolerance", _real),
@@ -62,14 +63,14 @@ class Settings(ctypes.Structure):
                 ("max_modified_newton_restart_iterations", _int),
                 ("adapt_initial_residual", _int), ("reuse_jacobian", _int),
                 ("reuse_contractivity", _real), ("reuse_broyden", _int),
-                ("first_pass_tolerance", _real)]
+                ("first_pass_tolerance", _real), ("reuse_damping", _int)]
     DEFAULTS = dict(spectral_radius=0.9, relative_tolerance=1e-8, absolute_tolerance=1e-10,
                     maximum_solution_norm=1e38, modified_newton_contractivity=0.5,
                     pivot_tolerance=1e-12, max_iterations=25, use_modified_newton=0,
                     max_modified_newton_iterations=8,
                     max_modified_newton_restart_iterations=7, adapt_initial_residual=1,
                     reuse_jacobian=0, reuse_contractivity=0.5, reuse_broyden=0,
-                    first_pass_tolerance=0.0)
+                    first_pass_tolerance=0.0, reuse_damping=0)
 
     def __init__(self, **given):
         unknown = set(given) - set(self.DEFAULTS)

@@ -50,15 +50,20 @@ CAPACITY = 65536  # triplets of the system's Jacobian
 # matrix: that solution only sets the FMUs' first pass, whose answers give the next law; the
 # step's last solve is to the full tolerance (docs/vehicle.md, "A rough first solve")
 FIRST_PASS_LOOSENESS = 1e4
+# An update that grew the residual on a new Newton matrix halved up to this many times
+# (alpha_solver.h's reuse_damping): Newton on laws with a kink between its iterates (a
+# reversal's at the step's start: kinked_first_laws) cycles without it
+DAMPING = 3
 # the solver core's Newton policies (alpha_solver.h): exudyn's full Newton (a new
 # factorization every iteration); "chord", the last factorization kept across
 # iterations, passes and steps of the same h, a new one at the present iterate after an
 # iteration that contracted the residual norm by a ratio worse than the contractivity;
 # "reuse", the same with the kept matrix's steps corrected by Broyden's rank-one updates
-# (docs/vehicle.md, The vehicle on its own solver)
+# and the updates damped (docs/vehicle.md, The vehicle on its own solver)
 NEWTON = {"full": dict(reuse_jacobian=0),
           "chord": dict(reuse_jacobian=2, reuse_contractivity=0.5),
-          "reuse": dict(reuse_jacobian=2, reuse_contractivity=0.25, reuse_broyden=1)}
+          "reuse": dict(reuse_jacobian=2, reuse_contractivity=0.25, reuse_broyden=1,
+                        reuse_damping=DAMPING)}
 DEFAULT_NEWTON = "reuse"
 # exudyn's adaptive step: steps that converge before a halved step is doubled
 # (timeIntegration.adaptiveStepRecoverySteps), the factor (adaptiveStepIncrease), and the
@@ -131,6 +136,14 @@ def first_pass_tolerance(scheme, policy, tolerance):
     return FIRST_PASS_LOOSENESS * tolerance if rough else 0.0
 
 
+def kinked_first_laws(policy):
+    """Whether a run with the Newton `policy` (a value of NEWTON) gives each step's first
+    law the reversal's kink at the accepted point (Bank.kink_first_laws): where the policy
+    damps Newton's updates; full Newton, exudyn's, cycles on that kink (docs/vehicle.md,
+    "A kink in the first law")."""
+    return policy.get("reuse_damping", 0) > 0
+
+
 def solver_for(vehicle, laws, relative_tolerance=1e-8):
     """(OwnSystem, AlphaSolver) for `vehicle` with the laws of `laws` (a bank or a
     LawTable), with the run's settings: the vehicle's spectral radius and Newton absolute
@@ -189,6 +202,7 @@ class OwnHost:
         self.path = vehicle.compiled_path
         self.bank = self.path.bank
         self.own, self.solver = solver_for(vehicle, self.bank, relative_tolerance)
+        self.kinked = kinked_first_laws(NEWTON[vehicle.own_newton or DEFAULT_NEWTON])
         # the contacts at a pass's solution: the system's Newton evaluated them last there
         contacts, evaluated = vehicle.contacts, self.own.system.contacts
         self.adopt = lambda t, q, v, at: contacts.adopt(t, q, v, evaluated, at)
@@ -377,6 +391,7 @@ class OwnHost:
         end = start_time + steps * step
         with bank_in_use(self.v):
             self._one = self._one_call(check)
+            self.bank.kink_first_laws(self.kinked)
             return self._run(start_time, end, step, check)
 
     def _run(self, start_time, end, step, check):
@@ -401,6 +416,7 @@ class OwnHost:
             self.solve_cpu = time.process_time() - began
             self._put(t, self._accepted)  # the run's last state in exudyn's data
         finally:
+            self.bank.kink_first_laws(False)
             self.bank.free()
         return self
 

@@ -44,6 +44,9 @@ EXPORT void bank_bind(Bank *bank, const double *deflection, double *laws, double
 
 EXPORT void bank_bind_call(Bank *bank, BankCall *call) { bank->call = call; }
 
+/* fmu.py's kinked_first_law, for every instance (bank.py's kink_first_laws) */
+EXPORT void bank_kink_first_laws(Bank *bank, int on) { bank->kinked_first_laws = on; }
+
 EXPORT void bank_set_scheme(Bank *bank, int scheme, int passes, int least_passes,
                             double tolerance) {
     bank->scheme = scheme;
@@ -274,6 +277,11 @@ static int reversible_law(Bank *bank, int i) {
         if (status > STATUS_OK) return fail(bank, i, FAILED_GET, status, accepted[0], 0.0);
     }
     double tangent = out[c->stiffness];
+    if (bank->kinked_first_laws && accepted[2] != 0.0) {  /* the kink at the accepted point */
+        set_law(bank, i, accepted[1], out[c->load], tangent, 0.0);
+        set_kink(bank, i, accepted[1], c->reverse_stiffness, sign_of(accepted[2]));
+        return 0;
+    }
     if (!(fabs(2.0 * accepted[2] - c->previous_rate) > fabs(accepted[2] - c->previous_rate)))
         tangent = 0.5 * (tangent + c->reverse_stiffness);
     set_law(bank, i, accepted[1], out[c->load], tangent, 0.0);

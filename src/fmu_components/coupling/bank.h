@@ -112,6 +112,7 @@ typedef struct {
 
 typedef struct {
     int n, scheme, passes, least_passes;
+    int kinked_first_laws; /* fmu.py's kinked_first_law, for every instance */
     BankCall *call;
     double tolerance;
     Instance *instances;

@@ -86,6 +86,7 @@ def library():
         lib.bank_law_loads.argtypes = [pointer] * 4
         lib.law_table_loads.argtypes = [pointer] * 4
         lib.bank_bind_call.argtypes = [pointer, pointer]
+        lib.bank_kink_first_laws.argtypes = [pointer, integer]
         # the calls of every host step take the bank alone, as a c_void_p (no argtypes:
         # ctypes passes it as it is; converting arguments cost more than the calls' work)
         for name in ("bank_begin_step", "bank_end_pass", "bank_accept"):
@@ -371,6 +372,16 @@ class Bank:
             self._raise()
 
     # --- the laws ----------------------------------------------------------------------------
+
+    def kink_first_laws(self, on=True):
+        """Each step's first law with the reversal's kink at the accepted point, for every
+        instance (fmu.py's `kinked_first_law`, reversible_law): for a host whose Newton
+        copes with a kink at the step's start (the vehicle's own solver, whose Newton
+        damps an update that grew the residual on a new matrix)."""
+        for component in self.components:
+            component.kinked_first_law = on
+        if self._handle:
+            self._lib.bank_kink_first_laws(self._handle, int(on))
 
     def law_loads(self, deflection, slopes=False):
         """The current laws' loads at the host's deflections (and their slopes)."""

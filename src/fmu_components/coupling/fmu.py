@@ -102,6 +102,9 @@ class FmuComponent:
         self.law = None
         # the tangent for motion the other way from the accepted point (reversible_law)
         self.reverse_stiffness = None
+        # a step's first law with the reversal's kink at the accepted point, for a host
+        # whose Newton copes with a kink at the step's start (reversible_law)
+        self.kinked_first_law = False
         self.do_steps = self.saves = self.restores = 0
 
     # --- FMI calls (instance.py makes them, and raises for their refusals) ----------------
@@ -194,7 +197,10 @@ class FmuComponent:
         way (a reversal meets up to four times the loading tangent). It may where the
         last rate, extrapolated by its last change, is no larger than that change: the
         direction is not known (the track bushes ringing from step to step; a wheel's
-        tyre moving smoothly keeps its direction's tangent). The tangent for motion the
+        tyre moving smoothly keeps its direction's tangent). With `kinked_first_law`
+        (and a last rate) the law has both instead: the last direction's tangent on its
+        side of the accepted point, the other way's beyond it, the FMU's own kink there
+        (docs/vehicle.md, "A kink in the first law"). The tangent for motion the
         other way is the `stiffness` output at the mirrored rate (the FMU's states are
         not changed, and the next trial sets its inputs again); the law about the step's
         answer keeps it for the kink (_reversal)."""
@@ -204,6 +210,9 @@ class FmuComponent:
             self.instance.set(self._inputs, [self.deflection, -self.rate])
             self.reverse_stiffness = self.instance.get(self._stiffness_output)[0]
         tangent = self.stiffness
+        if self.kinked_first_law and self.rate:
+            return self._law(self.deflection, self.load, tangent, kink=self.deflection,
+                             beyond=self.reverse_stiffness, side=_sign(self.rate))
         if not abs(2.0 * self.rate - self.previous_rate) > abs(self.rate - self.previous_rate):
             tangent = 0.5 * (tangent + self.reverse_stiffness)
         return self._law(self.deflection, self.load, tangent)
