@@ -488,3 +488,29 @@ def test_only_a_scheme_that_always_solves_again_with_a_kept_matrix_solves_first_
     for name in ("explicit", "corrected", "converged"):
         assert first_pass_tolerance(scheme_named(name), NEWTON["reuse"], 0.1) == 0.0
     assert first_pass_tolerance(None, NEWTON["reuse"], 0.1) == 0.0
+
+
+def test_the_passes_benchmark_records_the_banks_own_mismatch(native_fmus):
+    """benchmarks/vehicle_passes.py over 10 steps: every step's passes recorded (at least
+    the two `iterated` takes), each pass's instances' mismatches, whose worst is the
+    bank's verdict's to the bit; a step ended before the pass limit by a pass within the
+    tolerance, and past the least passes only after one above it; and its table printed."""
+    import importlib.util
+
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    spec = importlib.util.spec_from_file_location(
+        "vehicle_passes", ROOT / "benchmarks" / "vehicle_passes.py")
+    passes = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(passes)
+    vehicle, steps, tolerance = passes.recorded_run("bump", 5.0, 0.01, straight=False)
+    assert len(steps) == 10 and tolerance > 0.0
+    scheme = vehicle.coupling.scheme
+    for step in steps:
+        assert len(step) >= scheme.least_passes >= 2
+        for mismatch, worst in step:
+            assert mismatch.shape == (vehicle.instances,) and mismatch.max() == worst
+        if len(step) < scheme.passes:
+            assert step[-1][1] <= tolerance
+        if len(step) > scheme.least_passes:
+            assert step[-2][1] > tolerance
+    passes.table(vehicle, steps, tolerance)
