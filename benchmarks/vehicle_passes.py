@@ -52,7 +52,7 @@ def recorded_run(course, speed, end_time, straight):
     Bank.begin_step, Bank.end_pass = begin_step, end_pass
     kinked = own_host.kinked_first_laws
     if straight:
-        own_host.kinked_first_laws = lambda policy: False
+        own_host.kinked_first_laws = lambda settings: False
     try:
         vehicle, _, _, _ = simulate(course, speed, end_time, DEFAULT_STEP,
                                     statics=static_points())

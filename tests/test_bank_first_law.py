@@ -30,6 +30,7 @@ def test_the_bank_gives_the_python_paths_numbers_with_kinked_first_laws(native_f
         for row, (law, *_) in zip(laws, step):
             assert list(row[[0, 1, 2, 3, 8, 9, 10, 11]]) == [getattr(law, f) for f in fields]
 
+
 def test_the_first_law_has_the_last_directions_tangent_on_its_side_the_others_beyond(
         native_fmus):
     """About the accepted point (x*, F*): on the side the last step moved to, the

@@ -47,7 +47,7 @@ def runs(native_fmus):
             if name == "own":  # the adoptions of one run (test_every_pass_takes_...)
                 result["adopted"] = _watch_adoptions(patch)
             if name.startswith("reuse"):
-                patch.setattr("vehicle.own_host.kinked_first_laws", lambda policy: False)
+                patch.setattr("vehicle.own_host.kinked_first_laws", lambda settings: False)
             vehicle, histories, _, _ = simulate("bump", SPEED, END, STEP, statics=statics,
                                                 fmu_dir=fmu_dir, solver=solver,
                                                 own_newton=newton, newton_tolerance=tolerance)
@@ -124,7 +124,6 @@ def test_the_reuse_policy_converges_to_full_newtons_solution(runs):
     assert reuse["jacobians"] < own["jacobians"]  # it kept its matrix
 
 
-
 def test_the_kinked_first_laws_save_solves_within_the_couplings_own_error(runs):
     """The default run (the reuse policy with kinked first laws: docs/vehicle.md, "A kink
     in the first law") takes every step at its length, in fewer solves per step than the
@@ -142,6 +141,7 @@ def test_the_kinked_first_laws_save_solves_within_the_couplings_own_error(runs):
     assert kinked["newton_per_pass"] != straight["newton_per_pass"]
     hull, _ = largest_difference(runs["own"][0], runs["kinked"][0], KEYS[:2])
     assert 0.0 < hull <= 1e-3
+
 
 def test_the_step_check_judges_the_solvers_arrays_as_exudyns_data(runs):
     """StepCheck.judge (the own run's, on the solver's arrays) and StepCheck.__call__ (the

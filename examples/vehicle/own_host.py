@@ -136,12 +136,12 @@ def first_pass_tolerance(scheme, policy, tolerance):
     return FIRST_PASS_LOOSENESS * tolerance if rough else 0.0
 
 
-def kinked_first_laws(policy):
-    """Whether a run with the Newton `policy` (a value of NEWTON) gives each step's first
-    law the reversal's kink at the accepted point (Bank.kink_first_laws): where the policy
-    damps Newton's updates; full Newton, exudyn's, cycles on that kink (docs/vehicle.md,
-    "A kink in the first law")."""
-    return policy.get("reuse_damping", 0) > 0
+def kinked_first_laws(settings):
+    """Whether a run with the solver core's `settings` (alpha_solver.Settings) gives each
+    step's first law the reversal's kink at the accepted point (Bank.kink_first_laws):
+    where its Newton damps the updates; full Newton, exudyn's, cycles on that kink
+    (docs/vehicle.md, "A kink in the first law")."""
+    return settings.reuse_damping > 0
 
 
 def solver_for(vehicle, laws, relative_tolerance=1e-8):
@@ -202,7 +202,6 @@ class OwnHost:
         self.path = vehicle.compiled_path
         self.bank = self.path.bank
         self.own, self.solver = solver_for(vehicle, self.bank, relative_tolerance)
-        self.kinked = kinked_first_laws(NEWTON[vehicle.own_newton or DEFAULT_NEWTON])
         # the contacts at a pass's solution: the system's Newton evaluated them last there
         contacts, evaluated = vehicle.contacts, self.own.system.contacts
         self.adopt = lambda t, q, v, at: contacts.adopt(t, q, v, evaluated, at)
@@ -391,8 +390,11 @@ class OwnHost:
         end = start_time + steps * step
         with bank_in_use(self.v):
             self._one = self._one_call(check)
-            self.bank.kink_first_laws(self.kinked)
-            return self._run(start_time, end, step, check)
+            self.bank.kink_first_laws(kinked_first_laws(self.solver.settings))
+            try:
+                return self._run(start_time, end, step, check)
+            finally:  # the components' own attribute (the bank is freed by then)
+                self.bank.kink_first_laws(False)
 
     def _run(self, start_time, end, step, check):
         data = self.v.mbs.systemData
@@ -416,7 +418,6 @@ class OwnHost:
             self.solve_cpu = time.process_time() - began
             self._put(t, self._accepted)  # the run's last state in exudyn's data
         finally:
-            self.bank.kink_first_laws(False)
             self.bank.free()
         return self
 

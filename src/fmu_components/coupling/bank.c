@@ -277,14 +277,13 @@ static int reversible_law(Bank *bank, int i) {
         if (status > STATUS_OK) return fail(bank, i, FAILED_GET, status, accepted[0], 0.0);
     }
     double tangent = out[c->stiffness];
-    if (bank->kinked_first_laws && accepted[2] != 0.0) {  /* the kink at the accepted point */
-        set_law(bank, i, accepted[1], out[c->load], tangent, 0.0);
-        set_kink(bank, i, accepted[1], c->reverse_stiffness, sign_of(accepted[2]));
-        return 0;
-    }
-    if (!(fabs(2.0 * accepted[2] - c->previous_rate) > fabs(accepted[2] - c->previous_rate)))
+    int kinked = bank->kinked_first_laws && accepted[2] != 0.0;
+    if (!kinked
+        && !(fabs(2.0 * accepted[2] - c->previous_rate) > fabs(accepted[2] - c->previous_rate)))
         tangent = 0.5 * (tangent + c->reverse_stiffness);
     set_law(bank, i, accepted[1], out[c->load], tangent, 0.0);
+    if (kinked)  /* the kink at the accepted point: the other way's tangent beyond it */
+        set_kink(bank, i, accepted[1], c->reverse_stiffness, sign_of(accepted[2]));
     return 0;
 }
 

@@ -123,6 +123,12 @@ def _address(array):
     return array.ctypes.data_as(ctypes.c_void_p)
 
 
+def _addresses(dll, names):
+    """The named functions' addresses in a loaded FMU library, as a C array of pointers."""
+    return (ctypes.c_void_p * len(names))(*[function_address(getattr(dll, name))
+                                             for name in names])
+
+
 def _law_loads(function, handle, n, deflection, slopes):
     """(loads, slopes where asked) of n laws at `deflection` by bank.c's `function`."""
     deflection = np.ascontiguousarray(deflection, dtype=float)
@@ -207,9 +213,7 @@ class Bank:
         """Give the C bank the instance pointer and its library's function addresses."""
         instance = component.instance
         version = 3 if instance.fmi3 else 2
-        functions = (ctypes.c_void_p * 6)(*[
-            ctypes.cast(getattr(instance.fmpy.dll, name), ctypes.c_void_p)
-            for name in FUNCTIONS[version]])
+        functions = _addresses(instance.fmpy.dll, FUNCTIONS[version])
         if len(component.output_names) > MAX_OUTPUTS:
             raise ValueError(f"{component.name}: more than {MAX_OUTPUTS} outputs")
         vrs = (ctypes.c_uint * (3 + len(component.output_names)))(
@@ -239,8 +243,7 @@ class Bank:
         model = component.linearisation()
         instance = model._instance
         names = MODEL_FUNCTIONS[3 if instance.fmi3 else 2]
-        functions = (ctypes.c_void_p * len(names))(*[
-            ctypes.cast(getattr(instance.fmpy.dll, name), ctypes.c_void_p) for name in names])
+        functions = _addresses(instance.fmpy.dll, names)
         vrs = (ctypes.c_uint * (2 * model.n + 4))(
             *instance.fmu.references(model.state_names), *model._jacobian.unknowns,
             *model._inputs.references)

@@ -209,13 +209,13 @@ class FmuComponent:
             self.instance.time = self.time
             self.instance.set(self._inputs, [self.deflection, -self.rate])
             self.reverse_stiffness = self.instance.get(self._stiffness_output)[0]
-        tangent = self.stiffness
+        tangent, kink = self.stiffness, {}
         if self.kinked_first_law and self.rate:
-            return self._law(self.deflection, self.load, tangent, kink=self.deflection,
-                             beyond=self.reverse_stiffness, side=_sign(self.rate))
-        if not abs(2.0 * self.rate - self.previous_rate) > abs(self.rate - self.previous_rate):
+            kink = {"kink": self.deflection, "beyond": self.reverse_stiffness,
+                    "side": _sign(self.rate)}
+        elif not abs(2.0 * self.rate - self.previous_rate) > abs(self.rate - self.previous_rate):
             tangent = 0.5 * (tangent + self.reverse_stiffness)
-        return self._law(self.deflection, self.load, tangent)
+        return self._law(self.deflection, self.load, tangent, **kink)
 
     def _reversal(self, deflection):
         """The kink of a law about a trial that ended at `deflection`: at the accepted
