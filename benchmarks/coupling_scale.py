@@ -15,7 +15,10 @@ the real-time factor (simulated time over wall time), and the ratio of the per-i
 cost to the C host's corrected cycle (c_host/bench_host.c `rollback`, as
 rollback_cost.py measures it), mix-weighted, measured in this run, wall time to wall time
 and CPU time to CPU time (on a loaded machine the wall times of both stretch unevenly:
-compare CPU times there). The load average is printed with them.
+compare CPU times there). The machine's pace moves by up to a factor of two between
+runs of a few milliseconds, so the C host and the compiled path are measured in rounds, one
+after the other, and each ratio is taken within its round; the figures printed are the
+rounds' medians. The load average is printed with them.
 """
 
 import argparse
@@ -144,43 +147,75 @@ def long_run(fmus, steps):
     return early, rss_mib(), wall
 
 
+def c_host_per_instance(cycles, counts):
+    """The C host's corrected cycle per instance of a mix, mix-weighted: (wall, CPU) us."""
+    n = sum(counts.values())
+    return tuple(sum(cycles[name][j] * k for name, k in counts.items()) / n for j in (0, 1))
+
+
+def compiled_rounds(fmus, mixes, steps, rounds, c_steps):
+    """Per round, the C host's cycles and then the compiled path at each count, so that each
+    ratio is taken against the C host measured beside it: {count: [(wall, CPU, ratio wall,
+    ratio CPU), ...]} and the rounds' C host cycles."""
+    figures, all_cycles = {count: [] for count in mixes}, []
+    for _ in range(rounds):
+        cycles = c_host_cycles(fmus, 1, c_steps)
+        all_cycles.append(cycles)
+        for count, counts in mixes.items():
+            n = sum(counts.values())
+            names, x, second = inputs(counts, steps)
+            wall, cpu = run_bank(fmus, names, x, second, steps)
+            c_wall, c_cpu = c_host_per_instance(cycles, counts)
+            figures[count].append((wall, cpu, wall * 1e6 / n / c_wall, cpu * 1e6 / n / c_cpu))
+    return figures, all_cycles
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--fmus", type=Path, default=ROOT / "fmus")
     parser.add_argument("--counts", type=int, nargs="+", default=[10, 100, 362, 1000])
-    parser.add_argument("--steps", type=int, default=400, help="host steps, compiled path")
+    parser.add_argument("--steps", type=int, default=1000, help="host steps, compiled path")
+    parser.add_argument("--rounds", type=int, default=5,
+                        help="rounds of the C host and the compiled path (their medians)")
     parser.add_argument("--python-steps", type=int, default=20, help="host steps, Python path")
     parser.add_argument("--quick", action="store_true", help="seconds: small sizes")
     parser.add_argument("--long", action="store_true", help="also 10^6 bank steps: memory")
     args = parser.parse_args(argv)
     if args.quick:
-        args.counts, args.steps, args.python_steps = [10, 40], 50, 5
+        args.counts, args.steps, args.python_steps, args.rounds = [10, 40], 50, 5, 1
     fmus = native_fmus(args.fmus)
     load_before = os.getloadavg()[0]
-    cycles = c_host_cycles(fmus, 3 if args.quick else 5, 2000 if args.quick else 10000)
+    mixes = {count: mix(count) for count in args.counts}
+    figures, all_cycles = compiled_rounds(fmus, mixes, args.steps, args.rounds,
+                                          2000 if args.quick else 10000)
+    cycles = {name: tuple(statistics.median(c[name][j] for c in all_cycles) for j in (0, 1))
+              for name in all_cycles[0]}
     print("# The coupling at vehicle scale: Python path, compiled path (bank), C host\n")
-    print("C host's corrected cycle (us, median, wall / CPU): "
+    print(f"C host's corrected cycle (us, median of {args.rounds} rounds, wall / CPU): "
           + ", ".join(f"{n} {c:.3f} / {u:.3f}" for n, (c, u) in cycles.items()) + "\n")
     print("| instances | path | us per host step (wall) | us per instance step (wall) | "
           "CPU us per host step | real-time factor (wall) | per instance / C host (wall) | "
           "per instance / C host (CPU) |")
     print("|---|---|---|---|---|---|---|---|")
-    for count in args.counts:
-        counts = mix(count)
+    for count, counts in mixes.items():
         n = sum(counts.values())
-        # us per instance, mix-weighted: wall, CPU
-        c_host, c_host_cpu = (sum(cycles[name][j] * k for name, k in counts.items()) / n
-                              for j in (0, 1))
-        steps = max(args.steps, args.python_steps)
-        names, x, second = inputs(counts, steps)
-        for path, run, k in (("Python", run_python, args.python_steps),
-                             ("compiled", run_bank, args.steps)):
-            wall, cpu = run(fmus, names, x, second, k)
-            print(f"| {n} | {path} | {wall * 1e6:.1f} | {wall * 1e6 / n:.3f} | "
-                  f"{cpu * 1e6:.1f} | {STEP / wall:.3g} | {wall * 1e6 / n / c_host:.2f} | "
-                  f"{cpu * 1e6 / n / c_host_cpu:.2f} |", flush=True)
+        c_wall, c_cpu = c_host_per_instance(cycles, counts)
+        names, x, second = inputs(counts, args.python_steps)
+        wall, cpu = run_python(fmus, names, x, second, args.python_steps)
+        print(f"| {n} | Python | {wall * 1e6:.1f} | {wall * 1e6 / n:.3f} | {cpu * 1e6:.1f} | "
+              f"{STEP / wall:.3g} | {wall * 1e6 / n / c_wall:.2f} | "
+              f"{cpu * 1e6 / n / c_cpu:.2f} |", flush=True)
+        wall, cpu, ratio, ratio_cpu = (statistics.median(f[j] for f in figures[count])
+                                       for j in range(4))
+        spread = (f" ({min(f[3] for f in figures[count]):.2f} to "
+                  f"{max(f[3] for f in figures[count]):.2f})" if args.rounds > 1 else "")
+        print(f"| {n} | compiled | {wall * 1e6:.1f} | {wall * 1e6 / n:.3f} | {cpu * 1e6:.1f} | "
+              f"{STEP / wall:.3g} | {ratio:.2f} | {ratio_cpu:.2f}{spread} |", flush=True)
     print(f"\nload average (1 min) {load_before:.2f} before, {os.getloadavg()[0]:.2f} after, "
-          f"{os.cpu_count()} CPUs; 1 ms host steps, `corrected`, two passes per step.")
+          f"{os.cpu_count()} CPUs; 1 ms host steps, `corrected`, two passes per step; "
+          f"the compiled path's figures are medians over {args.rounds} rounds, each ratio "
+          f"taken against the C host measured in its round (the CPU ratio's range in "
+          f"brackets); the Python path runs once, against the rounds' median C host.")
     if args.long:
         steps = 1_000_000
         early, late, wall = long_run(fmus, steps)
