@@ -13,6 +13,11 @@ the end times, so that exudyn's start drops out too; each in a process of its ow
 8 m/s over the bump (`explicit` and `corrected`), the span (examples/track_span.py) has
 40 links, 82 instances, `corrected`; 1 ms host steps (--step: another). The real-time factor by CPU is
 simulated time over CPU time. The machine may be loaded: the load average is printed.
+On this shared machine one run's figure moves by up to 1.7 times from the next one's (the
+station's `explicit` 0.080 and 0.137 CPU s per simulated s in runs one after the other),
+so the runs go in rounds (--rounds), each round every run once, one after the other; the
+figures printed are the rounds' medians, and the station's ratio is each round's own
+ratio's median (its range in brackets).
 --newton-tolerance sets both examples' NEWTON_TOLERANCE (exudyn's Newton's absolute
 tolerance; "default", exudyn's own), which decides whether a step's second solve starts
 from the first's solution (exudyn_host).
@@ -20,6 +25,7 @@ from the first's solution (exudyn_host).
 
 import argparse
 import os
+import statistics
 import subprocess
 import sys
 import warnings
@@ -109,6 +115,8 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="seconds: short runs")
     parser.add_argument("--newton-tolerance", help="both examples' Newton tolerance "
                         "(exudyn's absolute tolerance, or 'default'); else each one's own")
+    parser.add_argument("--rounds", type=int, default=5,
+                        help="rounds of runs, each run once a round (their medians)")
     parser.add_argument("--only", choices=("station", "span"))
     parser.add_argument("--path", choices=("python", "compiled"), help="this path only")
     parser.add_argument("--one", nargs=3, metavar=("KIND", "SCHEME", "PATH"),
@@ -118,31 +126,38 @@ def main(argv=None):
         print(measure_one(args, *args.one))
         return
     links = 3 if args.quick else args.links
+    rounds = 1 if args.quick else args.rounds
     load_before = os.getloadavg()[0]
-    rows = []
+    runs = []  # (name, path, kind, scheme)
     paths = (args.path,) if args.path else ("python", "compiled")
     if args.only in (None, "station"):
         for scheme in ("explicit", "corrected"):
             for path in paths:
-                rows.append((f"station at 8 m/s, `{scheme}`", path,
-                             measure(args, "station", scheme, path)))
+                runs.append((f"station at 8 m/s, `{scheme}`", path, "station", scheme))
     if args.only in (None, "span"):
         for path in paths:
-            rows.append((f"track span, {links} links ({2 * (links + 1)} instances), "
-                         f"`corrected`", path, measure(args, "span", "corrected", path)))
+            runs.append((f"track span, {links} links ({2 * (links + 1)} instances), "
+                         f"`corrected`", path, "span", "corrected"))
+    figures = {(name, path): [] for name, path, _, _ in runs}
+    for _ in range(rounds):
+        for name, path, kind, scheme in runs:
+            figures[name, path].append(measure(args, kind, scheme, path))
+    cost = {key: statistics.median(values) for key, values in figures.items()}
     print(f"# The coupling in exudyn: CPU seconds per simulated second "
-          f"({args.step * 1e3:g} ms host steps)\n")
-    print("| run | path | CPU s per simulated s | real-time factor by CPU |")
-    print("|---|---|---|---|")
-    for name, path, cpu in rows:
-        print(f"| {name} | {path} | {cpu:.3f} | {1 / cpu:.2f} |")
-    cost = {(name, path): cpu for name, path, cpu in rows}
+          f"({args.step * 1e3:g} ms host steps; medians of {rounds} rounds)\n")
+    print("| run | path | CPU s per simulated s | real-time factor by CPU | the rounds |")
+    print("|---|---|---|---|---|")
+    for (name, path), cpu in cost.items():
+        print(f"| {name} | {path} | {cpu:.3f} | {1 / cpu:.2f} | "
+              f"{', '.join(f'{v:.3f}' for v in figures[name, path])} |")
     for path in paths:
-        explicit = cost.get(("station at 8 m/s, `explicit`", path))
+        explicit = figures.get(("station at 8 m/s, `explicit`", path))
         if explicit:
-            corrected = cost[("station at 8 m/s, `corrected`", path)]
+            ratios = [c / e for c, e in zip(figures["station at 8 m/s, `corrected`", path],
+                                            explicit)]
             print(f"\nstation, {path} path: `corrected` / `explicit` = "
-                  f"{corrected / explicit:.2f}")
+                  f"{statistics.median(ratios):.2f} (the rounds' ratios "
+                  f"{min(ratios):.2f} to {max(ratios):.2f})")
     python_explicit = cost.get(("station at 8 m/s, `explicit`", "python"))
     if python_explicit and ("station at 8 m/s, `corrected`", "compiled") in cost:
         print(f"compiled `corrected` / Python `explicit` = "
