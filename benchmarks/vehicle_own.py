@@ -7,12 +7,17 @@ evaluation, its Jacobian, the rest the solver core's LU and updates; the bank's 
 deflections; the records; the step check; the rest Python per step).
 
     python benchmarks/vehicle_own.py [--speeds 3 5] [--end-time 0.2] [--rounds 2]
-                                     [--course bump]
+                                     [--course bump [sine random]]
     python benchmarks/vehicle_own.py --agreement 0.1 0.001 [--speeds 3] [--end-time 0.02]
     python benchmarks/vehicle_own.py --newton full reuse [--no-exudyn] ...
     python benchmarks/vehicle_own.py --couplings corrected iterated ...
 
-Prints each run and the load (os.getloadavg) before and after. --agreement: instead, at
+Prints each run and the load (os.getloadavg) before and after, and then, for each course,
+speed and solver, the median of its rounds' CPU s per simulated s with their range (real
+time: 1 or less) and the system's evaluation's median time per call, the machine's pace
+(one run's CPU moves with it: compare runs of one round). Each round runs every course,
+speed and solver once, so that a change of the machine's pace falls on all of them.
+--agreement: instead, at
 each Newton absolute tolerance given, the two runs' largest difference of the histories
 (outputs.largest_difference at the times both runs have, in % of range; the hull's
 vertical acceleration's too) and their Newton iterations per solve, and each run against
@@ -116,6 +121,21 @@ def split(statistics, cpu):
     return parts
 
 
+def medians(figures, rounds):
+    """The table of each run's median over the rounds: {(course, speed, solver, coupling):
+    [(CPU s per simulated s, the system's us per evaluation or None)]}."""
+    lines = [f"medians of {rounds} round(s), CPU s per simulated s (real time: 1 or less):",
+             "| course | speed | solver | coupling | median | range | us per evaluation |",
+             "|---|---|---|---|---|---|---|"]
+    for (course, speed, solver, coupling), runs in figures.items():
+        cpu = [run[0] for run in runs]
+        paces = [run[1] for run in runs if run[1] is not None]
+        pace = f"{np.median(paces):.1f}" if paces else "-"
+        lines.append(f"| {course} | {speed:g} m/s | {solver} | {coupling} | "
+                     f"{np.median(cpu):.2f} | {min(cpu):.2f}-{max(cpu):.2f} | {pace} |")
+    return "\n".join(lines)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--speeds", type=float, nargs="+", default=[3.0, 5.0])
@@ -128,9 +148,10 @@ def main(argv=None):
                         help="the own solver's policies alone")
     parser.add_argument("--couplings", nargs="+", default=[COUPLING], metavar="SCHEME",
                         help=f"coupling schemes (default {COUPLING})")
-    parser.add_argument("--course", choices=sorted(COURSES), default=COURSE[0])
+    parser.add_argument("--course", choices=sorted(COURSES), nargs="+",
+                        default=COURSE[:1], help="one or more (each in every round)")
     args = parser.parse_args(argv)
-    COURSE[0] = args.course
+    COURSE[0] = args.course[0]
     print(f"load before: {os.getloadavg()}")
     statics = static_points()
     solvers = ([] if args.no_exudyn else ["exudyn"]) + args.newton
@@ -139,29 +160,36 @@ def main(argv=None):
                   args.newton if len(args.newton) > 1 else ["exudyn"] + args.newton)
         print(f"load after: {os.getloadavg()}")
         return
-    for speed in args.speeds:
-        for round_ in range(args.rounds):
-            for solver, coupling in itertools.product(solvers, args.couplings):
-                vehicle, result, wall, cpu = run(speed, args.end_time, statics, solver,
-                                                 coupling=coupling)
-                simulated = result["time"][-1] - result["time"][0]
-                s = vehicle.solver_statistics()
-                print(f"{speed:g} m/s round {round_ + 1} {solver} {coupling}: "
-                      f"{cpu / simulated:.2f} s CPU "
-                      f"per simulated s ({wall / simulated:.2f} wall); "
-                      f"{s['newton_per_pass']:.2f} Newton iterations per solve, "
-                      f"{s['passes_per_step']:.2f} solves per step, {s['steps']} steps for "
-                      f"{s['host_steps']}, {s['refused']} refused", flush=True)
-                if solver != "exudyn":
-                    print(f"    {s['jacobians'] / s['steps']:.2f} Newton matrices (Jacobian "
-                          f"and factorization) per step; the solves "
-                          f"{s['solve'] / simulated:.2f} s CPU per simulated s; the system's "
-                          f"f, g, G {1e6 * s['evaluate_s'] / s['evaluations']:.1f} us per "
-                          f"evaluation ({s['evaluations']})", flush=True)
-                    parts = split(s, cpu)
-                    print("    " + ", ".join(f"{name} {seconds / simulated:.3f}"
-                                             for name, seconds in parts.items())
-                          + " (s per simulated s)", flush=True)
+    figures = {}  # (course, speed, solver, coupling): [(CPU per simulated s, us an evaluation)]
+    for round_, course, speed, (solver, coupling) in itertools.product(
+            range(args.rounds), args.course, args.speeds,
+            itertools.product(solvers, args.couplings)):
+        COURSE[0] = course
+        vehicle, result, wall, cpu = run(speed, args.end_time, statics, solver,
+                                         coupling=coupling)
+        simulated = result["time"][-1] - result["time"][0]
+        s = vehicle.solver_statistics()
+        print(f"{course}, {speed:g} m/s round {round_ + 1} {solver} {coupling}: "
+              f"{cpu / simulated:.2f} s CPU "
+              f"per simulated s ({wall / simulated:.2f} wall); "
+              f"{s['newton_per_pass']:.2f} Newton iterations per solve, "
+              f"{s['passes_per_step']:.2f} solves per step, {s['steps']} steps for "
+              f"{s['host_steps']}, {s['refused']} refused", flush=True)
+        evaluation = None
+        if solver != "exudyn":
+            evaluation = 1e6 * s["evaluate_s"] / s["evaluations"]
+            print(f"    {s['jacobians'] / s['steps']:.2f} Newton matrices (Jacobian "
+                  f"and factorization) per step; the solves "
+                  f"{s['solve'] / simulated:.2f} s CPU per simulated s; the system's "
+                  f"f, g, G {evaluation:.1f} us per evaluation ({s['evaluations']})",
+                  flush=True)
+            parts = split(s, cpu)
+            print("    " + ", ".join(f"{name} {seconds / simulated:.3f}"
+                                     for name, seconds in parts.items())
+                  + " (s per simulated s)", flush=True)
+        figures.setdefault((course, speed, solver, coupling), []).append(
+            (cpu / simulated, evaluation))
+    print(medians(figures, args.rounds))
     print(f"load after: {os.getloadavg()}")
 
 
