@@ -514,3 +514,32 @@ def test_the_passes_benchmark_records_the_banks_own_mismatch(native_fmus):
         if len(step) > scheme.least_passes:
             assert step[-2][1] > tolerance
     passes.table(vehicle, steps, tolerance)
+
+
+def test_the_own_benchmark_runs_every_course_in_every_round_and_prints_medians(
+        native_fmus, capsys):
+    """benchmarks/vehicle_own.py over 5 steps, two courses in two rounds: each round runs
+    both courses, and the table's median and range are those of the runs it printed."""
+    import importlib.util
+    import re
+
+    pytest.importorskip("exudyn", reason=NO_EXUDYN)
+    spec = importlib.util.spec_from_file_location(
+        "vehicle_own_benchmark", ROOT / "benchmarks" / "vehicle_own.py")
+    benchmark = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(benchmark)
+    benchmark.main(["--speeds", "3", "--end-time", "0.005", "--rounds", "2", "--no-exudyn",
+                    "--course", "bump", "sine"])
+    out = capsys.readouterr().out
+    runs = re.findall(r"^(\w+), 3 m/s round (\d) reuse iterated: ([\d.]+) s CPU", out, re.M)
+    assert [(course, int(number)) for course, number, _ in runs] == [
+        ("bump", 1), ("sine", 1), ("bump", 2), ("sine", 2)]
+    for course in ("bump", "sine"):
+        cpu = sorted(float(figure) for name, _, figure in runs if name == course)
+        row = re.search(rf"^\| {course} \| 3 m/s \| reuse \| iterated \| ([\d.]+) \| "
+                        rf"([\d.]+)-([\d.]+) \| ([\d.]+) \|$", out, re.M)
+        assert row is not None, out
+        median, low, high, pace = map(float, row.groups())
+        # the printed figures are rounded to 0.01: the median of two is their mean
+        assert abs(median - (cpu[0] + cpu[1]) / 2) <= 0.011
+        assert (low, high) == (cpu[0], cpu[1]) and pace > 0.0
