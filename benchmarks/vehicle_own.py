@@ -61,13 +61,10 @@ def policy(name):
     return name
 
 
-COURSE = ["bump"]  # the runs' course (--course)
-
-
-def run(speed, end_time, statics, solver, **given):
-    """simulate's run of `solver`: "exudyn", or an own solver's Newton policy."""
+def run(course, speed, end_time, statics, solver, **given):
+    """simulate's run of `solver` on `course`: "exudyn", or an own solver's Newton policy."""
     own = None if solver == "exudyn" else solver
-    return simulate(COURSE[0], speed, end_time, DEFAULT_STEP, statics=statics,
+    return simulate(course, speed, end_time, DEFAULT_STEP, statics=statics,
                     solver="own" if own else "exudyn", own_newton=own, **given)
 
 
@@ -80,7 +77,7 @@ def common_times(a, b):
             {key: np.asarray(b[key])[keep_b] for key in ("time",) + KEYS})
 
 
-def agreement(speeds, end_time, tolerances, statics, solvers):
+def agreement(course, speeds, end_time, tolerances, statics, solvers):
     """Each pair at each tolerance, and each run against the first solver's at the smallest
     tolerance (what stopping at the tolerance moves), at the times both have."""
     def compare(what, a, b):
@@ -93,7 +90,7 @@ def agreement(speeds, end_time, tolerances, statics, solvers):
               f"iterations per solve {iterations[0]:.3f}, {iterations[1]:.3f}", flush=True)
 
     for speed in speeds:
-        runs = {(solver, tolerance): run(speed, end_time, statics, solver,
+        runs = {(solver, tolerance): run(course, speed, end_time, statics, solver,
                                          newton_tolerance=tolerance)
                 for tolerance in tolerances for solver in solvers}
         first, tightest = solvers[0], min(tolerances)
@@ -149,14 +146,14 @@ def main(argv=None):
     parser.add_argument("--couplings", nargs="+", default=[COUPLING], metavar="SCHEME",
                         help=f"coupling schemes (default {COUPLING})")
     parser.add_argument("--course", choices=sorted(COURSES), nargs="+",
-                        default=COURSE[:1], help="one or more (each in every round)")
+                        default=["bump"],
+                        help="one or more, each in every round (--agreement: the first)")
     args = parser.parse_args(argv)
-    COURSE[0] = args.course[0]
     print(f"load before: {os.getloadavg()}")
     statics = static_points()
     solvers = ([] if args.no_exudyn else ["exudyn"]) + args.newton
     if args.agreement:
-        agreement(args.speeds, args.end_time, args.agreement, statics,
+        agreement(args.course[0], args.speeds, args.end_time, args.agreement, statics,
                   args.newton if len(args.newton) > 1 else ["exudyn"] + args.newton)
         print(f"load after: {os.getloadavg()}")
         return
@@ -164,8 +161,7 @@ def main(argv=None):
     for round_, course, speed, (solver, coupling) in itertools.product(
             range(args.rounds), args.course, args.speeds,
             itertools.product(solvers, args.couplings)):
-        COURSE[0] = course
-        vehicle, result, wall, cpu = run(speed, args.end_time, statics, solver,
+        vehicle, result, wall, cpu = run(course, speed, args.end_time, statics, solver,
                                          coupling=coupling)
         simulated = result["time"][-1] - result["time"][0]
         s = vehicle.solver_statistics()

@@ -1,3 +1,4 @@
+import importlib.util
 from pathlib import Path
 
 import numpy as np
@@ -9,6 +10,15 @@ from fmu_components.runtime.catalog import COMPONENTS
 ROOT = Path(__file__).resolve().parents[1]
 FMU_NAMES = sorted(COMPONENTS)
 FLAVOURS = ("native", "python")
+
+
+def load_benchmark(name):
+    """benchmarks/<name>.py, imported as a module (the benchmarks are scripts, not a
+    package)."""
+    spec = importlib.util.spec_from_file_location(name, ROOT / "benchmarks" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 @pytest.fixture(scope="session")

@@ -13,7 +13,7 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import ROOT
+from conftest import ROOT, load_benchmark
 
 sys.path.insert(0, str(ROOT / "examples"))  # the example scripts, imported as modules
 
@@ -495,13 +495,8 @@ def test_the_passes_benchmark_records_the_banks_own_mismatch(native_fmus):
     the two `iterated` takes), each pass's instances' mismatches, whose worst is the
     bank's verdict's to the bit; a step ended before the pass limit by a pass within the
     tolerance, and past the least passes only after one above it; and its table printed."""
-    import importlib.util
-
     pytest.importorskip("exudyn", reason=NO_EXUDYN)
-    spec = importlib.util.spec_from_file_location(
-        "vehicle_passes", ROOT / "benchmarks" / "vehicle_passes.py")
-    passes = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(passes)
+    passes = load_benchmark("vehicle_passes")
     vehicle, steps, tolerance = passes.recorded_run("bump", 5.0, 0.01, straight=False)
     assert len(steps) == 10 and tolerance > 0.0
     scheme = vehicle.coupling.scheme
@@ -520,14 +515,10 @@ def test_the_own_benchmark_runs_every_course_in_every_round_and_prints_medians(
         native_fmus, capsys):
     """benchmarks/vehicle_own.py over 5 steps, two courses in two rounds: each round runs
     both courses, and the table's median and range are those of the runs it printed."""
-    import importlib.util
     import re
 
     pytest.importorskip("exudyn", reason=NO_EXUDYN)
-    spec = importlib.util.spec_from_file_location(
-        "vehicle_own_benchmark", ROOT / "benchmarks" / "vehicle_own.py")
-    benchmark = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(benchmark)
+    benchmark = load_benchmark("vehicle_own")
     benchmark.main(["--speeds", "3", "--end-time", "0.005", "--rounds", "2", "--no-exudyn",
                     "--course", "bump", "sine"])
     out = capsys.readouterr().out

@@ -3,12 +3,10 @@ the times both reached, never across different step sequences by interpolation, 
 lets exudyn's Newton iterate long enough that a step is not halved in one run only. The
 study itself is a benchmark; these check its comparison on made-up histories."""
 
-import importlib.util
-
 import numpy as np
 import pytest
 
-from conftest import ROOT
+from conftest import load_benchmark
 
 NO_EXUDYN = 'exudyn is not installed: pip install -e ".[examples]"'
 
@@ -16,11 +14,7 @@ NO_EXUDYN = 'exudyn is not installed: pip install -e ".[examples]"'
 @pytest.fixture(scope="module")
 def study():
     pytest.importorskip("exudyn", reason=NO_EXUDYN)
-    spec = importlib.util.spec_from_file_location("vehicle_study",
-                                                  ROOT / "benchmarks" / "vehicle_study.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_benchmark("vehicle_study")
 
 
 def history(times, signal):
